@@ -1,0 +1,19 @@
+/* kergs: constants, log events and small helpers shared by every component. */
+#ifndef KERGS_BASE_H
+#define KERGS_BASE_H
+
+#include <petscsys.h>
+
+/* Spatial dimension. 3D spheres (6 DOFs per grain, 3 components per contact) are a later goal:
+   every per-grain or per-contact size is derived from this constant, never a literal 2. */
+#define KERGS_DIM 2
+/* Rotational DOFs of a grain in KERGS_DIM dimensions (1 in 2D). */
+#define KERGS_NROT (KERGS_DIM == 2 ? 1 : 3)
+/* Largest number of components of a contact impulse: normal + tangential(s). */
+#define KERGS_MAXCOMP KERGS_DIM
+
+/* Log events, one per phase, so that -log_view explains the time of a step. */
+PETSC_EXTERN PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO;
+PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
+
+#endif

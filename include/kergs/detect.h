@@ -1,0 +1,50 @@
+/* kergs detect: contact detection. Broad phase by cell lists (O(N)), narrow phase disk-disk and
+   disk-wall, gaps, local frames, potential contacts within the alert distance, and persistence:
+   a contact keeps its impulse from one step to the next when the same pair of bodies touches again
+   (warm start of Algorithm 1). */
+#ifndef KERGS_DETECT_H
+#define KERGS_DETECT_H
+
+#include <kergs/scene.h>
+
+typedef enum {
+  KERGS_CONTACT_DISK_DISK,
+  KERGS_CONTACT_DISK_WALL
+} KergsContactKind;
+
+/* One contact. Body a is always a disk; body b is a disk (b > a) or a wall. The normal n points from
+   b towards a, the tangent is t = (-n_y, n_x). Contact point c: c - x_a = -ra n, c - x_b = +rb n
+   (rb = 0 for a wall). */
+typedef struct {
+  KergsContactKind kind;
+  PetscInt         a, b;
+  PetscReal        n[KERGS_DIM], t[KERGS_DIM];
+  PetscReal        ra, rb;
+  PetscReal        gap;                 /* g^- : gap at the start of the step (negative = interpenetration) */
+  PetscReal        mu;                  /* friction coefficient of the material pair */
+  PetscReal        r[KERGS_MAXCOMP];    /* impulse (n, t): warm start in, solution out */
+  PetscReal        v[KERGS_MAXCOMP];    /* local relative velocity (n, t) after the solve */
+  PetscBool        persistent;          /* the pair touched at the previous detection too */
+} KergsContact;
+
+typedef struct _p_KergsContacts *KergsContacts;
+struct _p_KergsContacts {
+  MPI_Comm      comm;
+  PetscInt      n, nalloc; /* contacts owned by this rank: those whose disk a is owned here */
+  KergsContact *c;         /* sorted by (a, kind, b) */
+  PetscInt      nglobal, start; /* global count and global index of c[0] */
+  /* previous detection, for persistence */
+  PetscInt      nprev, nprevalloc;
+  KergsContact *prev;
+  /* broad-phase workspace: cell list */
+  PetscInt  ncellx, ncelly, ncellalloc, *cellhead, *next;
+  PetscReal cellsize, origin[KERGS_DIM];
+};
+
+PETSC_EXTERN PetscErrorCode KergsContactsCreate(MPI_Comm, KergsContacts *);
+/* Find every potential contact (gap < scene->alert) owned by this rank, carry impulses over from the
+   previous call for persistent pairs (zero for new ones), and set nglobal and start (collective). */
+PETSC_EXTERN PetscErrorCode KergsContactsDetect(KergsContacts, KergsScene);
+PETSC_EXTERN PetscErrorCode KergsContactsDestroy(KergsContacts *);
+
+#endif

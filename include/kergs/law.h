@@ -1,0 +1,28 @@
+/* kergs law: the exact one-contact solve of the 2D Signorini-Coulomb law (DESIGN.md section 3).
+   Problem: v = Waa r + b, with Waa the contact's diagonal block (ncomp x ncomp, row-major, symmetric
+   positive definite), b the rest of the local velocity. Unknown r = (r_n, r_t):
+     inactive (predicted gap > 0):  r = 0
+     active: 0 <= v_n _|_ r_n >= 0, |r_t| <= mu r_n, v_t = 0 if |r_t| < mu r_n, r_t = -mu r_n sign(v_t) if sliding.
+   Solved by cases (open, stick, slip with v_t > 0, slip with v_t < 0), no iteration. */
+#ifndef KERGS_LAW_H
+#define KERGS_LAW_H
+
+#include <kergs/base.h>
+
+typedef enum {
+  KERGS_LAW_INACTIVE = 0, /* predicted gap positive: r = 0 */
+  KERGS_LAW_OPEN,         /* active but separating: r = 0, v_n >= 0 */
+  KERGS_LAW_STICK,        /* v = 0 */
+  KERGS_LAW_SLIP_POS,     /* v_n = 0, v_t > 0, r_t = -mu r_n */
+  KERGS_LAW_SLIP_NEG      /* v_n = 0, v_t < 0, r_t = +mu r_n */
+} KergsLawStatus;
+
+/* Exact solve; ncomp is 1 (frictionless, normal only) or 2. */
+PETSC_EXTERN KergsLawStatus KergsLawSolve(PetscInt ncomp, const PetscReal Waa[], const PetscReal b[], PetscReal mu, PetscBool active, PetscReal r[]);
+
+/* Squared norm of the natural-map residual of one contact,
+     r - proj_K(r - rho (v + mu |v_t| e_n))    (De Saxce's modified velocity; K: Coulomb cone),
+   or r itself when inactive. rho > 0 converts velocities to impulses (kergs uses rho = 1 / Waa_nn). */
+PETSC_EXTERN PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active);
+
+#endif

@@ -1,0 +1,43 @@
+/* kergs nlgs: the non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2), reading W's CSR
+   arrays directly. Gauss-Seidel inside a rank, Jacobi across ranks: the impulses of other ranks'
+   contacts are scattered once per sweep (DESIGN.md section 6).
+   Regularised variants (Algorithm 6, NLGS-Jac) pass an extra right-hand side per component and
+   replacement diagonal blocks. */
+#ifndef KERGS_NLGS_H
+#define KERGS_NLGS_H
+
+#include <kergs/law.h>
+#include <petscmat.h>
+
+typedef struct _p_KergsSweep *KergsSweep;
+struct _p_KergsSweep {
+  MPI_Comm comm;
+  PetscInt ncomp, n;          /* components per contact, local contacts */
+  Mat      W, Ad, Ao;         /* W and its local diagonal / off-process blocks (Ao NULL on one rank) */
+  const PetscInt    *ai, *aj, *bi, *bj;
+  const PetscScalar *aa, *ba;
+  PetscReal *Wdiag;           /* n blocks of ncomp x ncomp: W_alpha,alpha */
+  PetscReal *mu;              /* per contact */
+  PetscBool *active;          /* per contact: predicted gap <= 0 */
+  Vec        rghost;          /* off-process impulses, ordered as Ao's columns */
+  VecScatter ghost_scatter;
+  PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep) */
+};
+
+/* Measures of one sweep, reduced over ranks by KergsSweepRun. */
+typedef struct {
+  PetscReal quad; /* sqrt( sum dr^T Waa dr / sum r^T Waa r ): W-weighted relative change of r (LMGC90 "Quad" spirit) */
+  PetscReal maxm; /* max sqrt(dr^T Waa dr) / mean sqrt(r^T Waa r) over contacts (LMGC90 "Maxm" spirit) */
+} KergsSweepMeasures;
+
+PETSC_EXTERN PetscErrorCode KergsSweepCreate(MPI_Comm, KergsSweep *);
+/* Take W (assembled for the current contacts) and per-contact mu and activity. */
+PETSC_EXTERN PetscErrorCode KergsSweepSetUp(KergsSweep, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active);
+/* One sweep: r (local array, updated in place) for v = W r + vd (+ extra). Collective. */
+PETSC_EXTERN PetscErrorCode KergsSweepRun(KergsSweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wdiag_override, KergsSweepMeasures *);
+/* Natural-map residual sqrt(sum_a |r_a - proj(...)|^2) / max(|r|, tiny), with v = W r + vd; also returns v. Collective. */
+PETSC_EXTERN PetscErrorCode KergsSweepNaturalResidual(KergsSweep, Vec r, Vec vd, Vec v, PetscReal *res);
+PETSC_EXTERN PetscErrorCode KergsSweepReset(KergsSweep);
+PETSC_EXTERN PetscErrorCode KergsSweepDestroy(KergsSweep *);
+
+#endif

@@ -1,0 +1,48 @@
+/* kergs operators: the linear maps of one step as PETSc objects (DESIGN.md sections 2 and 6).
+   Free DOFs: per disk KERGS_DIM translations, plus KERGS_NROT rotations only when the scene is
+   frictional (frictionless contacts exert no torque on disks); then KERGS_DIM translations per free
+   wall, owned by the last rank. Given DOFs: KERGS_DIM translations per driven wall, owned by rank 0.
+   Contact components: normal, plus tangential only when the scene is frictional.
+
+   HfT = H_f^T (contact components x free DOFs) is assembled (each contact's rows are local to its owner);
+   H_f itself is its explicit transpose, built on demand. W = H_f^T M^-1 H_f is a parallel AIJ Mat over
+   contact components. */
+#ifndef KERGS_OPERATORS_H
+#define KERGS_OPERATORS_H
+
+#include <kergs/detect.h>
+
+typedef struct _p_KergsOperators *KergsOperators;
+struct _p_KergsOperators {
+  MPI_Comm comm;
+  PetscInt ndof_disk; /* free DOFs per disk: KERGS_DIM (+ KERGS_NROT if frictional) */
+  PetscInt ncomp;     /* components per contact: 1 (frictionless) or KERGS_DIM */
+  PetscInt nfreewalls, ndrivenwalls;
+  PetscInt *wall_dof; /* per wall: global index of its first free DOF, or of its first given DOF (driven) */
+  Mat HfT;            /* H_f^T */
+  Mat Hf;             /* H_f, NULL until KergsOperatorsGetHf */
+  Mat HgT;            /* H_g^T, NULL when the scene has no driven wall */
+  Mat W;              /* H_f^T M^-1 H_f */
+  Vec Minv;           /* diagonal of M^-1 over free DOFs */
+  Vec Vf;             /* free velocities V_f (V_f^- on entry of a step, V_f^+ after the update) */
+  Vec Rd;             /* impulse of external forces over the step */
+  Vec Vg;             /* given velocities V_g^+ (NULL without driven walls) */
+  Vec vd;             /* free local velocity v^d */
+  Vec r, v;           /* contact impulses and local velocities */
+  Vec R;              /* H_f r */
+  VecScatter vf_all;  /* V_f to every rank (the scene state is replicated) */
+  Vec        vf_seq;
+};
+
+PETSC_EXTERN PetscErrorCode KergsOperatorsCreate(MPI_Comm, KergsOperators *);
+/* Build H_f^T, H_g^T, M^-1, W, V_f^-, V_g^+, R^d, v^d for the current scene and contact set. */
+PETSC_EXTERN PetscErrorCode KergsOperatorsAssemble(KergsOperators, KergsScene, KergsContacts);
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetHf(KergsOperators, Mat *);
+/* r <- impulses stored in the contacts; contacts <- r and v (after a solve) */
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetImpulses(KergsOperators, KergsContacts);
+PETSC_EXTERN PetscErrorCode KergsOperatorsSetImpulses(KergsOperators, KergsContacts);
+/* V_f^+ = V_f^- + M^-1 (H_f r + R^d), then scatter the new velocities into the replicated scene */
+PETSC_EXTERN PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators, KergsScene, PetscReal *Vold_disk, PetscReal *Vold_wall);
+PETSC_EXTERN PetscErrorCode KergsOperatorsDestroy(KergsOperators *);
+
+#endif

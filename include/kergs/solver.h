@@ -1,0 +1,66 @@
+/* kergs solver: solves the per-step problem W r - v = -v^d with the contact law (eq. 1, 2).
+   Variants are types registered by name, chosen with -solver_type (like KSPType):
+     nlgs  Algorithm 2 (plain NLGS)
+   Options: -solver_max_it (paper: 150), -solver_tol, -solver_criterion quad|maxm|natural. */
+#ifndef KERGS_SOLVER_H
+#define KERGS_SOLVER_H
+
+#include <kergs/operators.h>
+#include <kergs/nlgs.h>
+
+typedef const char *KergsSolverType;
+#define KERGS_SOLVER_NLGS "nlgs"
+
+typedef enum {
+  KERGS_CRITERION_QUAD,
+  KERGS_CRITERION_MAXM,
+  KERGS_CRITERION_NATURAL
+} KergsCriterion;
+PETSC_EXTERN const char *const KergsCriteria[];
+
+typedef struct {
+  PetscInt  iterations;
+  PetscBool converged;
+  PetscReal criterion; /* value of the chosen criterion at exit */
+  PetscReal residual;  /* natural-map residual recomputed from r at exit */
+  PetscReal seconds;
+} KergsSolveStats;
+
+typedef struct _p_KergsSolver *KergsSolver;
+typedef struct {
+  PetscErrorCode (*setfromoptions)(KergsSolver, PetscOptionItems *);
+  PetscErrorCode (*setup)(KergsSolver, KergsScene, KergsContacts, KergsOperators);
+  PetscErrorCode (*solve)(KergsSolver, KergsScene, KergsContacts, KergsOperators, KergsSolveStats *);
+  PetscErrorCode (*view)(KergsSolver, PetscViewer);
+  PetscErrorCode (*destroy)(KergsSolver);
+} KergsSolverOps;
+
+struct _p_KergsSolver {
+  MPI_Comm       comm;
+  char           type[64];
+  KergsSolverOps ops;
+  void          *data;
+  PetscInt       max_it;
+  PetscReal      tol;
+  KergsCriterion criterion;
+  KergsSweep     sweep;
+  PetscReal     *mu;     /* per local contact */
+  PetscBool     *active; /* per local contact */
+  PetscInt       nalloc;
+};
+
+PETSC_EXTERN PetscErrorCode KergsSolverRegister(const char[], PetscErrorCode (*)(KergsSolver));
+PETSC_EXTERN PetscErrorCode KergsSolverCreate(MPI_Comm, KergsSolver *);
+PETSC_EXTERN PetscErrorCode KergsSolverSetType(KergsSolver, KergsSolverType);
+PETSC_EXTERN PetscErrorCode KergsSolverSetFromOptions(KergsSolver);
+PETSC_EXTERN PetscErrorCode KergsSolverSolve(KergsSolver, KergsScene, KergsContacts, KergsOperators, KergsSolveStats *);
+PETSC_EXTERN PetscErrorCode KergsSolverView(KergsSolver, PetscViewer);
+PETSC_EXTERN PetscErrorCode KergsSolverDestroy(KergsSolver *);
+/* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */
+PETSC_EXTERN PetscErrorCode KergsSolverSetUpSweep(KergsSolver, KergsScene, KergsContacts, KergsOperators);
+/* Shared by the types: run sweeps until the criterion or max_it, extra/diag as in KergsSweepRun. */
+PETSC_EXTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, const PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *);
+
+PETSC_EXTERN PetscErrorCode KergsSolverCreate_NLGS(KergsSolver);
+
+#endif

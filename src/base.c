@@ -1,0 +1,22 @@
+/* kergs: log events of the phases of a step, registered once. */
+#include <kergs/base.h>
+
+PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO;
+
+PetscErrorCode KergsInitializePackage(void)
+{
+  static PetscBool initialized = PETSC_FALSE;
+  PetscClassId     classid;
+
+  PetscFunctionBeginUser;
+  if (initialized) PetscFunctionReturn(0);
+  initialized = PETSC_TRUE;
+  PetscCall(PetscClassIdRegister("kergs", &classid));
+  PetscCall(PetscLogEventRegister("KergsDetect", classid, &KERGS_Detect));
+  PetscCall(PetscLogEventRegister("KergsAssemble", classid, &KERGS_Assemble));
+  PetscCall(PetscLogEventRegister("KergsSolve", classid, &KERGS_Solve));
+  PetscCall(PetscLogEventRegister("KergsSweep", classid, &KERGS_Sweep));
+  PetscCall(PetscLogEventRegister("KergsUpdate", classid, &KERGS_Update));
+  PetscCall(PetscLogEventRegister("KergsIO", classid, &KERGS_IO));
+  PetscFunctionReturn(0);
+}
