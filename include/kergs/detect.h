@@ -36,8 +36,11 @@ struct _p_KergsContacts {
   /* previous detection, for persistence */
   PetscInt      nprev, nprevalloc;
   KergsContact *prev;
-  /* broad-phase workspace: cell list */
+  /* broad-phase workspace: cell list over the bounding box of the disk centres, rebuilt by every call.
+     cellhead[cell] is the highest disk index in the cell (-1: empty), next[i] the next lower index in
+     disk i's cell (-1: end), so a walk visits a cell's disks in decreasing index order. */
   PetscInt  ncellx, ncelly, ncellalloc, *cellhead, *next;
+  PetscInt  nnextalloc; /* capacity of next[] */
   PetscReal cellsize, origin[KERGS_DIM];
 };
 

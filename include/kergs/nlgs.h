@@ -22,6 +22,7 @@ struct _p_KergsSweep {
   Vec        rghost;          /* off-process impulses, ordered as Ao's columns */
   VecScatter ghost_scatter;
   PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep) */
+  PetscInt  *dsplit;          /* per local row i: [start, end) of the own block's entries in aj (skipped by the sweep) */
 };
 
 /* Measures of one sweep, reduced over ranks by KergsSweepRun. */

@@ -28,8 +28,10 @@ struct _p_KergsOperators {
   Vec Rd;             /* impulse of external forces over the step */
   Vec Vg;             /* given velocities V_g^+ (NULL without driven walls) */
   Vec vd;             /* free local velocity v^d */
+  Vec vminus;         /* local velocity at the start of the step, H_f^T V_f^- + H_g^T V_g (for the LMGC90 gap rule) */
   Vec r, v;           /* contact impulses and local velocities */
   Vec R;              /* H_f r */
+  PetscInt   nfree, nfree_local, ngiven; /* free DOFs (global, local), given DOFs */
   VecScatter vf_all;  /* V_f to every rank (the scene state is replicated) */
   Vec        vf_seq;
 };
@@ -41,8 +43,11 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsGetHf(KergsOperators, Mat *);
 /* r <- impulses stored in the contacts; contacts <- r and v (after a solve) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetImpulses(KergsOperators, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsSetImpulses(KergsOperators, KergsContacts);
-/* V_f^+ = V_f^- + M^-1 (H_f r + R^d), then scatter the new velocities into the replicated scene */
-PETSC_EXTERN PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators, KergsScene, PetscReal *Vold_disk, PetscReal *Vold_wall);
+/* V_f^+ = V_f^- + M^-1 (H_f r + R^d), then scatter the new velocities into the replicated scene
+   (disk velocities, angular velocities when the scene is frictional, free walls) */
+PETSC_EXTERN PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators, KergsScene);
+/* Global free DOF index of disk i's first DOF */
+#define KergsOperatorsDiskDof(ops, i) ((i) * (ops)->ndof_disk)
 PETSC_EXTERN PetscErrorCode KergsOperatorsDestroy(KergsOperators *);
 
 #endif

@@ -2,7 +2,13 @@
    renamed when complete (atomic). Layout in docs/results.md:
      /stats/<name>                 one 1-D dataset per statistic, one entry per step
      /snapshots/<k>/...            grain ids, positions, velocities, radii; contact list
-   Statistics are recorded by name each step (KergsResultsRecord), so components add their own. */
+   Statistics are recorded by name each step (KergsResultsRecord), so components add their own.
+   A statistic first recorded after some rows were completed gets NaN in those earlier rows, and a
+   statistic not recorded in a step gets NaN in that row.
+
+   Use: Create, (SetSceneName), SetFromOptions, Open; per step Record ... EndStep and, when
+   KergsResultsSnapshotDue says so, Snapshot; Close at the end; Destroy. With -output_none every call
+   is a no-op. */
 #ifndef KERGS_RESULTS_H
 #define KERGS_RESULTS_H
 
@@ -21,17 +27,35 @@ struct _p_KergsResults {
   char        statname[KERGS_RESULTS_MAXSTATS][64];
   PetscReal  *statvalues[KERGS_RESULTS_MAXSTATS];
   PetscBool   enabled;
+  char        scenename[PETSC_MAX_PATH_LEN]; /* names the default output path results/<scenename>.h5 */
+  PetscInt    last_snapshot_step;            /* step of the latest snapshot (-1: none yet) */
 };
 
 PETSC_EXTERN PetscErrorCode KergsResultsCreate(MPI_Comm, KergsResults *);
-PETSC_EXTERN PetscErrorCode KergsResultsSetFromOptions(KergsResults); /* -output, -output_every */
+/* Name used for the default path results/<name>.h5 when -output is not given (call before Open;
+   without it the default is results/kergs.h5). */
+PETSC_EXTERN PetscErrorCode KergsResultsSetSceneName(KergsResults, const char name[]);
+PETSC_EXTERN PetscErrorCode KergsResultsSetFromOptions(KergsResults); /* -output, -output_every, -output_none */
 PETSC_EXTERN PetscErrorCode KergsResultsOpen(KergsResults);
 /* Record one statistic of the current step (same call on every rank, values already reduced). */
 PETSC_EXTERN PetscErrorCode KergsResultsRecord(KergsResults, const char name[], PetscReal value);
 PETSC_EXTERN PetscErrorCode KergsResultsEndStep(KergsResults);
+/* Whether the snapshot policy asks for a snapshot at this step: the first snapshot of the run (none
+   written yet), the last step (last = PETSC_TRUE), and with -output_every N > 0 every step that is a
+   multiple of N. Always PETSC_FALSE with -output_none. */
+PETSC_EXTERN PetscErrorCode KergsResultsSnapshotDue(KergsResults, PetscInt step, PetscBool last, PetscBool *due);
+/* Write /snapshots/<k> for the scene's current step (collective). A second call for the same step is
+   ignored, so a final unconditional call after the loop does not duplicate the last snapshot. */
 PETSC_EXTERN PetscErrorCode KergsResultsSnapshot(KergsResults, KergsScene, KergsContacts);
 /* Write /stats, close and rename the temporary file to its final name. */
 PETSC_EXTERN PetscErrorCode KergsResultsClose(KergsResults);
 PETSC_EXTERN PetscErrorCode KergsResultsDestroy(KergsResults *);
+
+/* Helpers for atomic output files, shared by the io component (collective on comm; rank 0 does the file
+   system work and every rank gets the same error):
+   KergsFileMakeParentDir creates the directories leading to path (like mkdir -p of its dirname);
+   KergsFileCommit waits for every rank (after the file was closed everywhere), then renames tmp to path. */
+PETSC_EXTERN PetscErrorCode KergsFileMakeParentDir(MPI_Comm, const char path[]);
+PETSC_EXTERN PetscErrorCode KergsFileCommit(MPI_Comm, const char tmp[], const char path[]);
 
 #endif

@@ -1,0 +1,379 @@
+/* kergs detect: contact detection (DESIGN.md sections 4 and 6, the "detect" step of Algorithm 1).
+
+   Broad phase: a cell list over the bounding box of the disk centres, with cells at least as wide as the
+   largest reach 2 max(R) + alert, so that every potential pair lies in the same or an adjacent cell.
+   Narrow phase: disk-disk and disk-wall gaps, local frames (n from b towards a, t = (-n_y, n_x)).
+   Ownership: the scene state is replicated; the rank that owns disk a (dstart <= a < dend) owns every
+   contact whose first body is a, and for disk-disk pairs a is the lower index.
+   Persistence: the contacts of the previous call are kept, and a new contact of the same (a, kind, b)
+   takes over its impulse r (warm start of Algorithm 1). Both lists are sorted by (a, kind, b), so one
+   merge pass does it. */
+#include <kergs/detect.h>
+
+/* Relative widening of the cells beyond the largest reach: keeps a pair at exactly the reach distance
+   in adjacent cells in spite of the rounding of the cell index. */
+#define KERGS_CELL_MARGIN 1e-8
+
+/* A wall as the narrow phase needs it: origin a, unit direction e along a->b, outward unit normal n
+   (left normal of a->b), length. */
+typedef struct {
+  PetscReal a[KERGS_DIM], e[KERGS_DIM], n[KERGS_DIM];
+  PetscReal length;
+  PetscBool infinite;
+  PetscInt  material;
+} WallFrame;
+
+PetscErrorCode KergsContactsCreate(MPI_Comm comm, KergsContacts *contacts)
+{
+  KergsContacts ct;
+
+  PetscFunctionBeginUser;
+  PetscCheck(contacts, comm, PETSC_ERR_ARG_NULL, "KergsContactsCreate: output argument is NULL");
+  PetscCall(KergsInitializePackage());
+  PetscCall(PetscNew(&ct));
+  ct->comm = comm;
+  *contacts = ct;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsContactsDestroy(KergsContacts *contacts)
+{
+  PetscFunctionBeginUser;
+  if (!contacts || !*contacts) PetscFunctionReturn(0);
+  PetscCall(PetscFree((*contacts)->c));
+  PetscCall(PetscFree((*contacts)->prev));
+  PetscCall(PetscFree((*contacts)->cellhead));
+  PetscCall(PetscFree((*contacts)->next));
+  PetscCall(PetscFree(*contacts));
+  PetscFunctionReturn(0);
+}
+
+/* Make room for at least `needed` contacts in ct->c, growing geometrically. */
+static PetscErrorCode ContactsReserve(KergsContacts ct, PetscInt needed)
+{
+  PetscInt nalloc;
+
+  PetscFunctionBeginUser;
+  if (needed <= ct->nalloc) PetscFunctionReturn(0);
+  nalloc = PetscMax(PetscMax(2 * ct->nalloc, needed), 64);
+  PetscCall(PetscRealloc((size_t)nalloc * sizeof(KergsContact), &ct->c));
+  ct->nalloc = nalloc;
+  PetscFunctionReturn(0);
+}
+
+/* The scene fields detection relies on, checked once per call (cheap next to the search). */
+static PetscErrorCode CheckScene(KergsContacts ct, KergsScene scene)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(scene->ndisks >= 0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: negative number of disks %" PetscInt_FMT, scene->name, scene->ndisks);
+  PetscCheck(0 <= scene->dstart && scene->dstart <= scene->dend && scene->dend <= scene->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: owned disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not inside [0, %" PetscInt_FMT ")", scene->name, scene->dstart,
+             scene->dend, scene->ndisks);
+  PetscCheck(scene->alert >= 0.0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance %g must be >= 0", scene->name, (double)scene->alert);
+  PetscCheck(scene->nmaterials > 0 && scene->mu, ct->comm, PETSC_ERR_ARG_WRONGSTATE, "Scene %s: no materials (friction table missing)", scene->name);
+  PetscFunctionReturn(0);
+}
+
+/* Find the disk that made the bounding-box pass fail (non-finite centre, radius not positive and finite,
+   material out of range) and report it by grain id. Only called on the error path. */
+static PetscErrorCode ReportBadDisk(KergsContacts ct, KergsScene scene)
+{
+  const PetscReal *x = scene->x, *rad = scene->radius;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < scene->ndisks; i++) {
+    PetscCheck(!PetscIsInfOrNanReal(x[KERGS_DIM * i]) && !PetscIsInfOrNanReal(x[KERGS_DIM * i + 1]), ct->comm, PETSC_ERR_FP,
+               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has a non-finite centre", scene->name, scene->id[i], i);
+    PetscCheck(rad[i] > 0.0 && !PetscIsInfOrNanReal(rad[i]), ct->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has radius %g, not positive and finite", scene->name, scene->id[i], i, (double)rad[i]);
+    PetscCheck(0 <= scene->material[i] && scene->material[i] < scene->nmaterials, ct->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has material %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")", scene->name, scene->id[i], i,
+               scene->material[i], scene->nmaterials);
+  }
+  SETERRQ(ct->comm, PETSC_ERR_FP, "Scene %s: the bounding box of the disk centres is too large to represent", scene->name);
+}
+
+/* Bounding box of the centres and largest radius, in one pass over the disks that also checks radii and
+   materials (so that the search loops can index the friction table without checks). */
+static PetscErrorCode BoundingBox(KergsContacts ct, KergsScene scene, PetscReal lo[], PetscReal hi[], PetscReal *rmax)
+{
+  const PetscReal *x = scene->x, *rad = scene->radius;
+  const PetscInt  *mat = scene->material;
+  PetscReal        rmin = PETSC_MAX_REAL, rbig = 0.0;
+  PetscInt         matmin = 0, matmax = 0;
+  PetscBool        finite = PETSC_TRUE;
+
+  PetscFunctionBeginUser;
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    lo[d] = PETSC_MAX_REAL;
+    hi[d] = -PETSC_MAX_REAL;
+  }
+  for (PetscInt i = 0; i < scene->ndisks; i++) {
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      const PetscReal xi = x[KERGS_DIM * i + d];
+      lo[d]              = PetscMin(lo[d], xi);
+      hi[d]              = PetscMax(hi[d], xi);
+    }
+    rmin   = PetscMin(rmin, rad[i]);
+    rbig   = PetscMax(rbig, rad[i]);
+    matmin = PetscMin(matmin, mat[i]);
+    matmax = PetscMax(matmax, mat[i]);
+  }
+  if (scene->ndisks == 0) {
+    for (PetscInt d = 0; d < KERGS_DIM; d++) lo[d] = hi[d] = 0.0;
+  }
+  /* NaN fails every comparison: a NaN centre or radius makes the box or the radius bounds fail below */
+  for (PetscInt d = 0; d < KERGS_DIM; d++) finite = (PetscBool)(finite && !PetscIsInfOrNanReal(hi[d] - lo[d]));
+  if (scene->ndisks > 0 && (!finite || !(rmin > 0.0) || PetscIsInfOrNanReal(rbig) || matmin < 0 || matmax >= scene->nmaterials)) PetscCall(ReportBadDisk(ct, scene));
+  *rmax = rbig;
+  PetscFunctionReturn(0);
+}
+
+/* Rebuild the cell list over the bounding box of the centres. Cells are squares of side
+   h >= 2 max(R) + alert (the largest possible reach of a pair), widened if needed so that the grid has
+   at most 4 ndisks + 64 cells (one disk far away must not make a huge grid). */
+static PetscErrorCode BuildCellList(KergsContacts ct, KergsScene scene)
+{
+  const PetscInt   n = scene->ndisks;
+  const PetscReal *x = scene->x;
+  const PetscReal  maxcells = 4.0 * (PetscReal)n + 64.0;
+  PetscReal        lo[KERGS_DIM], hi[KERGS_DIM], rmax = 0.0, h, inv, extent[KERGS_DIM];
+  PetscInt         ncells;
+
+  PetscFunctionBeginUser;
+  PetscCall(BoundingBox(ct, scene, lo, hi, &rmax));
+  for (PetscInt d = 0; d < KERGS_DIM; d++) extent[d] = hi[d] - lo[d];
+  h = (2.0 * rmax + scene->alert) * (1.0 + KERGS_CELL_MARGIN);
+  if (!(h > 0.0)) h = 1.0;
+  if ((extent[0] / h + 1.0) * (extent[1] / h + 1.0) > maxcells) {
+    h = PetscMax(h, PetscSqrtReal(extent[0] * extent[1] / maxcells));
+    while ((extent[0] / h + 1.0) * (extent[1] / h + 1.0) > maxcells) h *= 1.1;
+  }
+  ct->cellsize  = h;
+  ct->origin[0] = lo[0];
+  ct->origin[1] = lo[1];
+  ct->ncellx    = (PetscInt)(extent[0] / h) + 1;
+  ct->ncelly    = (PetscInt)(extent[1] / h) + 1;
+  ncells        = ct->ncellx * ct->ncelly;
+  if (ncells > ct->ncellalloc) {
+    ct->ncellalloc = PetscMax(ncells, 2 * ct->ncellalloc);
+    PetscCall(PetscFree(ct->cellhead));
+    PetscCall(PetscMalloc1(ct->ncellalloc, &ct->cellhead));
+  }
+  if (n > ct->nnextalloc) {
+    ct->nnextalloc = PetscMax(n, 2 * ct->nnextalloc);
+    PetscCall(PetscFree(ct->next));
+    PetscCall(PetscMalloc1(ct->nnextalloc, &ct->next));
+  }
+  for (PetscInt c = 0; c < ncells; c++) ct->cellhead[c] = -1;
+  /* push disks in increasing order: each cell's chain then runs in decreasing index order */
+  inv = 1.0 / h;
+  for (PetscInt i = 0; i < n; i++) {
+    PetscInt ix = (PetscInt)((x[KERGS_DIM * i] - lo[0]) * inv), iy = (PetscInt)((x[KERGS_DIM * i + 1] - lo[1]) * inv), cell;
+
+    ix              = PetscMin(PetscMax(ix, 0), ct->ncellx - 1);
+    iy              = PetscMin(PetscMax(iy, 0), ct->ncelly - 1);
+    cell            = iy * ct->ncellx + ix;
+    ct->next[i]     = ct->cellhead[cell];
+    ct->cellhead[cell] = i;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Fill a contact with its geometry; a fresh contact has no impulse, no velocity, and is not persistent
+   until the merge with the previous detection says otherwise. */
+static inline void SetContact(KergsContact *c, KergsContactKind kind, PetscInt a, PetscInt b, PetscReal nx, PetscReal ny, PetscReal ra, PetscReal rb,
+                              PetscReal gap, PetscReal mu)
+{
+  c->kind = kind;
+  c->a    = a;
+  c->b    = b;
+  c->n[0] = nx;
+  c->n[1] = ny;
+  c->t[0] = -ny; /* t = (-n_y, n_x) */
+  c->t[1] = nx;
+  c->ra   = ra;
+  c->rb   = rb;
+  c->gap  = gap;
+  c->mu   = mu;
+  for (PetscInt k = 0; k < KERGS_MAXCOMP; k++) c->r[k] = c->v[k] = 0.0;
+  c->persistent = PETSC_FALSE;
+}
+
+/* Contacts of owned disk a with every disk b > a within the alert distance, appended to ct->c and sorted
+   by b. Gap g = |x_a - x_b| - R_a - R_b, normal n = (x_a - x_b) / |x_a - x_b|. */
+static PetscErrorCode DetectDiskDisk(KergsContacts ct, KergsScene scene, PetscInt a)
+{
+  const PetscReal *x = scene->x, *rad = scene->radius;
+  const PetscInt  *next = ct->next, *head = ct->cellhead, nx = ct->ncellx, ny = ct->ncelly;
+  const PetscReal  xa = x[KERGS_DIM * a], ya = x[KERGS_DIM * a + 1], ra = rad[a], alert = scene->alert, inv = 1.0 / ct->cellsize;
+  const PetscInt   first = ct->n, *mat = scene->material;
+  const PetscReal *murow = scene->mu + mat[a] * scene->nmaterials; /* row of a's material in the friction table */
+  PetscInt         ix = (PetscInt)((xa - ct->origin[0]) * inv), iy = (PetscInt)((ya - ct->origin[1]) * inv);
+
+  PetscFunctionBeginUser;
+  ix = PetscMin(PetscMax(ix, 0), nx - 1);
+  iy = PetscMin(PetscMax(iy, 0), ny - 1);
+  for (PetscInt cy = PetscMax(iy - 1, 0); cy <= PetscMin(iy + 1, ny - 1); cy++) {
+    for (PetscInt cx = PetscMax(ix - 1, 0); cx <= PetscMin(ix + 1, nx - 1); cx++) {
+      /* chains run in decreasing index order: stop at the first b <= a (also ends at -1) */
+      for (PetscInt b = head[cy * nx + cx]; b > a; b = next[b]) {
+        const PetscReal dx = xa - x[KERGS_DIM * b], dy = ya - x[KERGS_DIM * b + 1], reach = ra + rad[b] + alert, d2 = dx * dx + dy * dy;
+        PetscReal       dist;
+
+        if (d2 >= reach * reach) continue;
+        PetscCheck(d2 > 0.0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene %s: grains %" PetscInt_FMT " and %" PetscInt_FMT " (disks %" PetscInt_FMT " and %" PetscInt_FMT ") have coincident centres (%g, %g): contact normal undefined",
+                   scene->name, scene->id[a], scene->id[b], a, b, (double)xa, (double)ya);
+        if (ct->n == ct->nalloc) PetscCall(ContactsReserve(ct, ct->n + 1));
+        dist = PetscSqrtReal(d2);
+        SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_DISK, a, b, dx / dist, dy / dist, ra, rad[b], dist - ra - rad[b], murow[mat[b]]);
+      }
+    }
+  }
+  /* the few contacts of disk a come from up to 9 cells: insertion sort by b */
+  for (PetscInt i = first + 1; i < ct->n; i++) {
+    KergsContact key = ct->c[i];
+    PetscInt     j   = i - 1;
+
+    while (j >= first && ct->c[j].b > key.b) {
+      ct->c[j + 1] = ct->c[j];
+      j--;
+    }
+    ct->c[j + 1] = key;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Frames of the walls; a wall of zero length has no normal. */
+static PetscErrorCode SetUpWallFrames(KergsScene scene, WallFrame *frames)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt w = 0; w < scene->nwalls; w++) {
+    const KergsWall *wall = &scene->walls[w];
+    const PetscReal  ex = wall->b[0] - wall->a[0], ey = wall->b[1] - wall->a[1], len = PetscSqrtReal(ex * ex + ey * ey);
+
+    PetscCheck(0 <= wall->material && wall->material < scene->nmaterials, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+               "Scene %s: wall %" PetscInt_FMT " (%s) has material %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")", scene->name, w, wall->name, wall->material,
+               scene->nmaterials);
+    PetscCheck(len > 0.0 && !PetscIsInfOrNanReal(len), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene %s: wall %" PetscInt_FMT " (%s) from (%g, %g) to (%g, %g) has no direction",
+               scene->name, w, wall->name, (double)wall->a[0], (double)wall->a[1], (double)wall->b[0], (double)wall->b[1]);
+    frames[w].a[0]     = wall->a[0];
+    frames[w].a[1]     = wall->a[1];
+    frames[w].e[0]     = ex / len;
+    frames[w].e[1]     = ey / len;
+    frames[w].n[0]     = -ey / len; /* left normal of a->b: the outward side */
+    frames[w].n[1]     = ex / len;
+    frames[w].length   = len;
+    frames[w].infinite = wall->infinite;
+    frames[w].material = wall->material;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Contacts of owned disk a with the walls, in wall order. The wall is one-sided: the centre must lie on
+   the outward side (signed distance d = (x - a).n > 0) with gap d - R < alert, and for a segment its
+   projection (x - a).e must fall on [0, |b - a|]. The normal is the wall's, from the wall to the disk. */
+static PetscErrorCode DetectDiskWall(KergsContacts ct, KergsScene scene, const WallFrame *frames, PetscInt a)
+{
+  const PetscReal xa = scene->x[KERGS_DIM * a], ya = scene->x[KERGS_DIM * a + 1], ra = scene->radius[a];
+
+  PetscFunctionBeginUser;
+  for (PetscInt w = 0; w < scene->nwalls; w++) {
+    const WallFrame *f = &frames[w];
+    const PetscReal  dx = xa - f->a[0], dy = ya - f->a[1], d = dx * f->n[0] + dy * f->n[1];
+
+    if (!(d > 0.0 && d - ra < scene->alert)) continue;
+    if (!f->infinite) {
+      const PetscReal s = dx * f->e[0] + dy * f->e[1];
+      if (s < 0.0 || s > f->length) continue;
+    }
+    if (ct->n == ct->nalloc) PetscCall(ContactsReserve(ct, ct->n + 1));
+    SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_WALL, a, w, f->n[0], f->n[1], ra, 0.0, d - ra, scene->mu[scene->material[a] * scene->nmaterials + f->material]);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Order of contacts: (a, kind, b). */
+static inline int CompareContacts(const KergsContact *p, const KergsContact *q)
+{
+  if (p->a != q->a) return p->a < q->a ? -1 : 1;
+  if (p->kind != q->kind) return p->kind < q->kind ? -1 : 1;
+  if (p->b != q->b) return p->b < q->b ? -1 : 1;
+  return 0;
+}
+
+static int CompareContactsQsort(const void *p, const void *q)
+{
+  return CompareContacts((const KergsContact *)p, (const KergsContact *)q);
+}
+
+/* Warm start: a contact of the same (a, kind, b) as one of the previous call takes over its impulse.
+   Both lists are sorted, so one merge pass finds every match (O(n + nprev)). */
+static PetscErrorCode CarryOverImpulses(KergsContacts ct)
+{
+  PetscInt j = 0;
+
+  PetscFunctionBeginUser;
+  /* the previous list left this object sorted; if a caller reordered it in between, sort it again */
+  for (PetscInt k = 1; k < ct->nprev; k++) {
+    if (CompareContacts(&ct->prev[k - 1], &ct->prev[k]) > 0) {
+      qsort(ct->prev, (size_t)ct->nprev, sizeof(KergsContact), CompareContactsQsort);
+      break;
+    }
+  }
+  for (PetscInt i = 0; i < ct->n && j < ct->nprev; i++) {
+    KergsContact *c = &ct->c[i];
+
+    while (j < ct->nprev && CompareContacts(&ct->prev[j], c) < 0) j++;
+    if (j < ct->nprev && CompareContacts(&ct->prev[j], c) == 0) {
+      for (PetscInt k = 0; k < KERGS_MAXCOMP; k++) c->r[k] = ct->prev[j].r[k];
+      c->persistent = PETSC_TRUE;
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsContactsDetect(KergsContacts ct, KergsScene scene)
+{
+  WallFrame    *frames = NULL;
+  KergsContact *swap;
+  PetscInt      nswap, npersistent = 0;
+
+  PetscFunctionBeginUser;
+  PetscCheck(ct && scene, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KergsContactsDetect: contacts or scene is NULL");
+  PetscCall(PetscLogEventBegin(KERGS_Detect, 0, 0, 0, 0));
+  PetscCall(CheckScene(ct, scene));
+  /* the current contacts become the previous ones; their storage is reused for the new list */
+  swap           = ct->prev;
+  ct->prev       = ct->c;
+  ct->c          = swap;
+  nswap          = ct->nprevalloc;
+  ct->nprevalloc = ct->nalloc;
+  ct->nalloc     = nswap;
+  ct->nprev      = ct->n;
+  ct->n          = 0;
+
+  PetscCall(BuildCellList(ct, scene));
+  PetscCall(PetscMalloc1(scene->nwalls, &frames));
+  PetscCall(SetUpWallFrames(scene, frames));
+  for (PetscInt a = scene->dstart; a < scene->dend; a++) {
+    PetscCall(DetectDiskDisk(ct, scene, a));
+    PetscCall(DetectDiskWall(ct, scene, frames, a));
+  }
+  PetscCall(PetscFree(frames));
+  PetscCall(CarryOverImpulses(ct));
+
+  PetscCallMPI(MPI_Allreduce(&ct->n, &ct->nglobal, 1, MPIU_INT, MPI_SUM, ct->comm));
+  ct->start = 0;
+  PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));
+  {
+    PetscMPIInt rank;
+    PetscCallMPI(MPI_Comm_rank(ct->comm, &rank));
+    if (rank == 0) ct->start = 0; /* MPI_Exscan leaves rank 0's result undefined */
+  }
+  for (PetscInt i = 0; i < ct->n; i++) npersistent += ct->c[i].persistent;
+  PetscCall(PetscInfo(NULL, "Scene %s: %" PetscInt_FMT " contacts here (%" PetscInt_FMT " persistent) of %" PetscInt_FMT ", cell grid %" PetscInt_FMT " x %" PetscInt_FMT " of side %g\n", scene->name,
+                      ct->n, npersistent, ct->nglobal, ct->ncellx, ct->ncelly, (double)ct->cellsize));
+  PetscCall(PetscLogEventEnd(KERGS_Detect, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}

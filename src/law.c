@@ -1,0 +1,151 @@
+/* kergs law: the exact one-contact solve of the 2D Signorini-Coulomb law (DESIGN.md section 3).
+   v = Waa r + b. The solution is found by cases (open, stick, slip with v_t > 0, slip with v_t < 0):
+   each case fixes which relations are equalities, which gives a closed-form candidate, accepted when
+   it satisfies the remaining inequalities. No iteration, no PETSc calls: this runs in the sweep's
+   inner loop. */
+#include <kergs/law.h>
+
+/* Relative threshold under which a determinant or a denominator is treated as zero. */
+#define KERGS_LAW_SINGULAR (64 * PETSC_MACHINE_EPSILON)
+
+/* Projection onto the Coulomb cone K = {|z_t| <= mu z_n} (2D), or onto {z_n >= 0} for ncomp == 1.
+   K is spanned by the rays (1, +mu) and (1, -mu); its polar cone is {mu |z_t| <= -z_n}. Outside both,
+   the projection lies on the boundary ray (1, mu sign(z_t)): p_n = (z_n + mu |z_t|) / (1 + mu^2). */
+static inline void ProjectCoulombCone(PetscInt ncomp, const PetscReal z[], PetscReal mu, PetscReal p[])
+{
+  PetscReal at, pn;
+
+  if (ncomp == 1) {
+    p[0] = PetscMax(z[0], 0.0);
+    return;
+  }
+  at = PetscAbsReal(z[1]);
+  if (at <= mu * z[0]) {
+    p[0] = z[0];
+    p[1] = z[1];
+  } else if (mu * at <= -z[0]) {
+    p[0] = 0.0;
+    p[1] = 0.0;
+  } else {
+    pn   = (z[0] + mu * at) / (1.0 + mu * mu);
+    p[0] = pn;
+    p[1] = z[1] >= 0 ? mu * pn : -mu * pn;
+  }
+}
+
+PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active)
+{
+  PetscReal z[KERGS_MAXCOMP] = {0.0}, p[KERGS_MAXCOMP], s = 0.0;
+  PetscInt  c;
+
+  if (!active) {
+    for (c = 0; c < ncomp; c++) s += r[c] * r[c];
+    return s;
+  }
+  /* De Saxce's modified velocity: v + mu |v_t| e_n makes the law a projection on the cone K. */
+  z[0] = r[0] - rho * (v[0] + (ncomp > 1 ? mu * PetscAbsReal(v[1]) : 0.0));
+  if (ncomp > 1) z[1] = r[1] - rho * v[1];
+  ProjectCoulombCone(ncomp, z, mu, p);
+  for (c = 0; c < ncomp; c++) s += (r[c] - p[c]) * (r[c] - p[c]);
+  return s;
+}
+
+/* Fallback when rounding rejects every case (the exact solution lies on a case boundary) or the block is
+   degenerate: among the finite candidates, projected on the cone, keep the smallest natural residual. */
+static KergsLawStatus SolveCoulomb2Fallback(const PetscReal W[], const PetscReal b[], PetscReal mu, PetscInt ncand, PetscReal cand[][KERGS_MAXCOMP], PetscReal r[])
+{
+  static const KergsLawStatus status[] = {KERGS_LAW_STICK, KERGS_LAW_SLIP_POS, KERGS_LAW_SLIP_NEG, KERGS_LAW_OPEN};
+  const PetscReal rho  = W[0] > 0 ? 1.0 / W[0] : 1.0;
+  PetscReal       best = PETSC_MAX_REAL, p[KERGS_MAXCOMP], v[KERGS_MAXCOMP], res;
+  KergsLawStatus  st   = KERGS_LAW_OPEN;
+  PetscInt        k;
+
+  r[0] = 0.0;
+  r[1] = 0.0;
+  for (k = 0; k < ncand; k++) {
+    if (PetscIsInfOrNanReal(cand[k][0]) || PetscIsInfOrNanReal(cand[k][1])) continue;
+    ProjectCoulombCone(2, cand[k], mu, p);
+    v[0] = W[0] * p[0] + W[1] * p[1] + b[0];
+    v[1] = W[2] * p[0] + W[3] * p[1] + b[1];
+    res  = KergsLawNaturalResidual2(2, p, v, mu, rho, PETSC_TRUE);
+    if (res < best) {
+      best = res;
+      r[0] = p[0];
+      r[1] = p[1];
+      st   = status[k];
+    }
+  }
+  return st;
+}
+
+/* The active, closing 2D case (b_n < 0): r_n > 0 at the solution, so v_n = 0 and one of stick, slip+,
+   slip- holds. Waa = [Wnn Wnt; Wtn Wtt] row-major. */
+static inline KergsLawStatus SolveCoulomb2(const PetscReal W[], const PetscReal b[], PetscReal mu, PetscReal r[])
+{
+  const PetscReal Wnn = W[0], Wnt = W[1], Wtn = W[2], Wtt = W[3], bn = b[0], bt = b[1];
+  const PetscReal det = Wnn * Wtt - Wnt * Wtn;
+  PetscReal       cand[4][KERGS_MAXCOMP], den, rn, rt, vt;
+
+  /* Stick: v = 0, r = -Waa^{-1} b (Cramer). Divisions only by denominators known to be nonzero, so that
+     -fp_trap never fires; a rejected singular case leaves an infinite candidate, skipped by the fallback. */
+  if (det > KERGS_LAW_SINGULAR * PetscAbsReal(Wnn * Wtt)) {
+    rn = (Wnt * bt - Wtt * bn) / det;
+    rt = (Wtn * bn - Wnn * bt) / det;
+    if (rn >= 0 && PetscAbsReal(rt) <= mu * rn) {
+      r[0] = rn;
+      r[1] = rt;
+      return KERGS_LAW_STICK;
+    }
+    cand[0][0] = rn;
+    cand[0][1] = rt;
+  } else cand[0][0] = cand[0][1] = PETSC_INFINITY;
+  /* Slip with v_t > 0: r_t = -mu r_n, v_n = (Wnn - mu Wnt) r_n + b_n = 0 (r_n > 0 needs den > 0). */
+  den = Wnn - mu * Wnt;
+  if (den > KERGS_LAW_SINGULAR * (Wnn + mu * PetscAbsReal(Wnt))) {
+    rn = -bn / den;
+    vt = (Wtn - mu * Wtt) * rn + bt;
+    if (vt >= 0) {
+      r[0] = rn;
+      r[1] = -mu * rn;
+      return KERGS_LAW_SLIP_POS;
+    }
+    cand[1][0] = rn;
+    cand[1][1] = -mu * rn;
+  } else cand[1][0] = cand[1][1] = PETSC_INFINITY;
+  /* Slip with v_t < 0: r_t = +mu r_n, v_n = (Wnn + mu Wnt) r_n + b_n = 0. */
+  den = Wnn + mu * Wnt;
+  if (den > KERGS_LAW_SINGULAR * (Wnn + mu * PetscAbsReal(Wnt))) {
+    rn = -bn / den;
+    vt = (Wtn + mu * Wtt) * rn + bt;
+    if (vt <= 0) {
+      r[0] = rn;
+      r[1] = mu * rn;
+      return KERGS_LAW_SLIP_NEG;
+    }
+    cand[2][0] = rn;
+    cand[2][1] = mu * rn;
+  } else cand[2][0] = cand[2][1] = PETSC_INFINITY;
+  cand[3][0] = 0.0;
+  cand[3][1] = 0.0;
+  return SolveCoulomb2Fallback(W, b, mu, 4, cand, r);
+}
+
+KergsLawStatus KergsLawSolve(PetscInt ncomp, const PetscReal Waa[], const PetscReal b[], PetscReal mu, PetscBool active, PetscReal r[])
+{
+  if (!active || !(b[0] < 0)) {
+    /* Inactive, or separating: r = 0 gives v = b with v_n >= 0 (a solution of the law). */
+    r[0] = 0.0;
+    if (ncomp > 1) r[1] = 0.0;
+    return active ? KERGS_LAW_OPEN : KERGS_LAW_INACTIVE;
+  }
+  if (ncomp == 1) {
+    /* Signorini alone: v_n = Wnn r_n + b_n = 0 with b_n < 0. A degenerate block (Wnn <= 0) gets r = 0. */
+    if (!(Waa[0] > 0)) {
+      r[0] = 0.0;
+      return KERGS_LAW_OPEN;
+    }
+    r[0] = -b[0] / Waa[0];
+    return KERGS_LAW_STICK;
+  }
+  return SolveCoulomb2(Waa, b, mu, r);
+}

@@ -1,0 +1,335 @@
+/* kergs operators: H_f^T, H_g^T, M^-1, W = H_f^T M^-1 H_f, V_f, V_g, R^d and v^d for one step
+   (DESIGN.md sections 2 and 6). Only what the scene needs is built: no rotations nor tangential
+   components for a frictionless scene, no H_g without driven walls. */
+#include <kergs/operators.h>
+#include <petscmat.h>
+
+PetscErrorCode KergsOperatorsCreate(MPI_Comm comm, KergsOperators *ops)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscNew(ops));
+  (*ops)->comm = comm;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode DestroyStepObjects(KergsOperators ops)
+{
+  PetscFunctionBeginUser;
+  PetscCall(MatDestroy(&ops->HfT));
+  PetscCall(MatDestroy(&ops->Hf));
+  PetscCall(MatDestroy(&ops->HgT));
+  PetscCall(MatDestroy(&ops->W));
+  PetscCall(VecDestroy(&ops->vd));
+  PetscCall(VecDestroy(&ops->vminus));
+  PetscCall(VecDestroy(&ops->r));
+  PetscCall(VecDestroy(&ops->v));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsDestroy(KergsOperators *ops)
+{
+  PetscFunctionBeginUser;
+  if (!*ops) PetscFunctionReturn(0);
+  PetscCall(DestroyStepObjects(*ops));
+  PetscCall(VecDestroy(&(*ops)->Minv));
+  PetscCall(VecDestroy(&(*ops)->Vf));
+  PetscCall(VecDestroy(&(*ops)->Rd));
+  PetscCall(VecDestroy(&(*ops)->R));
+  PetscCall(VecDestroy(&(*ops)->Vg));
+  PetscCall(VecScatterDestroy(&(*ops)->vf_all));
+  PetscCall(VecDestroy(&(*ops)->vf_seq));
+  PetscCall(PetscFree((*ops)->wall_dof));
+  PetscCall(PetscFree(*ops));
+  PetscFunctionReturn(0);
+}
+
+/* DOF layout: disks by index (ndof_disk each), then free walls (KERGS_DIM each, on the last rank);
+   driven walls' given DOFs all on rank 0. Vectors over DOFs are created once per scene size. */
+static PetscErrorCode SetUpDofLayout(KergsOperators ops, KergsScene scene)
+{
+  PetscMPIInt rank, size;
+  PetscInt    nfree_local, ngiven_local, nf = 0, ng = 0;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(ops->comm, &rank));
+  PetscCallMPI(MPI_Comm_size(ops->comm, &size));
+  ops->ndof_disk = KERGS_DIM + (scene->frictional ? KERGS_NROT : 0);
+  ops->ncomp     = scene->frictional ? KERGS_DIM : 1;
+  PetscCall(PetscFree(ops->wall_dof));
+  PetscCall(PetscMalloc1(scene->nwalls + 1, &ops->wall_dof));
+  for (PetscInt w = 0; w < scene->nwalls; w++) {
+    if (scene->walls[w].kind == KERGS_WALL_FREE) ops->wall_dof[w] = scene->ndisks * ops->ndof_disk + KERGS_DIM * nf++;
+    else ops->wall_dof[w] = KERGS_DIM * ng++;
+  }
+  ops->nfreewalls   = nf;
+  ops->ndrivenwalls = ng;
+  ops->nfree        = scene->ndisks * ops->ndof_disk + KERGS_DIM * nf;
+  ops->ngiven       = KERGS_DIM * ng;
+  nfree_local       = (scene->dend - scene->dstart) * ops->ndof_disk + (rank == size - 1 ? KERGS_DIM * nf : 0);
+  ngiven_local      = rank == 0 ? ops->ngiven : 0;
+  if (ops->Vf && ops->nfree_local == nfree_local) PetscFunctionReturn(0);
+  ops->nfree_local = nfree_local;
+  PetscCall(VecDestroy(&ops->Vf));
+  PetscCall(VecDestroy(&ops->Minv));
+  PetscCall(VecDestroy(&ops->Rd));
+  PetscCall(VecDestroy(&ops->R));
+  PetscCall(VecDestroy(&ops->Vg));
+  PetscCall(VecScatterDestroy(&ops->vf_all));
+  PetscCall(VecDestroy(&ops->vf_seq));
+  PetscCall(VecCreateMPI(ops->comm, nfree_local, ops->nfree, &ops->Vf));
+  PetscCall(VecDuplicate(ops->Vf, &ops->Minv));
+  PetscCall(VecDuplicate(ops->Vf, &ops->Rd));
+  PetscCall(VecDuplicate(ops->Vf, &ops->R));
+  if (ng) PetscCall(VecCreateMPI(ops->comm, ngiven_local, ops->ngiven, &ops->Vg));
+  PetscCall(VecScatterCreateToAll(ops->Vf, &ops->vf_all, &ops->vf_seq));
+  PetscFunctionReturn(0);
+}
+
+/* M^-1, V_f^-, R^d (= dt * external forces) on the local free DOFs, V_g^+ on rank 0. Free walls feel
+   their applied force only (no gravity), so that a pressure-controlled wall applies exactly that force. */
+static PetscErrorCode SetDofVectors(KergsOperators ops, KergsScene scene)
+{
+  PetscScalar *minv, *vf, *rd;
+  PetscInt     lo, hi, nd = ops->ndof_disk;
+  PetscReal    tmid = scene->time + 0.5 * scene->dt;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetOwnershipRange(ops->Vf, &lo, &hi));
+  PetscCall(VecGetArray(ops->Minv, &minv));
+  PetscCall(VecGetArray(ops->Vf, &vf));
+  PetscCall(VecGetArray(ops->Rd, &rd));
+  for (PetscInt i = scene->dstart; i < scene->dend; i++) {
+    PetscInt k = i * nd - lo;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      minv[k + d] = 1.0 / scene->mass[i];
+      vf[k + d]   = scene->v[KERGS_DIM * i + d];
+      rd[k + d]   = scene->dt * scene->mass[i] * scene->gravity[d];
+    }
+    for (PetscInt d = KERGS_DIM; d < nd; d++) {
+      minv[k + d] = 1.0 / scene->inertia[i];
+      vf[k + d]   = scene->omega[KERGS_NROT * i + d - KERGS_DIM];
+      rd[k + d]   = 0.0;
+    }
+  }
+  for (PetscInt w = 0; w < scene->nwalls; w++) {
+    const KergsWall *wall = &scene->walls[w];
+    PetscInt         k    = ops->wall_dof[w] - lo;
+    if (wall->kind != KERGS_WALL_FREE || k < 0 || k >= hi - lo) continue;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      minv[k + d] = 1.0 / wall->mass;
+      vf[k + d]   = wall->v[d];
+      rd[k + d]   = scene->dt * wall->force[d];
+    }
+  }
+  PetscCall(VecRestoreArray(ops->Minv, &minv));
+  PetscCall(VecRestoreArray(ops->Vf, &vf));
+  PetscCall(VecRestoreArray(ops->Rd, &rd));
+  if (ops->Vg) {
+    PetscScalar *vg;
+    PetscInt     nglocal; /* rank 0 owns every given DOF, the others none */
+    PetscCall(VecGetLocalSize(ops->Vg, &nglocal));
+    PetscCall(VecGetArray(ops->Vg, &vg));
+    for (PetscInt w = 0; w < scene->nwalls; w++) {
+      KergsWall *wall = &scene->walls[w];
+      if (wall->kind != KERGS_WALL_DRIVEN) continue;
+      /* V_g^+ of the step: the program's value at mid-step, so that a piece boundary on a step boundary is exact */
+      PetscCall(KergsWallVelocityAt(wall, tmid, wall->v));
+      if (nglocal)
+        for (PetscInt d = 0; d < KERGS_DIM; d++) vg[ops->wall_dof[w] + d] = wall->v[d];
+    }
+    PetscCall(VecRestoreArray(ops->Vg, &vg));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Entries of the rows of H^T for one contact: for component c, body a's columns get +e_c (and -ra for the
+   tangential component on the rotation), body b's get -e_c (and -rb on its rotation); DESIGN.md section 2:
+   v_n = n.(u_a - u_b), v_t = t.(u_a - u_b) - ra w_a - rb w_b. */
+typedef struct {
+  PetscInt  ncol;
+  PetscInt  col[2 * (KERGS_DIM + KERGS_NROT)];
+  PetscReal val[2 * (KERGS_DIM + KERGS_NROT)];
+} HtRow;
+
+static void AddBody(HtRow *row, PetscInt dof, PetscBool rotates, const PetscReal e[], PetscReal sign, PetscReal lever, PetscBool tangential)
+{
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    row->col[row->ncol]   = dof + d;
+    row->val[row->ncol++] = sign * e[d];
+  }
+  if (rotates && tangential) {
+    row->col[row->ncol]   = dof + KERGS_DIM;
+    row->val[row->ncol++] = -lever;
+  }
+}
+
+/* Row c (0 normal, 1 tangential) of contact k, split into its free part (H_f^T) and given part (H_g^T). */
+static void ContactRows(KergsOperators ops, KergsScene scene, const KergsContact *ct, PetscInt c, HtRow *free, HtRow *given)
+{
+  const PetscReal *e       = c == 0 ? ct->n : ct->t;
+  PetscBool        rotates = (PetscBool)(ops->ndof_disk > KERGS_DIM);
+  PetscBool        tang    = (PetscBool)(c > 0);
+
+  free->ncol = given->ncol = 0;
+  AddBody(free, KergsOperatorsDiskDof(ops, ct->a), rotates, e, 1.0, ct->ra, tang);
+  if (ct->kind == KERGS_CONTACT_DISK_DISK) AddBody(free, KergsOperatorsDiskDof(ops, ct->b), rotates, e, -1.0, ct->rb, tang);
+  else if (scene->walls[ct->b].kind == KERGS_WALL_FREE) AddBody(free, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
+  else AddBody(given, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
+}
+
+/* Create an AIJ Mat with exact preallocation: rows = local contact components, columns split at
+   [clo, chi) into the diagonal and off-diagonal blocks. */
+static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContacts contacts, PetscBool freepart, PetscInt ncols_local,
+                               PetscInt ncols, Mat *Ht)
+{
+  PetscInt  nrows = contacts->n * ops->ncomp, *dnz, *onz, clo = 0;
+  HtRow     fr, gr;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Exscan(&ncols_local, &clo, 1, MPIU_INT, MPI_SUM, ops->comm));
+  PetscCall(PetscCalloc2(nrows, &dnz, nrows, &onz));
+  for (PetscInt k = 0; k < contacts->n; k++)
+    for (PetscInt c = 0; c < ops->ncomp; c++) {
+      HtRow *row = freepart ? &fr : &gr;
+      ContactRows(ops, scene, &contacts->c[k], c, &fr, &gr);
+      for (PetscInt j = 0; j < row->ncol; j++) {
+        if (row->col[j] >= clo && row->col[j] < clo + ncols_local) dnz[k * ops->ncomp + c]++;
+        else onz[k * ops->ncomp + c]++;
+      }
+    }
+  PetscCall(MatCreate(ops->comm, Ht));
+  PetscCall(MatSetSizes(*Ht, nrows, ncols_local, PETSC_DETERMINE, ncols));
+  PetscCall(MatSetType(*Ht, MATAIJ));
+  PetscCall(MatSeqAIJSetPreallocation(*Ht, 0, dnz));
+  PetscCall(MatMPIAIJSetPreallocation(*Ht, 0, dnz, 0, onz));
+  PetscCall(MatSetOption(*Ht, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
+  PetscCall(MatSetOption(*Ht, MAT_NO_OFF_PROC_ENTRIES, PETSC_TRUE));
+  for (PetscInt k = 0; k < contacts->n; k++)
+    for (PetscInt c = 0; c < ops->ncomp; c++) {
+      PetscInt row = (contacts->start + k) * ops->ncomp + c;
+      HtRow   *r   = freepart ? &fr : &gr;
+      ContactRows(ops, scene, &contacts->c[k], c, &fr, &gr);
+      if (r->ncol) PetscCall(MatSetValues(*Ht, 1, &row, r->ncol, r->col, r->val, INSERT_VALUES));
+    }
+  PetscCall(MatAssemblyBegin(*Ht, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*Ht, MAT_FINAL_ASSEMBLY));
+  PetscCall(PetscFree2(dnz, onz));
+  PetscFunctionReturn(0);
+}
+
+/* W = H_f^T M^-1 H_f as (H_f^T M^-1) (H_f^T)^T. */
+static PetscErrorCode ComputeDelassus(KergsOperators ops)
+{
+  Mat HtMinv;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatDuplicate(ops->HfT, MAT_COPY_VALUES, &HtMinv));
+  PetscCall(MatDiagonalScale(HtMinv, NULL, ops->Minv));
+  PetscCall(MatMatTransposeMult(HtMinv, ops->HfT, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &ops->W));
+  PetscCall(MatDestroy(&HtMinv));
+  PetscFunctionReturn(0);
+}
+
+/* v^d = H_f^T (V_f^- + M^-1 R^d) + H_g^T V_g^+, and v^- = H_f^T V_f^- + H_g^T V_g^+. */
+static PetscErrorCode ComputeFreeVelocity(KergsOperators ops)
+{
+  Vec tmp;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatCreateVecs(ops->HfT, NULL, &ops->vd));
+  PetscCall(VecDuplicate(ops->vd, &ops->vminus));
+  PetscCall(VecDuplicate(ops->vd, &ops->r));
+  PetscCall(VecDuplicate(ops->vd, &ops->v));
+  PetscCall(MatMult(ops->HfT, ops->Vf, ops->vminus));
+  if (ops->HgT) PetscCall(MatMultAdd(ops->HgT, ops->Vg, ops->vminus, ops->vminus));
+  PetscCall(VecDuplicate(ops->Vf, &tmp));
+  PetscCall(VecPointwiseMult(tmp, ops->Minv, ops->Rd));
+  PetscCall(MatMult(ops->HfT, tmp, ops->vd));
+  PetscCall(VecAXPY(ops->vd, 1.0, ops->vminus));
+  PetscCall(VecDestroy(&tmp));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsAssemble(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(KERGS_Assemble, 0, 0, 0, 0));
+  PetscCall(DestroyStepObjects(ops));
+  PetscCall(SetUpDofLayout(ops, scene));
+  PetscCall(SetDofVectors(ops, scene));
+  PetscCall(CreateHt(ops, scene, contacts, PETSC_TRUE, ops->nfree_local, ops->nfree, &ops->HfT));
+  if (ops->ndrivenwalls) {
+    PetscInt nglocal;
+    PetscCall(VecGetLocalSize(ops->Vg, &nglocal));
+    PetscCall(CreateHt(ops, scene, contacts, PETSC_FALSE, nglocal, ops->ngiven, &ops->HgT));
+  }
+  PetscCall(ComputeDelassus(ops));
+  PetscCall(ComputeFreeVelocity(ops));
+  PetscCall(PetscLogEventEnd(KERGS_Assemble, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsGetHf(KergsOperators ops, Mat *Hf)
+{
+  PetscFunctionBeginUser;
+  if (!ops->Hf) PetscCall(MatTranspose(ops->HfT, MAT_INITIAL_MATRIX, &ops->Hf));
+  *Hf = ops->Hf;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsGetImpulses(KergsOperators ops, KergsContacts contacts)
+{
+  PetscScalar *r;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArray(ops->r, &r));
+  for (PetscInt k = 0; k < contacts->n; k++)
+    for (PetscInt c = 0; c < ops->ncomp; c++) r[k * ops->ncomp + c] = contacts->c[k].r[c];
+  PetscCall(VecRestoreArray(ops->r, &r));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsSetImpulses(KergsOperators ops, KergsContacts contacts)
+{
+  const PetscScalar *r, *v;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArrayRead(ops->r, &r));
+  PetscCall(VecGetArrayRead(ops->v, &v));
+  for (PetscInt k = 0; k < contacts->n; k++) {
+    for (PetscInt c = 0; c < KERGS_MAXCOMP; c++) contacts->c[k].r[c] = contacts->c[k].v[c] = 0.0;
+    for (PetscInt c = 0; c < ops->ncomp; c++) {
+      contacts->c[k].r[c] = r[k * ops->ncomp + c];
+      contacts->c[k].v[c] = v[k * ops->ncomp + c];
+    }
+  }
+  PetscCall(VecRestoreArrayRead(ops->r, &r));
+  PetscCall(VecRestoreArrayRead(ops->v, &v));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene scene)
+{
+  const PetscScalar *vf;
+  PetscInt           nd = ops->ndof_disk;
+
+  PetscFunctionBeginUser;
+  /* V_f^+ = V_f^- + M^-1 (H_f r + R^d) */
+  PetscCall(MatMultTranspose(ops->HfT, ops->r, ops->R));
+  PetscCall(VecAXPY(ops->R, 1.0, ops->Rd));
+  PetscCall(VecPointwiseMult(ops->R, ops->R, ops->Minv));
+  PetscCall(VecAXPY(ops->Vf, 1.0, ops->R));
+  /* the scene state is replicated: every rank receives all of V_f */
+  PetscCall(VecScatterBegin(ops->vf_all, ops->Vf, ops->vf_seq, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(ops->vf_all, ops->Vf, ops->vf_seq, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(ops->vf_seq, &vf));
+  for (PetscInt i = 0; i < scene->ndisks; i++) {
+    for (PetscInt d = 0; d < KERGS_DIM; d++) scene->v[KERGS_DIM * i + d] = vf[i * nd + d];
+    for (PetscInt d = KERGS_DIM; d < nd; d++) scene->omega[KERGS_NROT * i + d - KERGS_DIM] = vf[i * nd + d];
+  }
+  for (PetscInt w = 0; w < scene->nwalls; w++)
+    if (scene->walls[w].kind == KERGS_WALL_FREE)
+      for (PetscInt d = 0; d < KERGS_DIM; d++) scene->walls[w].v[d] = vf[ops->wall_dof[w] + d];
+  PetscCall(VecRestoreArrayRead(ops->vf_seq, &vf));
+  PetscFunctionReturn(0);
+}

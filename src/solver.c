@@ -1,0 +1,176 @@
+/* kergs solver: the per-step problem W r - v = -v^d with the contact law (eq. 1, 2), solved by a type
+   chosen by name (-solver_type), the way PETSc chooses a KSP. This file holds what the types share:
+   the registry, the options, which contacts are active, and the loop of sweeps with its stopping test. */
+#include <kergs/solver.h>
+
+const char *const KergsCriteria[] = {"quad", "maxm", "natural", "KergsCriterion", "KERGS_CRITERION_", NULL};
+
+static PetscFunctionList KergsSolverList = NULL;
+
+PetscErrorCode KergsSolverRegister(const char name[], PetscErrorCode (*create)(KergsSolver))
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFunctionListAdd(&KergsSolverList, name, create));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KergsSolverRegisterAll(void)
+{
+  PetscFunctionBeginUser;
+  if (KergsSolverList) PetscFunctionReturn(0);
+  PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGS, KergsSolverCreate_NLGS));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverCreate(MPI_Comm comm, KergsSolver *solver)
+{
+  KergsSolver s;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSolverRegisterAll());
+  PetscCall(PetscNew(&s));
+  s->comm      = comm;
+  s->max_it    = 150; /* the paper's cap */
+  s->tol       = 1e-4;
+  s->criterion = KERGS_CRITERION_QUAD;
+  PetscCall(KergsSweepCreate(comm, &s->sweep));
+  *solver = s;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverSetType(KergsSolver s, KergsSolverType type)
+{
+  PetscErrorCode (*create)(KergsSolver);
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscFunctionListFind(KergsSolverList, type, &create));
+  PetscCheck(create, s->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "Unknown -solver_type %s (see -help for the registered types)", type);
+  if (s->ops.destroy) PetscCall((*s->ops.destroy)(s));
+  PetscCall(PetscMemzero(&s->ops, sizeof(s->ops)));
+  s->data = NULL;
+  PetscCall(PetscStrncpy(s->type, type, sizeof(s->type)));
+  PetscCall((*create)(s));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
+{
+  char      type[64] = KERGS_SOLVER_NLGS;
+  PetscBool set;
+
+  PetscFunctionBeginUser;
+  if (s->type[0]) PetscCall(PetscStrncpy(type, s->type, sizeof(type)));
+  PetscOptionsBegin(s->comm, NULL, "Contact solver options", NULL);
+  PetscCall(PetscOptionsFList("-solver_type", "Solver of the per-step contact problem", "KergsSolverSetType", KergsSolverList, type, type, sizeof(type), &set));
+  PetscCall(PetscOptionsInt("-solver_max_it", "Maximum number of sweeps per step (the paper caps at 150)", "", s->max_it, &s->max_it, NULL));
+  PetscCall(PetscOptionsReal("-solver_tol", "Tolerance of the convergence criterion", "", s->tol, &s->tol, NULL));
+  PetscCall(PetscOptionsEnum("-solver_criterion", "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, LMGC90 Maxm), natural (natural-map residual, Siconos)", "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
+  if (!s->ops.solve || set) PetscCall(KergsSolverSetType(s, type));
+  if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(s, PetscOptionsObject));
+  PetscOptionsEnd();
+  PetscCheck(s->max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_max_it %" PetscInt_FMT " must be at least 1", s->max_it);
+  PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number", (double)s->tol);
+  PetscFunctionReturn(0);
+}
+
+/* Active contacts (eq. 2): the law applies when the predicted gap g~ <= 0, otherwise r = 0.
+   paper: g~ = g^-; lmgc90: g~ = g^- + (1 - theta) dt v_n^-. */
+PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
+{
+  const PetscScalar *vminus;
+
+  PetscFunctionBeginUser;
+  if (contacts->n > s->nalloc) {
+    PetscCall(PetscFree2(s->mu, s->active));
+    s->nalloc = PetscMax(contacts->n, 2 * s->nalloc);
+    PetscCall(PetscMalloc2(s->nalloc, &s->mu, s->nalloc, &s->active));
+  }
+  PetscCall(VecGetArrayRead(ops->vminus, &vminus));
+  for (PetscInt k = 0; k < contacts->n; k++) {
+    PetscReal g = contacts->c[k].gap;
+    if (scene->gaprule == KERGS_GAP_LMGC90) g += (1.0 - scene->theta) * scene->dt * vminus[k * ops->ncomp];
+    s->active[k] = (PetscBool)(g <= 0.0);
+    s->mu[k]     = contacts->c[k].mu;
+  }
+  PetscCall(VecRestoreArrayRead(ops->vminus, &vminus));
+  PetscCall(KergsSweepSetUp(s->sweep, ops->W, ops->ncomp, s->mu, s->active));
+  PetscFunctionReturn(0);
+}
+
+/* Sweeps until the chosen criterion is below tol or max_it sweeps were done (Algorithm 2's loop).
+   At exit the natural-map residual is recomputed from r, whatever the criterion. */
+PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, const PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *stats)
+{
+  KergsSweepMeasures m;
+  PetscReal          value = 0.0;
+  PetscInt           nglobal;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetSize(ops->r, &nglobal));
+  stats->iterations = 0;
+  stats->converged  = PETSC_TRUE;
+  if (nglobal > 0) {
+    stats->converged = PETSC_FALSE;
+    for (PetscInt k = 1; k <= s->max_it; k++) {
+      PetscCall(KergsSweepRun(s->sweep, ops->r, ops->vd, extra, Wdiag, &m));
+      stats->iterations = k;
+      switch (s->criterion) {
+      case KERGS_CRITERION_QUAD:
+        value = m.quad;
+        break;
+      case KERGS_CRITERION_MAXM:
+        value = m.maxm;
+        break;
+      case KERGS_CRITERION_NATURAL:
+        PetscCall(KergsSweepNaturalResidual(s->sweep, ops->r, ops->vd, ops->v, &value));
+        break;
+      }
+      if (value < s->tol) {
+        stats->converged = PETSC_TRUE;
+        break;
+      }
+    }
+  }
+  stats->criterion = value;
+  PetscCall(KergsSweepNaturalResidual(s->sweep, ops->r, ops->vd, ops->v, &stats->residual));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops, KergsSolveStats *stats)
+{
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBeginUser;
+  PetscCheck(s->ops.solve, s->comm, PETSC_ERR_ORDER, "Call KergsSolverSetFromOptions() or KergsSolverSetType() first");
+  PetscCall(PetscLogEventBegin(KERGS_Solve, 0, 0, 0, 0));
+  PetscCall(PetscTime(&t0));
+  if (s->ops.setup) PetscCall((*s->ops.setup)(s, scene, contacts, ops));
+  PetscCall((*s->ops.solve)(s, scene, contacts, ops, stats));
+  PetscCall(PetscTime(&t1));
+  stats->seconds = t1 - t0;
+  PetscCall(PetscLogEventEnd(KERGS_Solve, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverView(KergsSolver s, PetscViewer viewer)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact solver: %s, at most %" PetscInt_FMT " sweeps, criterion %s < %g\n", s->type, s->max_it, KergsCriteria[s->criterion], (double)s->tol));
+  if (s->ops.view) {
+    PetscCall(PetscViewerASCIIPushTab(viewer));
+    PetscCall((*s->ops.view)(s, viewer));
+    PetscCall(PetscViewerASCIIPopTab(viewer));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverDestroy(KergsSolver *s)
+{
+  PetscFunctionBeginUser;
+  if (!*s) PetscFunctionReturn(0);
+  if ((*s)->ops.destroy) PetscCall((*(*s)->ops.destroy)(*s));
+  PetscCall(KergsSweepDestroy(&(*s)->sweep));
+  PetscCall(PetscFree2((*s)->mu, (*s)->active));
+  PetscCall(PetscFree(*s));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,27 @@
+/* kergs solver type "nlgs": Algorithm 2, plain non-linear Gauss-Seidel on W with the exact one-contact law,
+   warm-started from the previous step's impulses. */
+#include <kergs/solver.h>
+
+static PetscErrorCode KergsSolverSetUp_NLGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsSolverSetUpSweep(s, scene, contacts, ops));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KergsSolverSolve_NLGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops, KergsSolveStats *stats)
+{
+  PetscFunctionBeginUser;
+  (void)scene;
+  (void)contacts;
+  PetscCall(KergsSolverIterate(s, ops, NULL, NULL, stats));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverCreate_NLGS(KergsSolver s)
+{
+  PetscFunctionBeginUser;
+  s->ops.setup = KergsSolverSetUp_NLGS;
+  s->ops.solve = KergsSolverSolve_NLGS;
+  PetscFunctionReturn(0);
+}

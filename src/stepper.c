@@ -1,0 +1,245 @@
+/* kergs stepper: the time loop of Algorithm 1 (Moreau-Jean, theta-method). Data flows one way per step:
+   scene state -> detect -> operators -> solver -> update -> results. */
+#include <kergs/stepper.h>
+#include <kergs/sample.h>
+#include <kergs/fclib_export.h>
+
+PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
+{
+  KergsStepper st;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsInitializePackage());
+  PetscCall(PetscNew(&st));
+  st->comm        = comm;
+  st->fclib_step  = -1;
+  st->overlap_tol = 1e-2;
+  PetscCall(KergsSceneCreate(comm, &st->scene));
+  PetscCall(KergsContactsCreate(comm, &st->contacts));
+  PetscCall(KergsOperatorsCreate(comm, &st->ops));
+  PetscCall(KergsSolverCreate(comm, &st->solver));
+  PetscCall(KergsResultsCreate(comm, &st->results));
+  *stepper = st;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneSetFromOptions(st->scene));
+  PetscCall(KergsSolverSetFromOptions(st->solver));
+  if (!st->results->path[0]) {
+    /* default results name from the scene */
+    const char *name = st->scene->name[0] ? st->scene->name : "kergs";
+    PetscCall(PetscSNPrintf(st->results->path, sizeof(st->results->path), "results/%s.h5", name));
+  }
+  PetscCall(KergsResultsSetFromOptions(st->results));
+  PetscOptionsBegin(st->comm, NULL, "Time stepping options", NULL);
+  PetscCall(PetscOptionsReal("-stop_at_rest", "Stop once every disk is slower than this speed (0: run all -steps)", "", st->rest_speed, &st->rest_speed, NULL));
+  PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "", st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
+  PetscCall(PetscOptionsInt("-fclib_step", "Export the local problem of this step in FCLib format (-1: none)", "", st->fclib_step, &st->fclib_step, NULL));
+  PetscCall(PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path), NULL));
+  PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair", "", st->overlap_tol, &st->overlap_tol, NULL));
+  PetscCall(PetscOptionsBool("-quiet", "Do not print a summary line per step", "", st->quiet, &st->quiet, NULL));
+  PetscOptionsEnd();
+  PetscCheck(st->rest_speed >= 0 && !PetscIsInfOrNanReal(st->rest_speed), st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-stop_at_rest %g must be a non-negative speed", (double)st->rest_speed);
+  PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative", (double)st->overlap_tol);
+  if (st->fclib_step >= 0 && !st->fclib_path[0]) PetscCall(PetscSNPrintf(st->fclib_path, sizeof(st->fclib_path), "results/%s-step%" PetscInt_FMT ".fclib.h5", st->scene->name[0] ? st->scene->name : "kergs", st->fclib_step));
+  PetscFunctionReturn(0);
+}
+
+/* Initial grains must not overlap (beyond a tolerance): report the first offending pair by grain id. */
+static PetscErrorCode CheckInitialOverlaps(KergsStepper st)
+{
+  KergsScene    sc = st->scene;
+  KergsContacts ct = st->contacts;
+  PetscInt      bad = -1, nbad;
+
+  PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < ct->n && bad < 0; k++) {
+    const KergsContact *c    = &ct->c[k];
+    PetscReal           rmin = c->kind == KERGS_CONTACT_DISK_DISK ? PetscMin(c->ra, c->rb) : c->ra;
+    if (c->gap < -st->overlap_tol * rmin) bad = k;
+  }
+  PetscCall(MPIU_Allreduce(bad >= 0 ? &(PetscInt){1} : &(PetscInt){0}, &nbad, 1, MPIU_INT, MPI_SUM, st->comm));
+  if (bad >= 0) {
+    const KergsContact *c = &ct->c[bad];
+    if (c->kind == KERGS_CONTACT_DISK_DISK)
+      PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grains %" PetscInt_FMT " and %" PetscInt_FMT " overlap by %g (radii %g, %g)\n", sc->id[c->a], sc->id[c->b], (double)-c->gap, (double)c->ra, (double)c->rb));
+    else PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grain %" PetscInt_FMT " crosses wall %s by %g (radius %g)\n", sc->id[c->a], sc->walls[c->b].name, (double)-c->gap, (double)c->ra));
+  }
+  PetscCheck(nbad == 0, st->comm, PETSC_ERR_USER_INPUT, "The initial packing has overlapping grains (see the pairs printed above); raise -initial_overlap_tol to accept interpenetrations up to that fraction of the smaller radius");
+  PetscFunctionReturn(0);
+}
+
+/* x+ = x- + dt (theta V+ + (1 - theta) V-) for disks and walls; V- is given as the velocities before the update. */
+static PetscErrorCode UpdatePositions(KergsScene sc, const PetscReal *vold, const PetscReal *wold, const PetscReal *wvold)
+{
+  PetscReal th = sc->theta, dt = sc->dt;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < KERGS_DIM * sc->ndisks; i++) sc->x[i] += dt * (th * sc->v[i] + (1 - th) * vold[i]);
+  for (PetscInt i = 0; i < KERGS_NROT * sc->ndisks; i++) sc->rot[i] += dt * (th * sc->omega[i] + (1 - th) * wold[i]);
+  for (PetscInt w = 0; w < sc->nwalls; w++) {
+    KergsWall *wall = &sc->walls[w];
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      /* a driven wall moves with its given velocity; a free wall with the theta-rule like a disk */
+      PetscReal dx = wall->kind == KERGS_WALL_DRIVEN ? dt * wall->v[d] : dt * (th * wall->v[d] + (1 - th) * wvold[KERGS_DIM * w + d]);
+      wall->a[d] += dx;
+      wall->b[d] += dx;
+      wall->disp[d] += dx;
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Interpenetration at the end of the step, from the exact gaps of this step's contact pairs at the new
+   positions: mean over active contacts of max(0, -g+), and the largest. Global. */
+static PetscErrorCode MeasureViolation(KergsStepper st, PetscReal *mean, PetscReal *max, PetscInt *nactive)
+{
+  KergsScene sc = st->scene;
+  PetscReal  loc[2] = {0, 0}, glob[2], lmax = 0, gmax;
+  PetscInt   lact = 0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < st->contacts->n; k++) {
+    const KergsContact *c = &st->contacts->c[k];
+    const PetscReal    *xa = &sc->x[KERGS_DIM * c->a];
+    PetscReal           g;
+    if (!st->solver->active[k]) continue;
+    if (c->kind == KERGS_CONTACT_DISK_DISK) {
+      const PetscReal *xb = &sc->x[KERGS_DIM * c->b];
+      PetscReal        d2 = 0;
+      for (PetscInt d = 0; d < KERGS_DIM; d++) d2 += (xa[d] - xb[d]) * (xa[d] - xb[d]);
+      g = PetscSqrtReal(d2) - c->ra - c->rb;
+    } else {
+      const KergsWall *w = &sc->walls[c->b];
+      g                  = -c->ra;
+      for (PetscInt d = 0; d < KERGS_DIM; d++) g += (xa[d] - w->a[d]) * c->n[d];
+    }
+    lact++;
+    loc[0] += PetscMax(0.0, -g);
+    lmax = PetscMax(lmax, -g);
+  }
+  loc[1] = (PetscReal)lact;
+  PetscCall(MPIU_Allreduce(loc, glob, 2, MPIU_REAL, MPI_SUM, st->comm));
+  PetscCall(MPIU_Allreduce(&lmax, &gmax, 1, MPIU_REAL, MPI_MAX, st->comm));
+  *mean    = glob[1] > 0 ? glob[0] / glob[1] : 0.0;
+  *max     = gmax;
+  *nactive = (PetscInt)glob[1];
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SaveVelocities(KergsScene sc, PetscReal **vold, PetscReal **wold, PetscReal **wvold)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc3(KERGS_DIM * sc->ndisks, vold, KERGS_NROT * sc->ndisks, wold, KERGS_DIM * sc->nwalls, wvold));
+  PetscCall(PetscArraycpy(*vold, sc->v, KERGS_DIM * sc->ndisks));
+  PetscCall(PetscArraycpy(*wold, sc->omega, KERGS_NROT * sc->ndisks));
+  for (PetscInt w = 0; w < sc->nwalls; w++)
+    for (PetscInt d = 0; d < KERGS_DIM; d++) (*wvold)[KERGS_DIM * w + d] = sc->walls[w].v[d];
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode RecordStep(KergsStepper st, const KergsSolveStats *ss, PetscLogDouble tdetect, PetscLogDouble tassemble)
+{
+  KergsResults res = st->results;
+  PetscReal    mean, max, times[2] = {tdetect, tassemble}, tmax[2];
+  PetscInt     nactive;
+
+  PetscFunctionBeginUser;
+  PetscCall(MeasureViolation(st, &mean, &max, &nactive));
+  PetscCall(MPIU_Allreduce(times, tmax, 2, MPIU_REAL, MPI_MAX, st->comm));
+  st->max_violation = PetscMax(st->max_violation, max);
+  if (!ss->converged) st->nonconverged++;
+  PetscCall(KergsResultsRecord(res, "step", (PetscReal)st->scene->step));
+  PetscCall(KergsResultsRecord(res, "time", st->scene->time));
+  PetscCall(KergsResultsRecord(res, "contacts", (PetscReal)st->contacts->nglobal));
+  PetscCall(KergsResultsRecord(res, "active", (PetscReal)nactive));
+  PetscCall(KergsResultsRecord(res, "iterations", (PetscReal)ss->iterations));
+  PetscCall(KergsResultsRecord(res, "converged", ss->converged ? 1.0 : 0.0));
+  PetscCall(KergsResultsRecord(res, "residual", ss->residual));
+  PetscCall(KergsResultsRecord(res, "criterion", ss->criterion));
+  PetscCall(KergsResultsRecord(res, "mean_violation", mean));
+  PetscCall(KergsResultsRecord(res, "max_violation", max));
+  PetscCall(KergsResultsRecord(res, "solve_seconds", ss->seconds));
+  PetscCall(KergsResultsRecord(res, "detect_seconds", tmax[0]));
+  PetscCall(KergsResultsRecord(res, "assemble_seconds", tmax[1]));
+  PetscCall(KergsResultsEndStep(res));
+  if (!st->quiet)
+    PetscCall(PetscPrintf(st->comm, "step %5" PetscInt_FMT " t %-10.5g contacts %6" PetscInt_FMT " active %6" PetscInt_FMT " sweeps %4" PetscInt_FMT "%s residual %8.2e violation mean %8.2e max %8.2e solve %.3g s\n", st->scene->step, (double)st->scene->time,
+                          st->contacts->nglobal, nactive, ss->iterations, ss->converged ? "  " : " !", (double)ss->residual, (double)mean, (double)max, (double)ss->seconds));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsStepperStep(KergsStepper st)
+{
+  KergsScene      sc = st->scene;
+  KergsSolveStats ss;
+  PetscLogDouble  t0, t1, t2;
+  PetscReal      *vold, *wold, *wvold;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscTime(&t0));
+  PetscCall(KergsContactsDetect(st->contacts, sc));
+  if (sc->step == 0) PetscCall(CheckInitialOverlaps(st));
+  PetscCall(PetscTime(&t1));
+  PetscCall(KergsOperatorsAssemble(st->ops, sc, st->contacts));
+  PetscCall(KergsOperatorsGetImpulses(st->ops, st->contacts)); /* warm start */
+  PetscCall(PetscTime(&t2));
+  PetscCall(KergsSolverSolve(st->solver, sc, st->contacts, st->ops, &ss));
+  PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
+  if (sc->step == st->fclib_step) PetscCall(KergsFCLibExport(sc, st->contacts, st->ops, st->solver->active, st->fclib_path));
+  PetscCall(PetscLogEventBegin(KERGS_Update, 0, 0, 0, 0));
+  PetscCall(SaveVelocities(sc, &vold, &wold, &wvold));
+  PetscCall(KergsOperatorsUpdateVelocities(st->ops, sc));
+  PetscCall(UpdatePositions(sc, vold, wold, wvold));
+  PetscCall(PetscFree3(vold, wold, wvold));
+  sc->time += sc->dt;
+  sc->step++;
+  PetscCall(PetscLogEventEnd(KERGS_Update, 0, 0, 0, 0));
+  PetscCall(RecordStep(st, &ss, t1 - t0, t2 - t1));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsStepperRun(KergsStepper st)
+{
+  KergsScene sc = st->scene;
+  PetscReal  ek, vmax;
+  PetscBool  rest = PETSC_FALSE;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsResultsOpen(st->results));
+  PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
+  while (sc->step < sc->nsteps && !rest) {
+    PetscCall(KergsStepperStep(st));
+    if (st->results->snapshot_every > 0 && sc->step % st->results->snapshot_every == 0 && sc->step < sc->nsteps) PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
+    if (st->rest_speed > 0) {
+      PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
+      rest = (PetscBool)(vmax < st->rest_speed);
+    }
+  }
+  PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
+  PetscCall(KergsResultsClose(st->results));
+  if (st->sample_out[0]) PetscCall(KergsSampleWrite(sc, st->sample_out));
+  PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
+  PetscCall(PetscPrintf(st->comm, "kergs: %" PetscInt_FMT " steps%s, %" PetscInt_FMT " not converged (cap %" PetscInt_FMT " sweeps), largest interpenetration %.3g, kinetic energy %.3g, fastest grain %.3g\n", sc->step, rest ? " (at rest)" : "", st->nonconverged, st->solver->max_it,
+                        (double)st->max_violation, (double)ek, (double)vmax));
+  if (st->results->enabled) PetscCall(PetscPrintf(st->comm, "kergs: results in %s\n", st->results->path));
+  if (st->sample_out[0]) PetscCall(PetscPrintf(st->comm, "kergs: sample in %s\n", st->sample_out));
+  if (st->fclib_step >= 0 && st->fclib_step < sc->step) PetscCall(PetscPrintf(st->comm, "kergs: FCLib problem of step %" PetscInt_FMT " in %s\n", st->fclib_step, st->fclib_path));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsStepperDestroy(KergsStepper *st)
+{
+  PetscFunctionBeginUser;
+  if (!*st) PetscFunctionReturn(0);
+  PetscCall(KergsResultsDestroy(&(*st)->results));
+  PetscCall(KergsSolverDestroy(&(*st)->solver));
+  PetscCall(KergsOperatorsDestroy(&(*st)->ops));
+  PetscCall(KergsContactsDestroy(&(*st)->contacts));
+  PetscCall(KergsSceneDestroy(&(*st)->scene));
+  PetscCall(PetscFree(*st));
+  PetscFunctionReturn(0);
+}
