@@ -53,7 +53,7 @@ static PetscErrorCode SetUpDofLayout(KergsOperators ops, KergsScene scene)
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(ops->comm, &rank));
   PetscCallMPI(MPI_Comm_size(ops->comm, &size));
-  ops->ndof_disk = KERGS_DIM + (scene->frictional ? KERGS_NROT : 0);
+  ops->ndof_disk = KERGS_DIM + (scene->frictional && !scene->lock_rotation ? KERGS_NROT : 0);
   ops->ncomp     = scene->frictional ? KERGS_DIM : 1;
   PetscCall(PetscFree(ops->wall_dof));
   PetscCall(PetscMalloc1(scene->nwalls + 1, &ops->wall_dof));

@@ -103,9 +103,11 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, const Petsc
 {
   KergsSweepMeasures m;
   PetscReal          value = 0.0;
+  PetscLogDouble     t0, t1;
   PetscInt           nglobal;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscTime(&t0));
   PetscCall(VecGetSize(ops->r, &nglobal));
   stats->iterations = 0;
   stats->converged  = PETSC_TRUE;
@@ -131,7 +133,9 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, const Petsc
       }
     }
   }
-  stats->criterion = value;
+  PetscCall(PetscTime(&t1));
+  stats->sweep_seconds = t1 - t0;
+  stats->criterion     = value;
   PetscCall(KergsSweepNaturalResidual(s->sweep, ops->r, ops->vd, ops->v, &stats->residual));
   PetscFunctionReturn(0);
 }

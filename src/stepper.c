@@ -3,6 +3,20 @@
 #include <kergs/stepper.h>
 #include <kergs/sample.h>
 #include <kergs/fclib_export.h>
+#include <sys/resource.h>
+
+/* Peak resident memory of the whole run so far, in bytes, summed over ranks. */
+static PetscErrorCode PeakMemory(MPI_Comm comm, PetscReal *bytes)
+{
+  struct rusage ru;
+  PetscReal     mine;
+
+  PetscFunctionBeginUser;
+  getrusage(RUSAGE_SELF, &ru);
+  mine = 1024.0 * (PetscReal)ru.ru_maxrss; /* Linux reports kilobytes */
+  PetscCall(MPIU_Allreduce(&mine, bytes, 1, MPIU_REAL, MPI_SUM, comm));
+  PetscFunctionReturn(0);
+}
 
 PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
 {
@@ -14,6 +28,7 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   st->comm        = comm;
   st->fclib_step  = -1;
   st->overlap_tol = 1e-2;
+  PetscCall(PeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));
   PetscCall(KergsContactsCreate(comm, &st->contacts));
   PetscCall(KergsOperatorsCreate(comm, &st->ops));
@@ -144,12 +159,13 @@ static PetscErrorCode SaveVelocities(KergsScene sc, PetscReal **vold, PetscReal 
 static PetscErrorCode RecordStep(KergsStepper st, const KergsSolveStats *ss, PetscLogDouble tdetect, PetscLogDouble tassemble)
 {
   KergsResults res = st->results;
-  PetscReal    mean, max, times[2] = {tdetect, tassemble}, tmax[2];
-  PetscInt     nactive;
+  PetscReal    mean = 0, max = 0, times[3] = {tdetect, tassemble, st->io_seconds}, tmax[3], peak;
+  PetscInt     nactive = 0;
 
   PetscFunctionBeginUser;
   PetscCall(MeasureViolation(st, &mean, &max, &nactive));
-  PetscCall(MPIU_Allreduce(times, tmax, 2, MPIU_REAL, MPI_MAX, st->comm));
+  PetscCall(MPIU_Allreduce(times, tmax, 3, MPIU_REAL, MPI_MAX, st->comm));
+  PetscCall(PeakMemory(st->comm, &peak));
   st->max_violation = PetscMax(st->max_violation, max);
   if (!ss->converged) st->nonconverged++;
   PetscCall(KergsResultsRecord(res, "step", (PetscReal)st->scene->step));
@@ -165,6 +181,10 @@ static PetscErrorCode RecordStep(KergsStepper st, const KergsSolveStats *ss, Pet
   PetscCall(KergsResultsRecord(res, "solve_seconds", ss->seconds));
   PetscCall(KergsResultsRecord(res, "detect_seconds", tmax[0]));
   PetscCall(KergsResultsRecord(res, "assemble_seconds", tmax[1]));
+  PetscCall(KergsResultsRecord(res, "sweep_seconds", ss->sweep_seconds));
+  PetscCall(KergsResultsRecord(res, "io_seconds", tmax[2]));
+  PetscCall(KergsResultsRecord(res, "peak_memory", peak));
+  PetscCall(KergsResultsRecord(res, "baseline_memory", st->baseline_rss));
   PetscCall(KergsResultsEndStep(res));
   if (!st->quiet)
     PetscCall(PetscPrintf(st->comm, "step %5" PetscInt_FMT " t %-10.5g contacts %6" PetscInt_FMT " active %6" PetscInt_FMT " sweeps %4" PetscInt_FMT "%s residual %8.2e violation mean %8.2e max %8.2e solve %.3g s\n", st->scene->step, (double)st->scene->time,
@@ -198,6 +218,14 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   sc->time += sc->dt;
   sc->step++;
   PetscCall(PetscLogEventEnd(KERGS_Update, 0, 0, 0, 0));
+  st->io_seconds = 0;
+  if (st->results->snapshot_every > 0 && sc->step % st->results->snapshot_every == 0 && sc->step < sc->nsteps) {
+    PetscLogDouble t3, t4;
+    PetscCall(PetscTime(&t3));
+    PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
+    PetscCall(PetscTime(&t4));
+    st->io_seconds = t4 - t3;
+  }
   PetscCall(RecordStep(st, &ss, t1 - t0, t2 - t1));
   PetscFunctionReturn(0);
 }
@@ -213,7 +241,6 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
   while (sc->step < sc->nsteps && !rest) {
     PetscCall(KergsStepperStep(st));
-    if (st->results->snapshot_every > 0 && sc->step % st->results->snapshot_every == 0 && sc->step < sc->nsteps) PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
     if (st->rest_speed > 0) {
       PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
       rest = (PetscBool)(vmax < st->rest_speed);

@@ -11,6 +11,7 @@
 #define KERGS_OPERATORS_H
 
 #include <kergs/detect.h>
+#include <petscmat.h>
 
 typedef struct _p_KergsOperators *KergsOperators;
 struct _p_KergsOperators {

@@ -62,6 +62,7 @@ struct _p_KergsScene {
   PetscReal *density; /* per material (mass per unit area in 2D) */
   PetscReal *mu;      /* friction coefficient, nmaterials x nmaterials, symmetric */
   PetscBool  frictional; /* some pair has mu > 0: contacts carry tangential components, disks rotate */
+  PetscBool  lock_rotation; /* -disks_lock_rotation: disks translate only (sliding blocks), no rotation DOFs */
   /* loading and numerics */
   PetscReal    gravity[KERGS_DIM];
   PetscReal    dt, theta;
@@ -73,14 +74,24 @@ struct _p_KergsScene {
   PetscReal time;
 };
 
+/* Defaults: gravity (0, -9.81), dt 1e-3, 100 steps, theta 1, paper gap rule, one material of density 1 without
+   friction, alert automatic (negative until disks are set), no disks, no walls. */
 PETSC_EXTERN PetscErrorCode KergsSceneCreate(MPI_Comm, KergsScene *);
+/* Reads every scene option (run with -help for the list), generates the disks, then calls KergsSceneCheck. */
 PETSC_EXTERN PetscErrorCode KergsSceneSetFromOptions(KergsScene);
+/* Collective. Replaces the disks: x (KERGS_DIM * n), r (n); material and v may be NULL (material 0, at rest).
+   Sets id = index, rot = omega = 0, mass and inertia from the densities, dstart/dend, recomputes frictional,
+   and sets alert = 0.1 * mean radius if alert is still automatic (negative). */
 PETSC_EXTERN PetscErrorCode KergsSceneSetDisks(KergsScene, PetscInt n, const PetscReal *x, const PetscReal *r, const PetscInt *material, const PetscReal *v);
+/* Errors naming the grain, wall, material pair or option at fault; overlaps are not checked here. */
 PETSC_EXTERN PetscErrorCode KergsSceneCheck(KergsScene);
 PETSC_EXTERN PetscErrorCode KergsSceneView(KergsScene, PetscViewer);
 PETSC_EXTERN PetscErrorCode KergsSceneDestroy(KergsScene *);
 PETSC_EXTERN PetscErrorCode KergsSceneFriction(KergsScene, PetscInt mat_a, PetscInt mat_b, PetscReal *mu);
+/* Driven wall: its program's velocity at time t (zero before the first piece or without program).
+   Free wall: its current velocity wall->v. */
 PETSC_EXTERN PetscErrorCode KergsWallVelocityAt(const KergsWall *, PetscReal t, PetscReal v[]);
+/* Over all disks (replicated, no communication): ek = sum 1/2 m |v|^2 + 1/2 I omega^2, vmax = largest speed. */
 PETSC_EXTERN PetscErrorCode KergsSceneKineticEnergy(KergsScene, PetscReal *ek, PetscReal *vmax);
 
 #endif

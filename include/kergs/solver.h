@@ -23,7 +23,8 @@ typedef struct {
   PetscBool converged;
   PetscReal criterion; /* value of the chosen criterion at exit */
   PetscReal residual;  /* natural-map residual recomputed from r at exit */
-  PetscReal seconds;
+  PetscReal seconds;       /* whole solve: set-up, sweeps, final residual */
+  PetscReal sweep_seconds; /* the sweeps alone */
 } KergsSolveStats;
 
 typedef struct _p_KergsSolver *KergsSolver;

@@ -23,6 +23,8 @@ struct _p_KergsStepper {
   PetscReal      overlap_tol;    /* -initial_overlap_tol: initial interpenetration allowed, relative to the smaller radius */
   PetscInt       nonconverged;   /* steps whose solve hit max_it */
   PetscReal      max_violation;  /* largest interpenetration seen over the run */
+  PetscReal      io_seconds;     /* snapshot time of the current step */
+  PetscReal      baseline_rss;   /* resident memory (bytes, summed over ranks) before the scene was built */
 };
 
 PETSC_EXTERN PetscErrorCode KergsStepperCreate(MPI_Comm, KergsStepper *);

@@ -1,0 +1,765 @@
+/* kergs scene: bodies, materials, loading programs and numerical settings, read from the options database.
+   The disks themselves come from src/scene_generate.c (list, lattice, random, sample file). */
+#include <kergs/scene.h>
+#include <petscviewer.h>
+
+const char *const KergsWallKinds[] = {"driven", "free", "KergsWallKind", "KERGS_WALL_", NULL};
+const char *const KergsGapRules[]  = {"paper", "lmgc90", "KergsGapRule", "KERGS_GAP_", NULL};
+
+/* Defined in src/scene_generate.c: the disk block of the options (-disks_source and its generators). */
+PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene);
+
+#define KERGS_WALL_PREFIX_LEN 128
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Options helpers, shared with src/scene_generate.c                                               */
+
+/* Number of comma-separated values given to option opt (under the block's prefix), 0 when absent. */
+static PetscErrorCode OptionsCountValues(PetscOptionItems *PetscOptionsObject, const char opt[], PetscInt *count)
+{
+  const char *value;
+  PetscBool   found;
+
+  PetscFunctionBeginUser;
+  *count = 0;
+  PetscCall(PetscOptionsFindPair(PetscOptionsObject->options, PetscOptionsObject->prefix, opt, &value, &found));
+  if (!found || !value || !value[0]) PetscFunctionReturn(0);
+  *count = 1;
+  for (const char *c = value; *c; c++)
+    if (*c == ',') (*count)++;
+  PetscFunctionReturn(0);
+}
+
+/* Read a list of reals of any length into a new array (*values, free with PetscFree; never NULL, since the
+   help printer reads values[0]). *n is the number of values given, 0 when the option is absent. */
+PETSC_INTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
+                                                 PetscReal **values, PetscBool *set)
+{
+  PetscInt  cap;
+  PetscBool flg;
+
+  PetscFunctionBeginUser;
+  PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
+  PetscCall(PetscCalloc1(cap + 1, values));
+  *n = cap + 1;
+  PetscCall(PetscOptionsRealArray(opt, text, NULL, *values, n, &flg));
+  if (!flg) *n = 0;
+  if (set) *set = flg;
+  PetscFunctionReturn(0);
+}
+
+/* Same for integers. */
+PETSC_INTERN PetscErrorCode KergsOptionsIntList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
+                                                PetscInt **values, PetscBool *set)
+{
+  PetscInt  cap;
+  PetscBool flg;
+
+  PetscFunctionBeginUser;
+  PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
+  PetscCall(PetscCalloc1(cap + 1, values));
+  *n = cap + 1;
+  PetscCall(PetscOptionsIntArray(opt, text, NULL, *values, n, &flg));
+  if (!flg) *n = 0;
+  if (set) *set = flg;
+  PetscFunctionReturn(0);
+}
+
+/* Read exactly n reals (a point, a vector, a box); v is left unchanged when the option is absent. */
+PETSC_INTERN PetscErrorCode KergsOptionsReals(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt n,
+                                              PetscReal v[], PetscBool *set)
+{
+  PetscReal *tmp;
+  PetscInt   nread = n, given;
+  PetscBool  flg;
+  char       help[512];
+  size_t     len;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(n, &tmp));
+  PetscCall(PetscArraycpy(tmp, v, n));
+  /* -help prints only the first value of an absent array option: show the whole default in the text */
+  PetscCall(PetscSNPrintf(help, sizeof(help), "%s (default ", text));
+  for (PetscInt k = 0; k < n; k++) {
+    PetscCall(PetscStrlen(help, &len));
+    PetscCall(PetscSNPrintf(help + len, sizeof(help) - len, "%g%s", (double)v[k], k + 1 < n ? "," : ")"));
+  }
+  PetscCall(PetscOptionsRealArray(opt, help, NULL, tmp, &nread, &flg));
+  if (flg) {
+    PetscCall(OptionsCountValues(PetscOptionsObject, opt, &given));
+    PetscCheck(given == n, PetscOptionsObject->comm, PETSC_ERR_ARG_SIZ,
+               "Option -%s%s needs %" PetscInt_FMT " comma-separated values, got %" PetscInt_FMT,
+               PetscOptionsObject->prefix ? PetscOptionsObject->prefix : "", opt + 1, n, given);
+    PetscCall(PetscArraycpy(v, tmp, n));
+  }
+  PetscCall(PetscFree(tmp));
+  if (set) *set = flg;
+  PetscFunctionReturn(0);
+}
+
+/* A point or vector: exactly KERGS_DIM reals. */
+PETSC_INTERN PetscErrorCode KergsOptionsVector(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscReal v[],
+                                               PetscBool *set)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsOptionsReals(PetscOptionsObject, opt, text, KERGS_DIM, v, set));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Create, destroy, disks                                                                          */
+
+PetscErrorCode KergsSceneCreate(MPI_Comm comm, KergsScene *scene)
+{
+  KergsScene s;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsInitializePackage());
+  PetscCall(PetscNew(&s));
+  s->comm = comm;
+  PetscCall(PetscStrncpy(s->name, "unnamed", sizeof(s->name)));
+  s->gravity[0] = 0.0;
+  s->gravity[1] = -9.81;
+  s->dt         = 1e-3;
+  s->theta      = 1.0;
+  s->nsteps     = 100;
+  s->gaprule    = KERGS_GAP_PAPER;
+  s->alert      = -1.0; /* automatic: 0.1 * mean radius once the disks are known */
+  s->nmaterials = 1;
+  PetscCall(PetscMalloc1(1, &s->density));
+  PetscCall(PetscCalloc1(1, &s->mu));
+  s->density[0] = 1.0;
+  *scene        = s;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneFreeDisks(KergsScene scene)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(scene->id));
+  PetscCall(PetscFree(scene->x));
+  PetscCall(PetscFree(scene->rot));
+  PetscCall(PetscFree(scene->v));
+  PetscCall(PetscFree(scene->omega));
+  PetscCall(PetscFree(scene->radius));
+  PetscCall(PetscFree(scene->mass));
+  PetscCall(PetscFree(scene->inertia));
+  PetscCall(PetscFree(scene->material));
+  scene->ndisks = 0;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneDestroy(KergsScene *scene)
+{
+  PetscFunctionBeginUser;
+  if (!*scene) PetscFunctionReturn(0);
+  PetscCall(SceneFreeDisks(*scene));
+  PetscCall(PetscFree((*scene)->walls));
+  PetscCall(PetscFree((*scene)->density));
+  PetscCall(PetscFree((*scene)->mu));
+  PetscCall(PetscFree(*scene));
+  PetscFunctionReturn(0);
+}
+
+/* Mass and inertia of a disk from its material's density (2D: area pi r^2, I = m r^2 / 2 about its centre).
+   Disks with an invalid material are left massless: KergsSceneCheck reports them. */
+static PetscErrorCode SceneComputeMasses(KergsScene scene)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < scene->ndisks; i++) {
+    const PetscInt  m = scene->material[i];
+    const PetscReal r = scene->radius[i];
+
+    scene->mass[i]    = (m >= 0 && m < scene->nmaterials) ? scene->density[m] * PETSC_PI * r * r : 0.0;
+    scene->inertia[i] = 0.5 * scene->mass[i] * r * r;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Contiguous split of the disks over the ranks: [dstart, dend). */
+static PetscErrorCode SceneSplitOwnership(KergsScene scene)
+{
+  PetscInt nlocal = PETSC_DECIDE, n = scene->ndisks, end;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSplitOwnership(scene->comm, &nlocal, &n));
+  PetscCallMPI(MPI_Scan(&nlocal, &end, 1, MPIU_INT, MPI_SUM, scene->comm));
+  scene->dstart = end - nlocal;
+  scene->dend   = end;
+  PetscFunctionReturn(0);
+}
+
+/* frictional = some pair of materials that can actually meet has mu > 0. A pair (p, q) can meet when a disk of
+   material p can touch a wall of material q, a disk of material q, or (p == q) another disk of material p. */
+static PetscErrorCode SceneUpdateFrictional(KergsScene scene)
+{
+  const PetscInt nm = scene->nmaterials;
+  PetscInt      *ndisk, *nwall;
+
+  PetscFunctionBeginUser;
+  scene->frictional = PETSC_FALSE;
+  PetscCall(PetscCalloc2(nm, &ndisk, nm, &nwall));
+  for (PetscInt i = 0; i < scene->ndisks; i++)
+    if (scene->material[i] >= 0 && scene->material[i] < nm) ndisk[scene->material[i]]++;
+  for (PetscInt w = 0; w < scene->nwalls; w++)
+    if (scene->walls[w].material >= 0 && scene->walls[w].material < nm) nwall[scene->walls[w].material]++;
+  for (PetscInt p = 0; p < nm; p++) {
+    for (PetscInt q = 0; q < nm; q++) {
+      const PetscBool meet =
+          (ndisk[p] > 0 && (nwall[q] > 0 || (p != q && ndisk[q] > 0) || (p == q && ndisk[p] > 1))) ? PETSC_TRUE : PETSC_FALSE;
+
+      if (meet && scene->mu[p * nm + q] > 0.0) scene->frictional = PETSC_TRUE;
+    }
+  }
+  PetscCall(PetscFree2(ndisk, nwall));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneMeanRadius(KergsScene scene, PetscReal *mean)
+{
+  PetscReal sum = 0.0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < scene->ndisks; i++) sum += scene->radius[i];
+  *mean = scene->ndisks ? sum / scene->ndisks : 0.0;
+  PetscFunctionReturn(0);
+}
+
+/* (Re)place the disks: n disks at x (KERGS_DIM * n) with radii r (n); material (n) and v (KERGS_DIM * n) may
+   be NULL (material 0, at rest). Ids are the indices, orientations and angular velocities zero, mass and
+   inertia from the materials' densities. Collective: recomputes the ownership range [dstart, dend). */
+PetscErrorCode KergsSceneSetDisks(KergsScene scene, PetscInt n, const PetscReal *x, const PetscReal *r, const PetscInt *material,
+                                  const PetscReal *v)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(n >= 0, scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "KergsSceneSetDisks: negative number of disks %" PetscInt_FMT, n);
+  PetscCheck(n == 0 || (x && r), scene->comm, PETSC_ERR_ARG_NULL, "KergsSceneSetDisks: positions and radii are required");
+  for (PetscInt i = 0; material && i < n; i++)
+    PetscCheck(material[i] >= 0 && material[i] < scene->nmaterials, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Grain %" PetscInt_FMT " has material %" PetscInt_FMT ", out of range [0, %" PetscInt_FMT ") (see -materials)", i,
+               material[i], scene->nmaterials);
+  PetscCall(SceneFreeDisks(scene));
+  scene->ndisks = n;
+  PetscCall(PetscMalloc1(n, &scene->id));
+  PetscCall(PetscMalloc1(KERGS_DIM * n, &scene->x));
+  PetscCall(PetscCalloc1(KERGS_NROT * n, &scene->rot));
+  PetscCall(PetscCalloc1(KERGS_DIM * n, &scene->v));
+  PetscCall(PetscCalloc1(KERGS_NROT * n, &scene->omega));
+  PetscCall(PetscMalloc1(n, &scene->radius));
+  PetscCall(PetscMalloc1(n, &scene->mass));
+  PetscCall(PetscMalloc1(n, &scene->inertia));
+  PetscCall(PetscCalloc1(n, &scene->material));
+  for (PetscInt i = 0; i < n; i++) scene->id[i] = i;
+  if (n) {
+    PetscCall(PetscArraycpy(scene->x, x, KERGS_DIM * n));
+    PetscCall(PetscArraycpy(scene->radius, r, n));
+    if (material) PetscCall(PetscArraycpy(scene->material, material, n));
+    if (v) PetscCall(PetscArraycpy(scene->v, v, KERGS_DIM * n));
+  }
+  PetscCall(SceneComputeMasses(scene));
+  PetscCall(SceneSplitOwnership(scene));
+  if (scene->alert < 0.0 && n > 0) {
+    PetscReal mean;
+
+    PetscCall(SceneMeanRadius(scene, &mean));
+    scene->alert = 0.1 * mean;
+  }
+  PetscCall(SceneUpdateFrictional(scene));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneFriction(KergsScene scene, PetscInt mat_a, PetscInt mat_b, PetscReal *mu)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(mat_a >= 0 && mat_a < scene->nmaterials && mat_b >= 0 && mat_b < scene->nmaterials, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Friction of materials (%" PetscInt_FMT ", %" PetscInt_FMT "): out of range [0, %" PetscInt_FMT ")", mat_a, mat_b,
+             scene->nmaterials);
+  *mu = scene->mu[mat_a * scene->nmaterials + mat_b];
+  PetscFunctionReturn(0);
+}
+
+/* Driven wall: the value of its piecewise-constant program at time t, piece k holding on [t_k, t_{k+1}) and the
+   last piece forever; zero before t_0 and for a wall without program. Free wall: its current velocity. */
+PetscErrorCode KergsWallVelocityAt(const KergsWall *wall, PetscReal t, PetscReal v[])
+{
+  PetscFunctionBeginUser;
+  if (wall->kind == KERGS_WALL_FREE) {
+    for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = wall->v[d];
+    PetscFunctionReturn(0);
+  }
+  for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = 0.0;
+  for (PetscInt k = 0; k < wall->nprog && t >= wall->prog_t[k]; k++)
+    for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = wall->prog_v[k][d];
+  PetscFunctionReturn(0);
+}
+
+/* E_k = sum over disks of 1/2 m |v|^2 + 1/2 I omega^2; vmax = largest disk speed. */
+PetscErrorCode KergsSceneKineticEnergy(KergsScene scene, PetscReal *ek, PetscReal *vmax)
+{
+  PetscReal e = 0.0, vm = 0.0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < scene->ndisks; i++) {
+    PetscReal v2 = 0.0, w2 = 0.0;
+
+    for (PetscInt d = 0; d < KERGS_DIM; d++) v2 += scene->v[KERGS_DIM * i + d] * scene->v[KERGS_DIM * i + d];
+    for (PetscInt d = 0; d < KERGS_NROT; d++) w2 += scene->omega[KERGS_NROT * i + d] * scene->omega[KERGS_NROT * i + d];
+    e += 0.5 * scene->mass[i] * v2 + 0.5 * scene->inertia[i] * w2;
+    vm = PetscMax(vm, PetscSqrtReal(v2));
+  }
+  if (ek) *ek = e;
+  if (vmax) *vmax = vm;
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Options: numerics, materials, walls                                                             */
+
+static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject, KergsScene scene, PetscBool *alert_set)
+{
+  PetscFunctionBeginUser;
+  PetscCall(
+      PetscOptionsString("-scene_name", "Name of the scene (used in output)", NULL, scene->name, scene->name, sizeof(scene->name), NULL));
+  PetscCall(KergsOptionsVector(PetscOptionsObject, "-gravity", "Gravity acceleration gx,gy (m/s^2)", scene->gravity, NULL));
+  PetscCall(PetscOptionsReal("-dt", "Time step (s)", NULL, scene->dt, &scene->dt, NULL));
+  PetscCall(PetscOptionsInt("-steps", "Number of time steps", NULL, scene->nsteps, &scene->nsteps, NULL));
+  PetscCall(PetscOptionsReal("-theta", "Theta of the theta-method, in (0,1] (Algorithm 1)", NULL, scene->theta, &scene->theta, NULL));
+  PetscCall(PetscOptionsBool("-disks_lock_rotation", "Disks translate only: no rotational DOFs even with friction (sliding blocks)", NULL,
+                             scene->lock_rotation, &scene->lock_rotation, NULL));
+  PetscCall(PetscOptionsEnum("-gap_rule", "Predicted gap: paper (g~ = g-) or lmgc90 (g~ = g- + (1-theta) dt vn-)", NULL, KergsGapRules,
+                             (PetscEnum)scene->gaprule, (PetscEnum *)&scene->gaprule, NULL));
+  PetscCall(PetscOptionsReal(
+      "-alert", "Alert distance >= 0: potential contacts have gap < alert (default 0.1 * mean radius, once the disks are known)", NULL,
+      scene->alert, &scene->alert, alert_set));
+  PetscFunctionReturn(0);
+}
+
+/* -materials, -material_density, -friction, -friction_pairs. */
+static PetscErrorCode SceneMaterialOptions(PetscOptionItems *PetscOptionsObject, KergsScene scene)
+{
+  PetscInt   nm     = scene->nmaterials, nd, np;
+  PetscReal  mu_all = 0.0, *dens, *pairs;
+  PetscBool  set, mu_set;
+  const char pre[] = "Scene materials";
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsInt("-materials", "Number of materials", NULL, nm, &nm, &set));
+  PetscCheck(nm >= 1, PetscOptionsObject->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s: -materials %" PetscInt_FMT " must be at least 1", pre, nm);
+  PetscCall(KergsOptionsRealList(PetscOptionsObject, "-material_density",
+                                 "Density of each material, d0,d1,... (mass per unit area, default 1)", &nd, &dens, NULL));
+  PetscCall(PetscOptionsReal("-friction", "Friction coefficient of every pair of materials", NULL, mu_all, &mu_all, &mu_set));
+  PetscCall(KergsOptionsRealList(PetscOptionsObject, "-friction_pairs",
+                                 "Friction of given pairs i,j,mu,i,j,mu,... (overrides -friction, symmetric)", &np, &pairs, NULL));
+  PetscCheck(nd == 0 || nd == 1 || nd == nm, PetscOptionsObject->comm, PETSC_ERR_ARG_SIZ,
+             "%s: -material_density has %" PetscInt_FMT " values; give 1 or -materials = %" PetscInt_FMT, pre, nd, nm);
+  PetscCheck(np % 3 == 0, PetscOptionsObject->comm, PETSC_ERR_ARG_SIZ,
+             "%s: -friction_pairs has %" PetscInt_FMT " values, not triples i,j,mu", pre, np);
+  if (set || nm != scene->nmaterials) { /* new material table: densities 1, no friction */
+    PetscCall(PetscFree(scene->density));
+    PetscCall(PetscFree(scene->mu));
+    scene->nmaterials = nm;
+    PetscCall(PetscMalloc1(nm, &scene->density));
+    PetscCall(PetscCalloc1(nm * nm, &scene->mu));
+    for (PetscInt m = 0; m < nm; m++) scene->density[m] = 1.0;
+  }
+  for (PetscInt m = 0; m < nm && nd; m++) scene->density[m] = dens[nd == 1 ? 0 : m];
+  for (PetscInt k = 0; k < nm * nm && mu_set; k++) scene->mu[k] = mu_all;
+  for (PetscInt k = 0; k < np; k += 3) {
+    const PetscInt i = (PetscInt)pairs[k], j = (PetscInt)pairs[k + 1];
+
+    PetscCheck(pairs[k] == (PetscReal)i && pairs[k + 1] == (PetscReal)j && i >= 0 && i < nm && j >= 0 && j < nm, PetscOptionsObject->comm,
+               PETSC_ERR_ARG_OUTOFRANGE,
+               "%s: -friction_pairs triple %" PetscInt_FMT " names materials (%g, %g), not integers in [0, %" PetscInt_FMT ")", pre, k / 3,
+               (double)pairs[k], (double)pairs[k + 1], nm);
+    scene->mu[i * nm + j] = scene->mu[j * nm + i] = pairs[k + 2];
+  }
+  PetscCall(PetscFree(dens));
+  PetscCall(PetscFree(pairs));
+  PetscFunctionReturn(0);
+}
+
+/* -box x0,y0,x1,y1: four driven walls at rest whose left normals point into the box. */
+static PetscErrorCode SceneBoxWalls(KergsScene scene, const PetscReal box[4], PetscBool open_top, PetscInt *nbox, KergsWall walls[])
+{
+  const char     *names[4] = {"box_bottom", "box_right", "box_top", "box_left"};
+  const PetscReal x0 = box[0], y0 = box[1], x1 = box[2], y1 = box[3];
+  /* corners counter-clockwise: (x0,y0) (x1,y0) (x1,y1) (x0,y1); wall k goes from corner k to corner k+1 */
+  const PetscReal cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
+
+  PetscFunctionBeginUser;
+  PetscCheck(x1 > x0 && y1 > y0, scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-box %g,%g,%g,%g: need x0 < x1 and y0 < y1", (double)x0,
+             (double)y0, (double)x1, (double)y1);
+  *nbox = 0;
+  for (PetscInt k = 0; k < 4; k++) {
+    KergsWall *w = &walls[*nbox];
+
+    if (k == 2 && open_top) continue;
+    PetscCall(PetscMemzero(w, sizeof(*w)));
+    PetscCall(PetscStrncpy(w->name, names[k], sizeof(w->name)));
+    w->kind = KERGS_WALL_DRIVEN;
+    w->a[0] = cx[k];
+    w->a[1] = cy[k];
+    w->b[0] = cx[(k + 1) % 4];
+    w->b[1] = cy[(k + 1) % 4];
+    (*nbox)++;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Fill a wall's program from -wall_<name>_velocity (constant from t = 0) or -wall_<name>_program t,vx,vy,... */
+static PetscErrorCode WallSetProgram(MPI_Comm comm, KergsWall *w, const PetscReal vel[], PetscBool vset, PetscInt nvals,
+                                     const PetscReal prog[])
+{
+  PetscFunctionBeginUser;
+  if (w->kind == KERGS_WALL_FREE) {
+    PetscCheck(nvals == 0, comm, PETSC_ERR_ARG_INCOMP, "Wall %s is free: -wall_%s_program applies to driven walls only", w->name, w->name);
+    w->nprog = 0;
+    if (vset)
+      for (PetscInt d = 0; d < KERGS_DIM; d++) w->v[d] = vel[d];
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(!(vset && nvals), comm, PETSC_ERR_ARG_INCOMP, "Wall %s: give -wall_%s_velocity or -wall_%s_program, not both", w->name,
+             w->name, w->name);
+  if (vset) {
+    w->nprog     = 1;
+    w->prog_t[0] = 0.0;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) w->prog_v[0][d] = vel[d];
+  }
+  if (nvals) {
+    const PetscInt width = 1 + KERGS_DIM; /* t, v */
+
+    PetscCheck(nvals % width == 0, comm, PETSC_ERR_ARG_SIZ, "Wall %s: -wall_%s_program has %" PetscInt_FMT " values, not groups t,vx,vy",
+               w->name, w->name, nvals);
+    PetscCheck(nvals / width <= KERGS_MAX_PROGRAM, comm, PETSC_ERR_ARG_SIZ,
+               "Wall %s: -wall_%s_program has %" PetscInt_FMT " pieces, at most %d", w->name, w->name, nvals / width, KERGS_MAX_PROGRAM);
+    w->nprog = nvals / width;
+    for (PetscInt k = 0; k < w->nprog; k++) {
+      w->prog_t[k] = prog[width * k];
+      for (PetscInt d = 0; d < KERGS_DIM; d++) w->prog_v[k][d] = prog[width * k + 1 + d];
+      PetscCheck(k == 0 || w->prog_t[k] > w->prog_t[k - 1], comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "Wall %s: -wall_%s_program times must increase (piece %" PetscInt_FMT " starts at %g after %g)", w->name, w->name, k,
+                 (double)w->prog_t[k], (double)w->prog_t[k - 1]);
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The options of one wall, prefix wall_<name>_. Declared walls must give both endpoints; box walls may
+   override theirs. */
+static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBool needs_endpoints, PetscReal time)
+{
+  char      prefix[KERGS_WALL_PREFIX_LEN], title[KERGS_WALL_PREFIX_LEN];
+  PetscReal vel[KERGS_DIM] = {0}, *prog;
+  PetscInt  nvals;
+  PetscBool aset, bset, vset;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "wall_%s_", w->name));
+  PetscCall(PetscSNPrintf(title, sizeof(title), "Wall %s options", w->name));
+  PetscOptionsBegin(scene->comm, prefix, title, NULL);
+  PetscCall(
+      KergsOptionsVector(PetscOptionsObject, "-a", "First endpoint x,y (the outward normal is the left normal of a->b)", w->a, &aset));
+  PetscCall(KergsOptionsVector(PetscOptionsObject, "-b", "Second endpoint x,y", w->b, &bset));
+  PetscCall(PetscOptionsEnum("-type", "Wall kind: driven (velocity program) or free (mass, applied force)", NULL, KergsWallKinds,
+                             (PetscEnum)w->kind, (PetscEnum *)&w->kind, NULL));
+  PetscCall(
+      PetscOptionsBool("-infinite", "Infinite line through a and b instead of the segment [a,b]", NULL, w->infinite, &w->infinite, NULL));
+  PetscCall(PetscOptionsInt("-material", "Material index of the wall", NULL, w->material, &w->material, NULL));
+  PetscCall(KergsOptionsVector(PetscOptionsObject, "-velocity",
+                               "Constant velocity vx,vy of a driven wall, or initial velocity of a free wall", vel, &vset));
+  PetscCall(KergsOptionsRealList(PetscOptionsObject, "-program",
+                                 "Driven wall velocity program t0,vx,vy,t1,vx,vy,...: (vx,vy) from t_k to t_{k+1}, zero before t0", &nvals,
+                                 &prog, NULL));
+  PetscCall(PetscOptionsReal("-mass", "Mass of a free wall", NULL, w->mass, &w->mass, NULL));
+  PetscCall(KergsOptionsVector(PetscOptionsObject, "-force", "Applied force fx,fy on a free wall (pressure x length)", w->force, NULL));
+  PetscOptionsEnd();
+  PetscCheck(!needs_endpoints || (aset && bset), scene->comm, PETSC_ERR_ARG_WRONGSTATE,
+             "Wall %s (from -walls) needs both -wall_%s_a x,y and -wall_%s_b x,y", w->name, w->name, w->name);
+  PetscCall(WallSetProgram(scene->comm, w, vel, vset, nvals, prog));
+  if (w->kind == KERGS_WALL_DRIVEN) PetscCall(KergsWallVelocityAt(w, time, w->v));
+  PetscCall(PetscFree(prog));
+  PetscFunctionReturn(0);
+}
+
+/* A wall name becomes part of option names: nonempty, unique, short enough for KergsWall.name. */
+static PetscErrorCode WallCheckName(KergsScene scene, const KergsWall walls[], PetscInt nwalls, const char name[])
+{
+  size_t len;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscStrlen(name, &len));
+  PetscCheck(len > 0, scene->comm, PETSC_ERR_ARG_WRONG, "-walls: empty wall name");
+  PetscCheck(len < sizeof(walls[0].name), scene->comm, PETSC_ERR_ARG_WRONG, "-walls: wall name %s is longer than %d characters", name,
+             (int)sizeof(walls[0].name) - 1);
+  for (PetscInt w = 0; w < nwalls; w++) {
+    PetscBool same;
+
+    PetscCall(PetscStrcmp(walls[w].name, name, &same));
+    PetscCheck(!same, scene->comm, PETSC_ERR_ARG_WRONG,
+               "-walls: wall name %s is used twice (box walls are named box_bottom, box_right, box_top, box_left)", name);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Build the wall list: box walls, then declared walls, then every wall's own options. */
+static PetscErrorCode SceneSetWalls(KergsScene scene, PetscBool box_set, const PetscReal box[4], PetscBool open_top, PetscInt nnames,
+                                    char *names[])
+{
+  PetscInt nbox = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(scene->walls));
+  scene->nwalls = 0;
+  PetscCall(PetscCalloc1(4 + nnames, &scene->walls));
+  if (box_set) PetscCall(SceneBoxWalls(scene, box, open_top, &nbox, scene->walls));
+  scene->nwalls = nbox;
+  for (PetscInt k = 0; k < nnames; k++) {
+    PetscCall(WallCheckName(scene, scene->walls, scene->nwalls, names[k]));
+    PetscCall(PetscStrncpy(scene->walls[scene->nwalls].name, names[k], sizeof(scene->walls[0].name)));
+    scene->walls[scene->nwalls].kind = KERGS_WALL_DRIVEN;
+    scene->nwalls++;
+  }
+  for (PetscInt w = 0; w < scene->nwalls; w++)
+    PetscCall(WallSetFromOptions(scene, &scene->walls[w], w >= nbox ? PETSC_TRUE : PETSC_FALSE, scene->time));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+
+/* Read the scene from the options database: numerics, materials, walls, disks; then check it. */
+PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
+{
+  PetscReal box[4] = {0, 0, 1, 1}, alert;
+  PetscInt  nnames;
+  PetscBool alert_set = PETSC_FALSE, box_set = PETSC_FALSE, open_top = PETSC_FALSE, names_set;
+  char    **names;
+  PetscInt  cap;
+
+  PetscFunctionBeginUser;
+  PetscOptionsBegin(scene->comm, NULL, "Scene options", NULL);
+  PetscCall(SceneNumericsOptions(PetscOptionsObject, scene, &alert_set));
+  PetscCall(SceneMaterialOptions(PetscOptionsObject, scene));
+  PetscCall(KergsOptionsReals(PetscOptionsObject, "-box",
+                              "Box x0,y0,x1,y1: driven walls box_bottom, box_right, box_top, box_left facing inward", 4, box, &box_set));
+  PetscCall(PetscOptionsBool("-box_open_top", "Omit the top wall of -box", NULL, open_top, &open_top, NULL));
+  PetscCall(OptionsCountValues(PetscOptionsObject, "-walls", &cap));
+  PetscCall(PetscCalloc1(cap + 1, &names));
+  nnames = cap + 1;
+  PetscCall(PetscOptionsStringArray("-walls", "Names of further walls, each set by -wall_<name>_a, _b, _type, ...", NULL, names, &nnames,
+                                    &names_set));
+  if (!names_set) nnames = 0;
+  PetscOptionsEnd();
+  PetscCall(SceneSetWalls(scene, box_set, box, open_top, nnames, names));
+  for (PetscInt k = 0; k < nnames; k++) PetscCall(PetscFree(names[k]));
+  PetscCall(PetscFree(names));
+
+  alert = scene->alert;
+  PetscCall(KergsSceneDisksSetFromOptions(scene));
+  PetscCall(SceneComputeMasses(scene)); /* the densities may have changed since the disks were set */
+  if (alert_set)
+    scene->alert = alert; /* the user's value, even a negative one (then rejected) */
+  else {
+    PetscReal mean;
+
+    PetscCall(SceneMeanRadius(scene, &mean));
+    scene->alert = 0.1 * mean;
+  }
+  PetscCall(SceneUpdateFrictional(scene));
+  PetscCall(KergsSceneCheck(scene));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Validation                                                                                       */
+
+static PetscBool Finite(PetscReal v) { return PetscIsInfOrNanReal(v) ? PETSC_FALSE : PETSC_TRUE; }
+
+static PetscErrorCode SceneCheckNumerics(KergsScene scene)
+{
+  MPI_Comm comm = scene->comm;
+
+  PetscFunctionBeginUser;
+  PetscCheck(Finite(scene->dt) && scene->dt > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: time step -dt %g must be positive",
+             scene->name, (double)scene->dt);
+  PetscCheck(Finite(scene->theta) && scene->theta > 0.0 && scene->theta <= 1.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: -theta %g must be in (0,1]", scene->name, (double)scene->theta);
+  PetscCheck(scene->nsteps >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -steps %" PetscInt_FMT " must be >= 0", scene->name,
+             scene->nsteps);
+  PetscCheck(Finite(scene->alert) && scene->alert >= 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance -alert %g must be >= 0",
+             scene->name, (double)scene->alert);
+  PetscCheck(scene->gaprule == KERGS_GAP_PAPER || scene->gaprule == KERGS_GAP_LMGC90, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: unknown gap rule %d", scene->name, (int)scene->gaprule);
+  for (PetscInt d = 0; d < KERGS_DIM; d++)
+    PetscCheck(Finite(scene->gravity[d]), comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -gravity is not finite", scene->name);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneCheckMaterials(KergsScene scene)
+{
+  const PetscInt nm   = scene->nmaterials;
+  MPI_Comm       comm = scene->comm;
+
+  PetscFunctionBeginUser;
+  PetscCheck(nm >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -materials %" PetscInt_FMT " must be at least 1", scene->name, nm);
+  for (PetscInt m = 0; m < nm; m++)
+    PetscCheck(Finite(scene->density[m]) && scene->density[m] > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Scene %s: density of material %" PetscInt_FMT " is %g, must be positive (-material_density)", scene->name, m,
+               (double)scene->density[m]);
+  for (PetscInt p = 0; p < nm; p++) {
+    for (PetscInt q = 0; q < nm; q++) {
+      const PetscReal mu = scene->mu[p * nm + q];
+
+      PetscCheck(Finite(mu) && mu >= 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "Scene %s: friction coefficient of materials (%" PetscInt_FMT ", %" PetscInt_FMT
+                 ") is %g, must be finite and >= 0 (-friction, -friction_pairs)",
+                 scene->name, p, q, (double)mu);
+      PetscCheck(mu == scene->mu[q * nm + p], comm, PETSC_ERR_ARG_WRONG,
+                 "Scene %s: friction of materials (%" PetscInt_FMT ", %" PetscInt_FMT ") is not symmetric", scene->name, p, q);
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneCheckDisks(KergsScene scene)
+{
+  MPI_Comm comm = scene->comm;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < scene->ndisks; i++) {
+    const PetscInt id = scene->id ? scene->id[i] : i;
+
+    PetscCheck(Finite(scene->radius[i]) && scene->radius[i] > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Grain %" PetscInt_FMT ": radius %g must be positive and finite", id, (double)scene->radius[i]);
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      PetscCheck(Finite(scene->x[KERGS_DIM * i + d]), comm, PETSC_ERR_FP,
+                 "Grain %" PetscInt_FMT ": position component %" PetscInt_FMT " is %g", id, d, (double)scene->x[KERGS_DIM * i + d]);
+      PetscCheck(Finite(scene->v[KERGS_DIM * i + d]), comm, PETSC_ERR_FP,
+                 "Grain %" PetscInt_FMT ": velocity component %" PetscInt_FMT " is %g", id, d, (double)scene->v[KERGS_DIM * i + d]);
+    }
+    for (PetscInt d = 0; d < KERGS_NROT; d++) {
+      PetscCheck(Finite(scene->rot[KERGS_NROT * i + d]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": orientation is %g", id,
+                 (double)scene->rot[KERGS_NROT * i + d]);
+      PetscCheck(Finite(scene->omega[KERGS_NROT * i + d]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": angular velocity is %g", id,
+                 (double)scene->omega[KERGS_NROT * i + d]);
+    }
+    PetscCheck(scene->material[i] >= 0 && scene->material[i] < scene->nmaterials, comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Grain %" PetscInt_FMT ": material %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ") (see -materials)", id,
+               scene->material[i], scene->nmaterials);
+  }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneCheckWall(KergsScene scene, const KergsWall *w)
+{
+  MPI_Comm  comm = scene->comm;
+  PetscReal len2 = 0.0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    PetscCheck(Finite(w->a[d]) && Finite(w->b[d]), comm, PETSC_ERR_FP, "Wall %s: endpoint is not finite", w->name);
+    PetscCheck(Finite(w->v[d]) && Finite(w->force[d]), comm, PETSC_ERR_FP, "Wall %s: velocity or force is not finite", w->name);
+    len2 += (w->b[d] - w->a[d]) * (w->b[d] - w->a[d]);
+  }
+  PetscCheck(len2 > 0.0, comm, PETSC_ERR_ARG_WRONG, "Wall %s is degenerate: a == b = (%g, %g)", w->name, (double)w->a[0], (double)w->a[1]);
+  PetscCheck(w->material >= 0 && w->material < scene->nmaterials, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Wall %s: material %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ") (-wall_%s_material, -materials)", w->name,
+             w->material, scene->nmaterials, w->name);
+  PetscCheck(w->kind == KERGS_WALL_DRIVEN || w->kind == KERGS_WALL_FREE, comm, PETSC_ERR_ARG_OUTOFRANGE, "Wall %s: unknown kind %d",
+             w->name, (int)w->kind);
+  PetscCheck(w->kind != KERGS_WALL_FREE || (Finite(w->mass) && w->mass > 0.0), comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Free wall %s: mass %g must be positive (-wall_%s_mass)", w->name, (double)w->mass, w->name);
+  PetscCheck(w->nprog >= 0 && w->nprog <= KERGS_MAX_PROGRAM, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Wall %s: %" PetscInt_FMT " program pieces, at most %d", w->name, w->nprog, KERGS_MAX_PROGRAM);
+  for (PetscInt k = 0; k < w->nprog; k++) {
+    PetscCheck(Finite(w->prog_t[k]), comm, PETSC_ERR_FP, "Wall %s: program time %" PetscInt_FMT " is not finite", w->name, k);
+    PetscCheck(k == 0 || w->prog_t[k] > w->prog_t[k - 1], comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Wall %s: program times must increase (piece %" PetscInt_FMT ")", w->name, k);
+    for (PetscInt d = 0; d < KERGS_DIM; d++)
+      PetscCheck(Finite(w->prog_v[k][d]), comm, PETSC_ERR_FP, "Wall %s: program velocity %" PetscInt_FMT " is not finite", w->name, k);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Every fault of the input named; overlaps of grains are left to the contact detection. */
+PetscErrorCode KergsSceneCheck(KergsScene scene)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(scene->ndisks > 0 || scene->nwalls > 0, scene->comm, PETSC_ERR_ARG_WRONGSTATE,
+             "Scene %s has no disks and no walls (give -disks_source and its options, -box or -walls)", scene->name);
+  PetscCall(SceneCheckDisks(scene));
+  PetscCall(SceneCheckMaterials(scene));
+  PetscCall(SceneCheckNumerics(scene));
+  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(SceneCheckWall(scene, &scene->walls[w]));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* View                                                                                             */
+
+static PetscErrorCode SceneViewWall(PetscViewer viewer, const KergsWall *w)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "wall %s: %s %s (%g, %g) -> (%g, %g), material %" PetscInt_FMT, w->name, KergsWallKinds[w->kind],
+                                   w->infinite ? "line" : "segment", (double)w->a[0], (double)w->a[1], (double)w->b[0], (double)w->b[1],
+                                   w->material));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
+  if (w->kind == KERGS_WALL_FREE) {
+    PetscCall(PetscViewerASCIIPrintf(viewer, ", mass %g, force (%g, %g), velocity (%g, %g)\n", (double)w->mass, (double)w->force[0],
+                                     (double)w->force[1], (double)w->v[0], (double)w->v[1]));
+  } else if (w->nprog == 0) {
+    PetscCall(PetscViewerASCIIPrintf(viewer, ", at rest\n"));
+  } else {
+    PetscCall(PetscViewerASCIIPrintf(viewer, ", velocity program"));
+    for (PetscInt k = 0; k < w->nprog; k++)
+      PetscCall(
+          PetscViewerASCIIPrintf(viewer, " [t >= %g: (%g, %g)]", (double)w->prog_t[k], (double)w->prog_v[k][0], (double)w->prog_v[k][1]));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
+  }
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneViewMaterials(KergsScene scene, PetscViewer viewer)
+{
+  const PetscInt nm = scene->nmaterials;
+
+  PetscFunctionBeginUser;
+  for (PetscInt m = 0; m < nm; m++) {
+    PetscCall(PetscViewerASCIIPrintf(viewer, "material %" PetscInt_FMT ": density %g, friction with materials 0..%" PetscInt_FMT ":", m,
+                                     (double)scene->density[m], nm - 1));
+    PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
+    for (PetscInt q = 0; q < nm; q++) PetscCall(PetscViewerASCIIPrintf(viewer, " %g", (double)scene->mu[m * nm + q]));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
+    PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneView(KergsScene scene, PetscViewer viewer)
+{
+  PetscBool iascii;
+  PetscReal rmin = PETSC_MAX_REAL, rmax = 0.0;
+
+  PetscFunctionBeginUser;
+  if (!viewer) viewer = PETSC_VIEWER_STDOUT_(scene->comm);
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &iascii));
+  if (!iascii) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < scene->ndisks; i++) {
+    rmin = PetscMin(rmin, scene->radius[i]);
+    rmax = PetscMax(rmax, scene->radius[i]);
+  }
+  if (!scene->ndisks) rmin = 0.0;
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer, "Scene %s: %" PetscInt_FMT " disks (radius %g to %g), %" PetscInt_FMT " walls, %" PetscInt_FMT " materials\n", scene->name,
+      scene->ndisks, (double)rmin, (double)rmax, scene->nwalls, scene->nmaterials));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "dt %g, steps %" PetscInt_FMT ", theta %g, gap rule %s, alert distance %g, gravity (%g, %g)\n",
+                                   (double)scene->dt, scene->nsteps, (double)scene->theta, KergsGapRules[scene->gaprule],
+                                   (double)scene->alert, (double)scene->gravity[0], (double)scene->gravity[1]));
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer, "%s\n", scene->frictional ? (scene->lock_rotation ? "frictional (tangential impulses), rotations locked" : "frictional (tangential impulses, rotations)") : "frictionless (normal impulses only)"));
+  PetscCall(SceneViewMaterials(scene, viewer));
+  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(SceneViewWall(viewer, &scene->walls[w]));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}

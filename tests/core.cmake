@@ -1,0 +1,22 @@
+# Whole-engine tests: physics with known answers (1 and 2 ranks) and bad input through the kergs executable.
+kergs_test(NAME physics_1 SOURCE test_physics.c NPROCS 1)
+kergs_test(NAME physics_2 SOURCE test_physics.c NPROCS 2)
+
+# kergs_bad_input(name regex args...): kergs must exit non-zero with a message matching regex, without crashing.
+function(kergs_bad_input name regex)
+  add_test(NAME bad_input_${name}
+           COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "${regex}"
+                   ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} 2 ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS} ${ARGN} -output_none
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(bad_input_${name} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60)
+endfunction()
+
+kergs_bad_input(malformed_file "malformed.opts" -options_file tests/data/malformed.opts)
+kergs_bad_input(unknown_option "unknown option -disks_radios" -options_file cases/confine5.opts -disks_radios 0.5)
+kergs_bad_input(negative_radius "radius.*-0.5" -options_file cases/confine5.opts -disks_radius -0.5)
+kergs_bad_input(nan_position "(nan|finite)" -options_file cases/confine5.opts -disks_x 0.5,nan,1.5,0.52,2.5,0.49,3.5,0.515,4.5,0.5)
+kergs_bad_input(overlap "grains 1 and 2 overlap" -options_file cases/confine5.opts -disks_x 0.5,0.5,1.5,0.5,2.2,0.5,3.5,0.5,4.5,0.5)
+kergs_bad_input(truncated_sample "truncated.h5" -options_file cases/confine500.opts -sample_input tests/data/truncated.h5)
+kergs_bad_input(missing_sample "no_such_sample.h5" -options_file cases/confine500.opts -sample_input tests/data/no_such_sample.h5)
+kergs_bad_input(bad_solver "solver_type" -options_file cases/confine5.opts -solver_type nlgz)
+kergs_bad_input(bad_dt "dt" -options_file cases/confine5.opts -dt -1)

@@ -1,0 +1,348 @@
+/* Physics with known answers, through the whole engine (scene -> detect -> operators -> NLGS -> update).
+   Runs on 1 and 2 ranks; every check is global. */
+static const char help[] = "kergs physics tests: column, slopes, wedged pair, momentum balance, adjoint of H, non-convergence.\n";
+
+#include <kergs/kergs.h>
+
+static PetscInt nfail = 0;
+
+static PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, PetscReal want)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s %-60s got %.10g want %.10g\n", ok ? "ok  " : "FAIL", what, (double)got, (double)want));
+  if (!ok) nfail++;
+  PetscFunctionReturn(0);
+}
+
+/* A fresh stepper configured only by the given options (the options database is reset). */
+static PetscErrorCode MakeStepper(const char *opts, KergsStepper *st)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsClear(NULL));
+  PetscCall(PetscOptionsInsertString(NULL, opts));
+  PetscCall(PetscOptionsInsertString(NULL, "-output_none -quiet"));
+  PetscCall(KergsStepperCreate(PETSC_COMM_WORLD, st));
+  PetscCall(KergsStepperSetFromOptions(*st));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode LastStat(KergsResults res, const char *name, PetscReal *value)
+{
+  PetscFunctionBeginUser;
+  *value = PETSC_MAX_REAL;
+  for (PetscInt s = 0; s < res->nstats; s++) {
+    PetscBool same;
+    PetscCall(PetscStrcmp(res->statname[s], name, &same));
+    if (same && res->nrows > 0) *value = res->statvalues[s][res->nrows - 1];
+  }
+  PetscCheck(*value != PETSC_MAX_REAL, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "No statistic %s recorded", name);
+  PetscFunctionReturn(0);
+}
+
+/* A column of N disks on a floor carries its cumulative weight: the contact below disk k carries
+   (N - k) m g dt, with no tangential impulse, and nothing moves. */
+static PetscErrorCode TestColumn(void)
+{
+  KergsStepper st;
+  const PetscInt N = 6;
+  PetscReal    g = 10, dt = 1e-3, worst = 0, worst_t = 0, m, vmax, ek;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper("-gravity 0,-10 -friction 0.3 -dt 1e-3 -steps 6 -disks_source lattice -lattice_type square -lattice_n 1,6 "
+                        "-lattice_radius 0.1 -lattice_origin 0,0.1 -walls floor -wall_floor_a -1,0 -wall_floor_b 1,0 -wall_floor_infinite "
+                        "-alert 0.01 -solver_tol 1e-13 -solver_max_it 20000",
+                        &st));
+  m = st->scene->mass[0];
+  for (PetscInt s = 0; s < 6; s++) {
+    PetscCall(KergsStepperStep(st));
+    if (s < 2) continue; /* a lattice gap of +1e-17 may leave a contact inactive on the first step */
+    for (PetscInt k = 0; k < st->contacts->n; k++) {
+      const KergsContact *c     = &st->contacts->c[k];
+      PetscInt            below = c->a; /* the lower disk of a pair has the lower index; a wall contact is disk 0's */
+      PetscReal           want  = (c->kind == KERGS_CONTACT_DISK_WALL ? N : N - 1 - below) * m * g * dt;
+      worst                     = PetscMax(worst, PetscAbsReal(c->r[0] - want) / (N * m * g * dt));
+      worst_t                   = PetscMax(worst_t, PetscAbsReal(c->r[1]) / (N * m * g * dt));
+    }
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &worst, 1, MPIU_REAL, MPI_MAX, PETSC_COMM_WORLD));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &worst_t, 1, MPIU_REAL, MPI_MAX, PETSC_COMM_WORLD));
+  PetscCall(KergsSceneKineticEnergy(st->scene, &ek, &vmax));
+  PetscCall(Check((PetscBool)(st->contacts->nglobal == N), "column: N contacts", (PetscReal)st->contacts->nglobal, N));
+  PetscCall(Check((PetscBool)(worst < 1e-8), "column: normal impulse = weight above (relative error)", worst, 0));
+  PetscCall(Check((PetscBool)(worst_t < 1e-8), "column: no tangential impulse", worst_t, 0));
+  PetscCall(Check((PetscBool)(vmax < 1e-8), "column: at rest (fastest grain)", vmax, 0));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+/* One disk on an inclined line through the origin at angle alpha. Returns the disk's velocity along the
+   slope (downhill positive) and its angular velocity after nsteps. */
+static PetscErrorCode RunSlope(PetscReal alpha, PetscReal mu, PetscBool lock, PetscInt nsteps, PetscReal *vdown, PetscReal *vnormal, PetscReal *omega, PetscReal *R)
+{
+  KergsStepper st;
+  char         opts[1024];
+  PetscReal    c = PetscCosReal(alpha), s = PetscSinReal(alpha), r = 0.1, d = r - 1e-9; /* start touching: gap -1e-9 */
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(opts, sizeof(opts),
+                          "-gravity 0,-10 -friction %.17g -dt 1e-3 -steps %" PetscInt_FMT " -disks_source list -disks_x %.17g,%.17g -disks_radius %g %s "
+                          "-walls slope -wall_slope_a %.17g,%.17g -wall_slope_b %.17g,%.17g -wall_slope_infinite -alert 0.01 -solver_tol 1e-14 -solver_max_it 1000",
+                          (double)mu, nsteps, (double)(-s * d), (double)(c * d), (double)r, lock ? "-disks_lock_rotation" : "", (double)(-10 * c), (double)(-10 * s), (double)(10 * c), (double)(10 * s)));
+  PetscCall(MakeStepper(opts, &st));
+  for (PetscInt k = 0; k < nsteps; k++) PetscCall(KergsStepperStep(st));
+  *vdown   = -(st->scene->v[0] * c + st->scene->v[1] * s);
+  *vnormal = -st->scene->v[0] * s + st->scene->v[1] * c;
+  *omega   = st->scene->omega[0];
+  *R       = r;
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode TestSlopes(void)
+{
+  const PetscInt n = 50;
+  const PetscReal g = 10, dt = 1e-3, mu = 0.5, T = n * dt;
+  PetscReal       v, vn, w, R, alpha, want;
+
+  PetscFunctionBeginUser;
+  /* a block-like disk (rotation locked): sticks below tan(alpha) = mu, slides with g (sin - mu cos) above */
+  alpha = PetscAtanReal(0.8 * mu);
+  PetscCall(RunSlope(alpha, mu, PETSC_TRUE, n, &v, &vn, &w, &R));
+  PetscCall(Check((PetscBool)(PetscAbsReal(v) < 1e-10), "slope, locked, tan = 0.8 mu: sticks (speed)", v, 0));
+  alpha = PetscAtanReal(1.2 * mu);
+  want  = g * (PetscSinReal(alpha) - mu * PetscCosReal(alpha)) * T;
+  PetscCall(RunSlope(alpha, mu, PETSC_TRUE, n, &v, &vn, &w, &R));
+  PetscCall(Check((PetscBool)(PetscAbsReal(v - want) < 1e-8 * want), "slope, locked, tan = 1.2 mu: slides at g(sin - mu cos)", v, want));
+  PetscCall(Check((PetscBool)(PetscAbsReal(vn) < 1e-10), "slope, locked: stays on the slope (normal speed)", vn, 0));
+  /* a free disk rolls without slipping for tan(alpha) < 3 mu: a = 2/3 g sin, and omega R = v */
+  alpha = PetscAtanReal(2.0 * mu);
+  want  = 2.0 / 3.0 * g * PetscSinReal(alpha) * T;
+  PetscCall(RunSlope(alpha, mu, PETSC_FALSE, n, &v, &vn, &w, &R));
+  PetscCall(Check((PetscBool)(PetscAbsReal(v - want) < 1e-8 * want), "slope, rolling, tan = 2 mu: a = 2/3 g sin", v, want));
+  PetscCall(Check((PetscBool)(PetscAbsReal(PetscAbsReal(w) * R - v) < 1e-8 * want), "slope, rolling: |omega| R = v (no slip)", PetscAbsReal(w) * R, v));
+  /* above 3 mu it slips: a = g (sin - mu cos), angular acceleration 2 mu g cos / R */
+  alpha = PetscAtanReal(4.0 * mu);
+  want  = g * (PetscSinReal(alpha) - mu * PetscCosReal(alpha)) * T;
+  PetscCall(RunSlope(alpha, mu, PETSC_FALSE, n, &v, &vn, &w, &R));
+  PetscCall(Check((PetscBool)(PetscAbsReal(v - want) < 1e-8 * want), "slope, slipping, tan = 4 mu: a = g(sin - mu cos)", v, want));
+  want = 2 * mu * g * PetscCosReal(alpha) / R * T;
+  PetscCall(Check((PetscBool)(PetscAbsReal(PetscAbsReal(w) - want) < 1e-8 * want), "slope, slipping: |omega| = 2 mu g cos t / R", PetscAbsReal(w), want));
+  PetscFunctionReturn(0);
+}
+
+/* Sum over this rank's contacts of the impulses they put on each disk (force and torque), DESIGN.md section 2. */
+static PetscErrorCode DiskImpulses(KergsStepper st, PetscReal *P /* 3 per disk, global, summed over ranks */)
+{
+  KergsScene sc = st->scene;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscArrayzero(P, 3 * sc->ndisks));
+  for (PetscInt k = 0; k < st->contacts->n; k++) {
+    const KergsContact *c = &st->contacts->c[k];
+    for (PetscInt d = 0; d < 2; d++) P[3 * c->a + d] += c->r[0] * c->n[d] + c->r[1] * c->t[d];
+    P[3 * c->a + 2] += -c->ra * c->r[1];
+    if (c->kind == KERGS_CONTACT_DISK_DISK) {
+      for (PetscInt d = 0; d < 2; d++) P[3 * c->b + d] -= c->r[0] * c->n[d] + c->r[1] * c->t[d];
+      P[3 * c->b + 2] += -c->rb * c->r[1];
+    }
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, P, 3 * sc->ndisks, MPIU_REAL, MPI_SUM, PETSC_COMM_WORLD));
+  PetscFunctionReturn(0);
+}
+
+/* Two disks wedged in a channel come to rest with balanced forces: H r + R^d = 0 on every disk. */
+static PetscErrorCode TestWedgedPair(void)
+{
+  KergsStepper st;
+  PetscReal    P[6], vmax, ek, worst = 0, w;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsClear(NULL));
+  PetscCall(MakeStepper("-options_file cases/two_disks_wedged.opts -wall_right_velocity 0,0 -steps 300 -solver_tol 1e-12 -solver_max_it 5000", &st));
+  for (PetscInt k = 0; k < 300; k++) PetscCall(KergsStepperStep(st));
+  PetscCall(KergsSceneKineticEnergy(st->scene, &ek, &vmax));
+  PetscCall(DiskImpulses(st, P));
+  for (PetscInt i = 0; i < 2; i++) {
+    w = st->scene->mass[i] * 9.81 * st->scene->dt;
+    worst = PetscMax(worst, PetscAbsReal(P[3 * i + 0]) / w);
+    worst = PetscMax(worst, PetscAbsReal(P[3 * i + 1] - w) / w);
+    worst = PetscMax(worst, PetscAbsReal(P[3 * i + 2]) / (w * st->scene->radius[i]));
+  }
+  PetscCall(Check((PetscBool)(vmax < 1e-6), "wedged pair: comes to rest (fastest grain)", vmax, 0));
+  PetscCall(Check((PetscBool)(worst < 1e-6), "wedged pair: contact impulses balance the weight", worst, 0));
+  PetscCall(Check((PetscBool)(st->contacts->nglobal == 4), "wedged pair: 4 contacts", (PetscReal)st->contacts->nglobal, 4));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+/* Momentum balance of every step: sum of m (V+ - V-) over disks = sum of R^d + impulses of the walls;
+   contact impulses between disks cancel (action and reaction). */
+static PetscErrorCode TestMomentumBalance(void)
+{
+  KergsStepper st;
+  PetscReal   *vold, *P, worst = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper("-gravity 0,-9.81 -friction 0.4 -dt 1e-3 -steps 40 -disks_source random -random_n 200 -random_box 0,0,0.6,0.6 "
+                        "-random_radius 0.01,0.02 -box 0,0,0.6,1 -box_open_top -wall_box_right_velocity -0.1,0 -solver_max_it 50",
+                        &st));
+  PetscCall(PetscMalloc2(2 * st->scene->ndisks, &vold, 3 * st->scene->ndisks, &P));
+  for (PetscInt s = 0; s < 40; s++) {
+    PetscReal dP[2] = {0, 0}, ext[2] = {0, 0}, scale = 0;
+    PetscCall(PetscArraycpy(vold, st->scene->v, 2 * st->scene->ndisks));
+    PetscCall(KergsStepperStep(st));
+    PetscCall(DiskImpulses(st, P));
+    for (PetscInt i = 0; i < st->scene->ndisks; i++)
+      for (PetscInt d = 0; d < 2; d++) {
+        dP[d] += st->scene->mass[i] * (st->scene->v[2 * i + d] - vold[2 * i + d]);
+        ext[d] += P[3 * i + d] + st->scene->mass[i] * st->scene->gravity[d] * st->scene->dt;
+        scale += st->scene->mass[i] * 9.81 * st->scene->dt;
+      }
+    worst = PetscMax(worst, (PetscAbsReal(dP[0] - ext[0]) + PetscAbsReal(dP[1] - ext[1])) / scale);
+  }
+  PetscCall(Check((PetscBool)(worst < 1e-12), "momentum balance per step (relative)", worst, 0));
+  PetscCall(PetscFree2(vold, P));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+/* H^T assembled as a Mat agrees with the kinematics of DESIGN.md section 2 (v_n = n.(u_a - u_b),
+   v_t = t.(u_a - u_b) - Ra w_a - Rb w_b) and H with the statics (force r_n n + r_t t, torque -Ra r_t on a,
+   the opposite force and torque -Rb r_t on b); hence <H r, V> = <r, H^T V>. */
+static PetscErrorCode TestAdjoint(void)
+{
+  KergsStepper   st;
+  KergsOperators ops;
+  Vec            V, r, HtV, Hr;
+  PetscRandom    rnd;
+  VecScatter     all;
+  Vec            Vall, Hrall;
+  PetscReal      dot1, dot2, errv = 0, errf = 0, *P;
+  const PetscScalar *va, *ra, *htv, *hr;
+  PetscInt       nd;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper("-gravity 0,-9.81 -friction 0.4 -dt 1e-3 -steps 5 -disks_source random -random_n 300 -random_box 0,0,0.5,0.5 "
+                        "-random_radius 0.01,0.02 -box 0,0,0.5,1 -box_open_top -alert 0.01",
+                        &st));
+  for (PetscInt s = 0; s < 5; s++) PetscCall(KergsStepperStep(st));
+  PetscCall(KergsContactsDetect(st->contacts, st->scene));
+  PetscCall(KergsOperatorsAssemble(st->ops, st->scene, st->contacts));
+  ops = st->ops;
+  nd  = ops->ndof_disk;
+  PetscCall(Check((PetscBool)(nd == 3 && ops->ncomp == 2), "adjoint: frictional scene has rotations and tangents", nd, 3));
+  PetscCall(PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
+  PetscCall(PetscRandomSetInterval(rnd, -1, 1));
+  PetscCall(VecDuplicate(ops->Vf, &V));
+  PetscCall(VecDuplicate(ops->Vf, &Hr));
+  PetscCall(VecDuplicate(ops->r, &r));
+  PetscCall(VecDuplicate(ops->r, &HtV));
+  PetscCall(VecSetRandom(V, rnd));
+  PetscCall(VecSetRandom(r, rnd));
+  PetscCall(MatMult(ops->HfT, V, HtV));
+  PetscCall(MatMultTranspose(ops->HfT, r, Hr));
+  PetscCall(VecDot(Hr, V, &dot1));
+  PetscCall(VecDot(r, HtV, &dot2));
+  PetscCall(Check((PetscBool)(PetscAbsReal(dot1 - dot2) < 1e-12 * PetscAbsReal(dot1)), "adjoint: <H r, V> = <r, H^T V>", dot1, dot2));
+  /* kinematics, contact by contact, against the Mat */
+  PetscCall(VecScatterCreateToAll(V, &all, &Vall));
+  PetscCall(VecScatterBegin(all, V, Vall, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(all, V, Vall, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecDuplicate(Vall, &Hrall));
+  PetscCall(VecScatterBegin(all, Hr, Hrall, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(all, Hr, Hrall, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(Vall, &va));
+  PetscCall(VecGetArrayRead(r, &ra));
+  PetscCall(VecGetArrayRead(HtV, &htv));
+  PetscCall(VecGetArrayRead(Hrall, &hr));
+  PetscCall(PetscCalloc1(3 * st->scene->ndisks, &P));
+  for (PetscInt k = 0; k < st->contacts->n; k++) {
+    const KergsContact *c  = &st->contacts->c[k];
+    const PetscScalar  *ua = &va[c->a * nd], *ub = c->kind == KERGS_CONTACT_DISK_DISK ? &va[c->b * nd] : NULL;
+    PetscReal           du[2], wb = ub ? ub[2] : 0, vn, vt;
+    for (PetscInt d = 0; d < 2; d++) du[d] = ua[d] - (ub ? ub[d] : 0); /* walls are at rest here: driven, V_g not in V_f */
+    vn = c->n[0] * du[0] + c->n[1] * du[1];
+    vt = c->t[0] * du[0] + c->t[1] * du[1] - c->ra * ua[2] - c->rb * wb;
+    errv = PetscMax(errv, PetscAbsReal(vn - htv[2 * k]) + PetscAbsReal(vt - htv[2 * k + 1]));
+    for (PetscInt d = 0; d < 2; d++) P[3 * c->a + d] += ra[2 * k] * c->n[d] + ra[2 * k + 1] * c->t[d];
+    P[3 * c->a + 2] -= c->ra * ra[2 * k + 1];
+    if (ub) {
+      for (PetscInt d = 0; d < 2; d++) P[3 * c->b + d] -= ra[2 * k] * c->n[d] + ra[2 * k + 1] * c->t[d];
+      P[3 * c->b + 2] -= c->rb * ra[2 * k + 1];
+    }
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, P, 3 * st->scene->ndisks, MPIU_REAL, MPI_SUM, PETSC_COMM_WORLD));
+  for (PetscInt i = 0; i < 3 * st->scene->ndisks; i++) errf = PetscMax(errf, PetscAbsReal(P[i] - hr[i]));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &errv, 1, MPIU_REAL, MPI_MAX, PETSC_COMM_WORLD));
+  PetscCall(Check((PetscBool)(errv < 1e-13), "adjoint: H^T V matches the contact kinematics", errv, 0));
+  PetscCall(Check((PetscBool)(errf < 1e-13), "adjoint: H r matches the contact statics", errf, 0));
+  PetscCall(VecRestoreArrayRead(Vall, &va));
+  PetscCall(VecRestoreArrayRead(r, &ra));
+  PetscCall(VecRestoreArrayRead(HtV, &htv));
+  PetscCall(VecRestoreArrayRead(Hrall, &hr));
+  PetscCall(PetscFree(P));
+  PetscCall(VecScatterDestroy(&all));
+  PetscCall(VecDestroy(&Vall));
+  PetscCall(VecDestroy(&Hrall));
+  PetscCall(VecDestroy(&V));
+  PetscCall(VecDestroy(&Hr));
+  PetscCall(VecDestroy(&r));
+  PetscCall(VecDestroy(&HtV));
+  PetscCall(PetscRandomDestroy(&rnd));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+/* The straight row of confine5 has no solution at velocity level: every solve must report non-convergence,
+   and the interpenetration stays within the right wall's displacement. */
+static PetscErrorCode TestInfeasibleRow(void)
+{
+  KergsStepper st;
+  PetscReal    disp;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper("-options_file cases/confine5_straight.opts", &st));
+  PetscCall(KergsStepperRun(st));
+  disp = PetscAbsReal(st->scene->walls[1].disp[0]);
+  PetscCall(Check((PetscBool)(st->nonconverged == st->scene->nsteps), "straight row: every solve reports non-convergence", st->nonconverged, st->scene->nsteps));
+  PetscCall(Check((PetscBool)(st->max_violation <= disp + 1e-12), "straight row: interpenetration <= wall displacement", st->max_violation, disp));
+  PetscCall(Check((PetscBool)(st->max_violation > 0.5 * disp), "straight row: the wall's motion became interpenetration", st->max_violation, disp));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+/* A converged solve has its natural-map residual below the tolerance (criterion natural). */
+static PetscErrorCode TestConvergedResidual(void)
+{
+  KergsStepper st;
+  PetscReal    conv, res, nconv = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper("-options_file cases/two_disks_wedged.opts -steps 20 -solver_criterion natural -solver_tol 1e-9 -solver_max_it 10000", &st));
+  for (PetscInt s = 0; s < 20; s++) {
+    PetscCall(KergsStepperStep(st));
+    PetscCall(LastStat(st->results, "converged", &conv));
+    PetscCall(LastStat(st->results, "residual", &res));
+    if (conv > 0.5) nconv++;
+    if (conv > 0.5 && !(res < 1e-9)) PetscCall(Check(PETSC_FALSE, "converged step has residual < tol", res, 1e-9));
+  }
+  PetscCall(Check((PetscBool)(nconv == 20), "wedged pair: every step converges to residual < 1e-9", nconv, 20));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+int main(int argc, char **argv)
+{
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(KergsInitializePackage());
+  PetscCall(TestColumn());
+  PetscCall(TestSlopes());
+  PetscCall(TestWedgedPair());
+  PetscCall(TestMomentumBalance());
+  PetscCall(TestAdjoint());
+  PetscCall(TestInfeasibleRow());
+  PetscCall(TestConvergedResidual());
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
+  PetscCall(PetscFinalize());
+  return nfail ? 1 : 0;
+}
