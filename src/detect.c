@@ -31,7 +31,7 @@ PetscErrorCode KergsContactsCreate(MPI_Comm comm, KergsContacts *contacts)
   PetscCheck(contacts, comm, PETSC_ERR_ARG_NULL, "KergsContactsCreate: output argument is NULL");
   PetscCall(KergsInitializePackage());
   PetscCall(PetscNew(&ct));
-  ct->comm = comm;
+  ct->comm  = comm;
   *contacts = ct;
   PetscFunctionReturn(0);
 }
@@ -65,12 +65,15 @@ static PetscErrorCode ContactsReserve(KergsContacts ct, PetscInt needed)
 static PetscErrorCode CheckScene(KergsContacts ct, KergsScene scene)
 {
   PetscFunctionBeginUser;
-  PetscCheck(scene->ndisks >= 0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: negative number of disks %" PetscInt_FMT, scene->name, scene->ndisks);
+  PetscCheck(scene->ndisks >= 0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: negative number of disks %" PetscInt_FMT, scene->name,
+             scene->ndisks);
   PetscCheck(0 <= scene->dstart && scene->dstart <= scene->dend && scene->dend <= scene->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-             "Scene %s: owned disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not inside [0, %" PetscInt_FMT ")", scene->name, scene->dstart,
-             scene->dend, scene->ndisks);
-  PetscCheck(scene->alert >= 0.0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance %g must be >= 0", scene->name, (double)scene->alert);
-  PetscCheck(scene->nmaterials > 0 && scene->mu, ct->comm, PETSC_ERR_ARG_WRONGSTATE, "Scene %s: no materials (friction table missing)", scene->name);
+             "Scene %s: owned disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not inside [0, %" PetscInt_FMT ")", scene->name,
+             scene->dstart, scene->dend, scene->ndisks);
+  PetscCheck(scene->alert >= 0.0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance %g must be >= 0", scene->name,
+             (double)scene->alert);
+  PetscCheck(scene->nmaterials > 0 && scene->mu, ct->comm, PETSC_ERR_ARG_WRONGSTATE, "Scene %s: no materials (friction table missing)",
+             scene->name);
   PetscFunctionReturn(0);
 }
 
@@ -85,10 +88,11 @@ static PetscErrorCode ReportBadDisk(KergsContacts ct, KergsScene scene)
     PetscCheck(!PetscIsInfOrNanReal(x[KERGS_DIM * i]) && !PetscIsInfOrNanReal(x[KERGS_DIM * i + 1]), ct->comm, PETSC_ERR_FP,
                "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has a non-finite centre", scene->name, scene->id[i], i);
     PetscCheck(rad[i] > 0.0 && !PetscIsInfOrNanReal(rad[i]), ct->comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has radius %g, not positive and finite", scene->name, scene->id[i], i, (double)rad[i]);
+               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has radius %g, not positive and finite", scene->name,
+               scene->id[i], i, (double)rad[i]);
     PetscCheck(0 <= scene->material[i] && scene->material[i] < scene->nmaterials, ct->comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has material %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")", scene->name, scene->id[i], i,
-               scene->material[i], scene->nmaterials);
+               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has material %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")",
+               scene->name, scene->id[i], i, scene->material[i], scene->nmaterials);
   }
   SETERRQ(ct->comm, PETSC_ERR_FP, "Scene %s: the bounding box of the disk centres is too large to represent", scene->name);
 }
@@ -98,7 +102,7 @@ static PetscErrorCode ReportBadDisk(KergsContacts ct, KergsScene scene)
 static PetscErrorCode BoundingBox(KergsContacts ct, KergsScene scene, PetscReal lo[], PetscReal hi[], PetscReal *rmax)
 {
   const PetscReal *x = scene->x, *rad = scene->radius;
-  const PetscInt  *mat = scene->material;
+  const PetscInt  *mat  = scene->material;
   PetscReal        rmin = PETSC_MAX_REAL, rbig = 0.0;
   PetscInt         matmin = 0, matmax = 0;
   PetscBool        finite = PETSC_TRUE;
@@ -124,7 +128,8 @@ static PetscErrorCode BoundingBox(KergsContacts ct, KergsScene scene, PetscReal 
   }
   /* NaN fails every comparison: a NaN centre or radius makes the box or the radius bounds fail below */
   for (PetscInt d = 0; d < KERGS_DIM; d++) finite = (PetscBool)(finite && !PetscIsInfOrNanReal(hi[d] - lo[d]));
-  if (scene->ndisks > 0 && (!finite || !(rmin > 0.0) || PetscIsInfOrNanReal(rbig) || matmin < 0 || matmax >= scene->nmaterials)) PetscCall(ReportBadDisk(ct, scene));
+  if (scene->ndisks > 0 && (!finite || !(rmin > 0.0) || PetscIsInfOrNanReal(rbig) || matmin < 0 || matmax >= scene->nmaterials))
+    PetscCall(ReportBadDisk(ct, scene));
   *rmax = rbig;
   PetscFunctionReturn(0);
 }
@@ -134,8 +139,8 @@ static PetscErrorCode BoundingBox(KergsContacts ct, KergsScene scene, PetscReal 
    at most 4 ndisks + 64 cells (one disk far away must not make a huge grid). */
 static PetscErrorCode BuildCellList(KergsContacts ct, KergsScene scene)
 {
-  const PetscInt   n = scene->ndisks;
-  const PetscReal *x = scene->x;
+  const PetscInt   n        = scene->ndisks;
+  const PetscReal *x        = scene->x;
   const PetscReal  maxcells = 4.0 * (PetscReal)n + 64.0;
   PetscReal        lo[KERGS_DIM], hi[KERGS_DIM], rmax = 0.0, h, inv, extent[KERGS_DIM];
   PetscInt         ncells;
@@ -171,10 +176,10 @@ static PetscErrorCode BuildCellList(KergsContacts ct, KergsScene scene)
   for (PetscInt i = 0; i < n; i++) {
     PetscInt ix = (PetscInt)((x[KERGS_DIM * i] - lo[0]) * inv), iy = (PetscInt)((x[KERGS_DIM * i + 1] - lo[1]) * inv), cell;
 
-    ix              = PetscMin(PetscMax(ix, 0), ct->ncellx - 1);
-    iy              = PetscMin(PetscMax(iy, 0), ct->ncelly - 1);
-    cell            = iy * ct->ncellx + ix;
-    ct->next[i]     = ct->cellhead[cell];
+    ix                 = PetscMin(PetscMax(ix, 0), ct->ncellx - 1);
+    iy                 = PetscMin(PetscMax(iy, 0), ct->ncelly - 1);
+    cell               = iy * ct->ncellx + ix;
+    ct->next[i]        = ct->cellhead[cell];
     ct->cellhead[cell] = i;
   }
   PetscFunctionReturn(0);
@@ -182,8 +187,8 @@ static PetscErrorCode BuildCellList(KergsContacts ct, KergsScene scene)
 
 /* Fill a contact with its geometry; a fresh contact has no impulse, no velocity, and is not persistent
    until the merge with the previous detection says otherwise. */
-static inline void SetContact(KergsContact *c, KergsContactKind kind, PetscInt a, PetscInt b, PetscReal nx, PetscReal ny, PetscReal ra, PetscReal rb,
-                              PetscReal gap, PetscReal mu)
+static inline void SetContact(KergsContact *c, KergsContactKind kind, PetscInt a, PetscInt b, PetscReal nx, PetscReal ny, PetscReal ra,
+                              PetscReal rb, PetscReal gap, PetscReal mu)
 {
   c->kind = kind;
   c->a    = a;
@@ -222,7 +227,9 @@ static PetscErrorCode DetectDiskDisk(KergsContacts ct, KergsScene scene, PetscIn
         PetscReal       dist;
 
         if (d2 >= reach * reach) continue;
-        PetscCheck(d2 > 0.0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene %s: grains %" PetscInt_FMT " and %" PetscInt_FMT " (disks %" PetscInt_FMT " and %" PetscInt_FMT ") have coincident centres (%g, %g): contact normal undefined",
+        PetscCheck(d2 > 0.0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+                   "Scene %s: grains %" PetscInt_FMT " and %" PetscInt_FMT " (disks %" PetscInt_FMT " and %" PetscInt_FMT
+                   ") have coincident centres (%g, %g): contact normal undefined",
                    scene->name, scene->id[a], scene->id[b], a, b, (double)xa, (double)ya);
         if (ct->n == ct->nalloc) PetscCall(ContactsReserve(ct, ct->n + 1));
         dist = PetscSqrtReal(d2);
@@ -253,10 +260,11 @@ static PetscErrorCode SetUpWallFrames(KergsScene scene, WallFrame *frames)
     const PetscReal  ex = wall->b[0] - wall->a[0], ey = wall->b[1] - wall->a[1], len = PetscSqrtReal(ex * ex + ey * ey);
 
     PetscCheck(0 <= wall->material && wall->material < scene->nmaterials, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-               "Scene %s: wall %" PetscInt_FMT " (%s) has material %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")", scene->name, w, wall->name, wall->material,
-               scene->nmaterials);
-    PetscCheck(len > 0.0 && !PetscIsInfOrNanReal(len), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "Scene %s: wall %" PetscInt_FMT " (%s) from (%g, %g) to (%g, %g) has no direction",
-               scene->name, w, wall->name, (double)wall->a[0], (double)wall->a[1], (double)wall->b[0], (double)wall->b[1]);
+               "Scene %s: wall %" PetscInt_FMT " (%s) has material %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")", scene->name, w,
+               wall->name, wall->material, scene->nmaterials);
+    PetscCheck(len > 0.0 && !PetscIsInfOrNanReal(len), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+               "Scene %s: wall %" PetscInt_FMT " (%s) from (%g, %g) to (%g, %g) has no direction", scene->name, w, wall->name,
+               (double)wall->a[0], (double)wall->a[1], (double)wall->b[0], (double)wall->b[1]);
     frames[w].a[0]     = wall->a[0];
     frames[w].a[1]     = wall->a[1];
     frames[w].e[0]     = ex / len;
@@ -279,7 +287,7 @@ static PetscErrorCode DetectDiskWall(KergsContacts ct, KergsScene scene, const W
 
   PetscFunctionBeginUser;
   for (PetscInt w = 0; w < scene->nwalls; w++) {
-    const WallFrame *f = &frames[w];
+    const WallFrame *f  = &frames[w];
     const PetscReal  dx = xa - f->a[0], dy = ya - f->a[1], d = dx * f->n[0] + dy * f->n[1];
 
     if (!(d > 0.0 && d - ra < scene->alert)) continue;
@@ -288,7 +296,8 @@ static PetscErrorCode DetectDiskWall(KergsContacts ct, KergsScene scene, const W
       if (s < 0.0 || s > f->length) continue;
     }
     if (ct->n == ct->nalloc) PetscCall(ContactsReserve(ct, ct->n + 1));
-    SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_WALL, a, w, f->n[0], f->n[1], ra, 0.0, d - ra, scene->mu[scene->material[a] * scene->nmaterials + f->material]);
+    SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_WALL, a, w, f->n[0], f->n[1], ra, 0.0, d - ra,
+               scene->mu[scene->material[a] * scene->nmaterials + f->material]);
   }
   PetscFunctionReturn(0);
 }
@@ -302,10 +311,7 @@ static inline int CompareContacts(const KergsContact *p, const KergsContact *q)
   return 0;
 }
 
-static int CompareContactsQsort(const void *p, const void *q)
-{
-  return CompareContacts((const KergsContact *)p, (const KergsContact *)q);
-}
+static int CompareContactsQsort(const void *p, const void *q) { return CompareContacts((const KergsContact *)p, (const KergsContact *)q); }
 
 /* Warm start: a contact of the same (a, kind, b) as one of the previous call takes over its impulse.
    Both lists are sorted, so one merge pass finds every match (O(n + nprev)). */
@@ -333,15 +339,27 @@ static PetscErrorCode CarryOverImpulses(KergsContacts ct)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsContactsDetect(KergsContacts ct, KergsScene scene)
+/* Global numbering of the contacts: rank p's contacts come after those of ranks 0 .. p-1 (collective). */
+static PetscErrorCode SetGlobalNumbering(KergsContacts ct)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(ct->comm, &rank));
+  PetscCallMPI(MPI_Allreduce(&ct->n, &ct->nglobal, 1, MPIU_INT, MPI_SUM, ct->comm));
+  ct->start = 0;
+  PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));
+  if (rank == 0) ct->start = 0; /* MPI_Exscan leaves rank 0's result undefined */
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode DetectContacts(KergsContacts ct, KergsScene scene)
 {
   WallFrame    *frames = NULL;
   KergsContact *swap;
   PetscInt      nswap, npersistent = 0;
 
   PetscFunctionBeginUser;
-  PetscCheck(ct && scene, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KergsContactsDetect: contacts or scene is NULL");
-  PetscCall(PetscLogEventBegin(KERGS_Detect, 0, 0, 0, 0));
   PetscCall(CheckScene(ct, scene));
   /* the current contacts become the previous ones; their storage is reused for the new list */
   swap           = ct->prev;
@@ -362,18 +380,25 @@ PetscErrorCode KergsContactsDetect(KergsContacts ct, KergsScene scene)
   }
   PetscCall(PetscFree(frames));
   PetscCall(CarryOverImpulses(ct));
-
-  PetscCallMPI(MPI_Allreduce(&ct->n, &ct->nglobal, 1, MPIU_INT, MPI_SUM, ct->comm));
-  ct->start = 0;
-  PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));
-  {
-    PetscMPIInt rank;
-    PetscCallMPI(MPI_Comm_rank(ct->comm, &rank));
-    if (rank == 0) ct->start = 0; /* MPI_Exscan leaves rank 0's result undefined */
-  }
+  PetscCall(SetGlobalNumbering(ct));
   for (PetscInt i = 0; i < ct->n; i++) npersistent += ct->c[i].persistent;
-  PetscCall(PetscInfo(NULL, "Scene %s: %" PetscInt_FMT " contacts here (%" PetscInt_FMT " persistent) of %" PetscInt_FMT ", cell grid %" PetscInt_FMT " x %" PetscInt_FMT " of side %g\n", scene->name,
-                      ct->n, npersistent, ct->nglobal, ct->ncellx, ct->ncelly, (double)ct->cellsize));
+  PetscCall(PetscInfo(NULL,
+                      "Scene %s: %" PetscInt_FMT " contacts here (%" PetscInt_FMT " persistent) of %" PetscInt_FMT
+                      ", cell grid %" PetscInt_FMT " x %" PetscInt_FMT " of side %g\n",
+                      scene->name, ct->n, npersistent, ct->nglobal, ct->ncellx, ct->ncelly, (double)ct->cellsize));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsContactsDetect(KergsContacts ct, KergsScene scene)
+{
+  PetscErrorCode ierr;
+
+  PetscFunctionBeginUser;
+  PetscCheck(ct && scene, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KergsContactsDetect: contacts or scene is NULL");
+  /* end the log event even on error, so that a caller that recovers still gets a readable -log_view */
+  PetscCall(PetscLogEventBegin(KERGS_Detect, 0, 0, 0, 0));
+  ierr = DetectContacts(ct, scene);
   PetscCall(PetscLogEventEnd(KERGS_Detect, 0, 0, 0, 0));
+  PetscCall(ierr);
   PetscFunctionReturn(0);
 }
