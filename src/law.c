@@ -20,7 +20,7 @@ static inline void ProjectCoulombCone(PetscInt ncomp, const PetscReal z[], Petsc
     return;
   }
   at = PetscAbsReal(z[1]);
-  if (at <= mu * z[0]) {
+  if (z[0] >= 0.0 && at <= mu * z[0]) { /* inside the cone (z_n >= 0 matters when mu = 0) */
     p[0] = z[0];
     p[1] = z[1];
   } else if (mu * at <= -z[0]) {
@@ -51,11 +51,13 @@ PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const Pe
 }
 
 /* Fallback when rounding rejects every case (the exact solution lies on a case boundary) or the block is
-   degenerate: among the finite candidates, projected on the cone, keep the smallest natural residual. */
-static KergsLawStatus SolveCoulomb2Fallback(const PetscReal W[], const PetscReal b[], PetscReal mu, PetscInt ncand, PetscReal cand[][KERGS_MAXCOMP], PetscReal r[])
+   degenerate: among the computed candidates, projected on the cone, keep the smallest natural residual.
+   Any rho > 0 has the same zeros; 1 / max |W_ij| keeps rho v of the order of r even when W_nn is tiny. */
+static KergsLawStatus SolveCoulomb2Fallback(const PetscReal W[], const PetscReal b[], PetscReal mu, PetscInt ncand, PetscReal cand[][KERGS_MAXCOMP],
+                                            const KergsLawStatus status[], PetscReal r[])
 {
-  static const KergsLawStatus status[] = {KERGS_LAW_STICK, KERGS_LAW_SLIP_POS, KERGS_LAW_SLIP_NEG, KERGS_LAW_OPEN};
-  const PetscReal rho  = W[0] > 0 ? 1.0 / W[0] : 1.0;
+  const PetscReal wmax = PetscMax(PetscMax(PetscAbsReal(W[0]), PetscAbsReal(W[1])), PetscMax(PetscAbsReal(W[2]), PetscAbsReal(W[3])));
+  const PetscReal rho  = wmax > 0 ? 1.0 / wmax : 1.0;
   PetscReal       best = PETSC_MAX_REAL, p[KERGS_MAXCOMP], v[KERGS_MAXCOMP], res;
   KergsLawStatus  st   = KERGS_LAW_OPEN;
   PetscInt        k;
@@ -63,7 +65,6 @@ static KergsLawStatus SolveCoulomb2Fallback(const PetscReal W[], const PetscReal
   r[0] = 0.0;
   r[1] = 0.0;
   for (k = 0; k < ncand; k++) {
-    if (PetscIsInfOrNanReal(cand[k][0]) || PetscIsInfOrNanReal(cand[k][1])) continue;
     ProjectCoulombCone(2, cand[k], mu, p);
     v[0] = W[0] * p[0] + W[1] * p[1] + b[0];
     v[1] = W[2] * p[0] + W[3] * p[1] + b[1];
@@ -85,9 +86,11 @@ static inline KergsLawStatus SolveCoulomb2(const PetscReal W[], const PetscReal 
   const PetscReal Wnn = W[0], Wnt = W[1], Wtn = W[2], Wtt = W[3], bn = b[0], bt = b[1];
   const PetscReal det = Wnn * Wtt - Wnt * Wtn;
   PetscReal       cand[4][KERGS_MAXCOMP], den, rn, rt, vt;
+  KergsLawStatus  status[4];
+  PetscInt        ncand = 0;
 
-  /* Stick: v = 0, r = -Waa^{-1} b (Cramer). Divisions only by denominators known to be nonzero, so that
-     -fp_trap never fires; a rejected singular case leaves an infinite candidate, skipped by the fallback. */
+  /* Stick: v = 0, r = -Waa^{-1} b (Cramer). Divisions only by denominators known to be nonzero (so that
+     -fp_trap never fires); a case with a singular denominator gives no candidate. */
   if (det > KERGS_LAW_SINGULAR * PetscAbsReal(Wnn * Wtt)) {
     rn = (Wnt * bt - Wtt * bn) / det;
     rt = (Wtn * bn - Wnn * bt) / det;
@@ -96,9 +99,10 @@ static inline KergsLawStatus SolveCoulomb2(const PetscReal W[], const PetscReal 
       r[1] = rt;
       return KERGS_LAW_STICK;
     }
-    cand[0][0] = rn;
-    cand[0][1] = rt;
-  } else cand[0][0] = cand[0][1] = PETSC_INFINITY;
+    cand[ncand][0]  = rn;
+    cand[ncand][1]  = rt;
+    status[ncand++] = KERGS_LAW_STICK;
+  }
   /* Slip with v_t > 0: r_t = -mu r_n, v_n = (Wnn - mu Wnt) r_n + b_n = 0 (r_n > 0 needs den > 0). */
   den = Wnn - mu * Wnt;
   if (den > KERGS_LAW_SINGULAR * (Wnn + mu * PetscAbsReal(Wnt))) {
@@ -109,9 +113,10 @@ static inline KergsLawStatus SolveCoulomb2(const PetscReal W[], const PetscReal 
       r[1] = -mu * rn;
       return KERGS_LAW_SLIP_POS;
     }
-    cand[1][0] = rn;
-    cand[1][1] = -mu * rn;
-  } else cand[1][0] = cand[1][1] = PETSC_INFINITY;
+    cand[ncand][0]  = rn;
+    cand[ncand][1]  = -mu * rn;
+    status[ncand++] = KERGS_LAW_SLIP_POS;
+  }
   /* Slip with v_t < 0: r_t = +mu r_n, v_n = (Wnn + mu Wnt) r_n + b_n = 0. */
   den = Wnn + mu * Wnt;
   if (den > KERGS_LAW_SINGULAR * (Wnn + mu * PetscAbsReal(Wnt))) {
@@ -122,12 +127,14 @@ static inline KergsLawStatus SolveCoulomb2(const PetscReal W[], const PetscReal 
       r[1] = mu * rn;
       return KERGS_LAW_SLIP_NEG;
     }
-    cand[2][0] = rn;
-    cand[2][1] = mu * rn;
-  } else cand[2][0] = cand[2][1] = PETSC_INFINITY;
-  cand[3][0] = 0.0;
-  cand[3][1] = 0.0;
-  return SolveCoulomb2Fallback(W, b, mu, 4, cand, r);
+    cand[ncand][0]  = rn;
+    cand[ncand][1]  = mu * rn;
+    status[ncand++] = KERGS_LAW_SLIP_NEG;
+  }
+  cand[ncand][0]  = 0.0;
+  cand[ncand][1]  = 0.0;
+  status[ncand++] = KERGS_LAW_OPEN;
+  return SolveCoulomb2Fallback(W, b, mu, ncand, cand, status, r);
 }
 
 KergsLawStatus KergsLawSolve(PetscInt ncomp, const PetscReal Waa[], const PetscReal b[], PetscReal mu, PetscBool active, PetscReal r[])

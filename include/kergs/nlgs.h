@@ -13,30 +13,39 @@ typedef struct _p_KergsSweep *KergsSweep;
 struct _p_KergsSweep {
   MPI_Comm comm;
   PetscInt ncomp, n;          /* components per contact, local contacts */
-  Mat      W, Ad, Ao;         /* W and its local diagonal / off-process blocks (Ao NULL on one rank) */
+  Mat      W, Ad, Ao;         /* W and its local diagonal / off-process blocks (Ao NULL when W is seqaij) */
   const PetscInt    *ai, *aj, *bi, *bj;
   const PetscScalar *aa, *ba;
   PetscReal *Wdiag;           /* n blocks of ncomp x ncomp: W_alpha,alpha */
-  PetscReal *mu;              /* per contact */
-  PetscBool *active;          /* per contact: predicted gap <= 0 */
+  PetscReal *mu;              /* per contact (the caller's array; NULL: frictionless) */
+  PetscBool *active;          /* per contact: predicted gap <= 0 (the caller's array; NULL: all active) */
   Vec        rghost;          /* off-process impulses, ordered as Ao's columns */
   VecScatter ghost_scatter;
   PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep) */
   PetscInt  *dsplit;          /* per local row i: [start, end) of the own block's entries in aj (skipped by the sweep) */
 };
 
-/* Measures of one sweep, reduced over ranks by KergsSweepRun. */
+/* Measures of one sweep, reduced over ranks by KergsSweepRun.
+   dr = r_new - r_old over the sweep, r = r_new, Waa = W's own diagonal blocks (not Wdiag_override); the mean
+   is over all contacts, inactive ones included. When a denominator vanishes (r_new = 0 everywhere) a measure
+   is 0 if nothing changed and 1 otherwise. */
 typedef struct {
   PetscReal quad; /* sqrt( sum dr^T Waa dr / sum r^T Waa r ): W-weighted relative change of r (LMGC90 "Quad" spirit) */
   PetscReal maxm; /* max sqrt(dr^T Waa dr) / mean sqrt(r^T Waa r) over contacts (LMGC90 "Maxm" spirit) */
 } KergsSweepMeasures;
 
 PETSC_EXTERN PetscErrorCode KergsSweepCreate(MPI_Comm, KergsSweep *);
-/* Take W (assembled for the current contacts) and per-contact mu and activity. */
+/* Take W (assembled seqaij/mpiaij for the current contacts, row and column layouts equal, ncomp rows per local
+   contact) and per-contact mu and activity. Keeps a reference to W and its CSR arrays, and the pointers mu and
+   active (owned by the caller, read at every sweep). Calling it again resets first; if W's values change,
+   call it again (the diagonal blocks are copied). */
 PETSC_EXTERN PetscErrorCode KergsSweepSetUp(KergsSweep, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active);
-/* One sweep: r (local array, updated in place) for v = W r + vd (+ extra). Collective. */
+/* One sweep: r (local array, updated in place) for v = W r + vd (+ extra). Collective.
+   extra (optional): n*ncomp values added to each contact's right-hand side, fixed during the sweep.
+   Wdiag_override (optional): n blocks of ncomp x ncomp used by the law instead of W_aa (NLGS-Jac: W_aa + Z_aa). */
 PETSC_EXTERN PetscErrorCode KergsSweepRun(KergsSweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wdiag_override, KergsSweepMeasures *);
-/* Natural-map residual sqrt(sum_a |r_a - proj(...)|^2) / max(|r|, tiny), with v = W r + vd; also returns v. Collective. */
+/* Natural-map residual sqrt(sum_a |r_a - proj(...)|^2) / max(|r|, tiny), with v = W r + vd; also returns v. Collective.
+   rho = 1 / W_aa,nn per contact (law.h). When r = 0 it is the absolute value (0 for the zero solution of an open problem). */
 PETSC_EXTERN PetscErrorCode KergsSweepNaturalResidual(KergsSweep, Vec r, Vec vd, Vec v, PetscReal *res);
 PETSC_EXTERN PetscErrorCode KergsSweepReset(KergsSweep);
 PETSC_EXTERN PetscErrorCode KergsSweepDestroy(KergsSweep *);
