@@ -1,0 +1,279 @@
+/* kergs FCLib export: one step's local problem u = W r + q with Coulomb's law (W, q = v^d, mu) in the FCLib
+   HDF5 format, written by Debian's libfclib so that other solvers (Siconos fc2d) can solve the very problem
+   kergs solved. Layout in docs/results.md.
+
+   libfclib is linked against the serial HDF5 while PETSc uses the MPI one: both libraries export the same
+   symbols. It is therefore never linked: it is loaded with dlopen(RTLD_LOCAL | RTLD_DEEPBIND) so that its
+   HDF5 calls bind to its own serial HDF5, and only rank 0 calls it. libfclib exits the process on an HDF5
+   failure, so everything it is given is checked first. */
+#define _GNU_SOURCE /* RTLD_DEEPBIND */
+#include <kergs/fclib_export.h>
+#include <kergs/results.h>
+#include <dlfcn.h>
+#include <limits.h>
+#include <stdio.h>
+#include <fclib.h>
+
+#ifndef KERGS_FCLIB_LIBRARY
+#define KERGS_FCLIB_LIBRARY "libfclib.so.0"
+#endif
+
+#define KERGS_FCLIB_SPACEDIM 2 /* FCLib's 2D frictional contact: normal then tangential per contact */
+#define KERGS_FCLIB_PACK 5     /* per exported contact: q_n, q_t, mu, r_n, r_t */
+
+typedef int (*KergsFCLibWriteLocalFn)(struct fclib_local *, const char *);
+typedef int (*KergsFCLibWriteSolutionFn)(struct fclib_solution *, const char *);
+
+/* Load libfclib once (rank 0 only); msg is set when it or one of its functions is missing. */
+static void KergsFCLibLoad(KergsFCLibWriteLocalFn *write_local, KergsFCLibWriteSolutionFn *write_solution, char msg[], size_t len)
+{
+  static void *handle  = NULL; /* never closed: unloading an HDF5 library at run time is not safe */
+  const char  *names[] = {KERGS_FCLIB_LIBRARY, "libfclib.so.0"};
+
+  for (size_t k = 0; !handle && k < sizeof(names) / sizeof(names[0]); k++) handle = dlopen(names[k], RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
+  if (!handle) {
+    snprintf(msg, len, "Cannot load libfclib (%s): %s", KERGS_FCLIB_LIBRARY, dlerror());
+    return;
+  }
+  *(void **)write_local    = dlsym(handle, "fclib_write_local");
+  *(void **)write_solution = dlsym(handle, "fclib_write_solution");
+  if (!*write_local || !*write_solution)
+    snprintf(msg, len, "libfclib (%s) lacks fclib_write_local or fclib_write_solution", KERGS_FCLIB_LIBRARY);
+}
+
+/* The exported problem on rank 0: na contacts, m = 2 na unknowns, W in compressed columns (FCLib nz = -1). */
+typedef struct {
+  PetscInt  na, m, nnz;
+  int      *colptr, *rowind;
+  double   *val, *q, *mu, *r, *u;
+  PetscBool padded; /* frictionless kergs problem: tangential components added */
+} KergsFCLibProblem;
+
+static PetscErrorCode KergsFCLibProblemFree(KergsFCLibProblem *p)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree3(p->colptr, p->rowind, p->val));
+  PetscCall(PetscFree4(p->q, p->mu, p->r, p->u));
+  PetscFunctionReturn(0);
+}
+
+/* Global row indices of W (contact components) of this rank's active contacts, gathered on rank 0 in
+   order; also the per-contact pack (q_n, q_t, mu, r_n, r_t) of those contacts. */
+static PetscErrorCode KergsFCLibGather(KergsContacts contacts, KergsOperators ops, const PetscBool *active, PetscInt rstart, PetscInt *na,
+                                       PetscInt **rows, PetscReal **pack)
+{
+  const PetscInt     nc   = ops->ncomp;
+  MPI_Comm           comm = ops->comm;
+  PetscMPIInt        rank, size, nloc = 0, ntot = 0, *counts = NULL, *displs = NULL;
+  PetscInt          *lrows;
+  PetscReal         *lpack;
+  const PetscScalar *vd;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  for (PetscInt k = 0; k < contacts->n; k++)
+    if (active[k]) nloc++;
+  PetscCall(PetscMalloc2(nloc * nc, &lrows, nloc * KERGS_FCLIB_PACK, &lpack));
+  PetscCall(VecGetArrayRead(ops->vd, &vd));
+  for (PetscInt k = 0, a = 0; k < contacts->n; k++) {
+    const KergsContact *c = &contacts->c[k];
+    if (!active[k]) continue;
+    for (PetscInt j = 0; j < nc; j++) lrows[a * nc + j] = rstart + k * nc + j;
+    lpack[a * KERGS_FCLIB_PACK + 0] = PetscRealPart(vd[k * nc]);
+    lpack[a * KERGS_FCLIB_PACK + 1] = nc > 1 ? PetscRealPart(vd[k * nc + 1]) : 0.0;
+    lpack[a * KERGS_FCLIB_PACK + 2] = nc > 1 ? c->mu : 0.0;
+    lpack[a * KERGS_FCLIB_PACK + 3] = c->r[0];
+    lpack[a * KERGS_FCLIB_PACK + 4] = nc > 1 ? c->r[1] : 0.0;
+    a++;
+  }
+  PetscCall(VecRestoreArrayRead(ops->vd, &vd));
+  if (rank == 0) PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
+  PetscCallMPI(MPI_Gather(&nloc, 1, MPI_INT, counts, 1, MPI_INT, 0, comm));
+  if (rank == 0) {
+    displs[0] = 0;
+    for (PetscMPIInt p = 0; p < size; p++) displs[p + 1] = displs[p] + counts[p];
+    ntot = displs[size];
+  }
+  *na = ntot;
+  PetscCall(PetscMalloc2(ntot * nc, rows, ntot * KERGS_FCLIB_PACK, pack));
+  /* rows: counts and displacements in units of contacts, scaled to components and packs */
+  if (rank == 0)
+    for (PetscMPIInt p = 0; p <= size; p++) {
+      if (p < size) counts[p] *= (PetscMPIInt)nc;
+      displs[p] *= (PetscMPIInt)nc;
+    }
+  PetscCallMPI(MPI_Gatherv(lrows, (PetscMPIInt)(nloc * nc), MPIU_INT, *rows, counts, displs, MPIU_INT, 0, comm));
+  if (rank == 0)
+    for (PetscMPIInt p = 0; p <= size; p++) {
+      if (p < size) counts[p] = counts[p] / (PetscMPIInt)nc * KERGS_FCLIB_PACK;
+      displs[p] = displs[p] / (PetscMPIInt)nc * KERGS_FCLIB_PACK;
+    }
+  PetscCallMPI(MPI_Gatherv(lpack, nloc * KERGS_FCLIB_PACK, MPIU_REAL, *pack, counts, displs, MPIU_REAL, 0, comm));
+  if (rank == 0) PetscCall(PetscFree2(counts, displs));
+  PetscCall(PetscFree2(lrows, lpack));
+  PetscFunctionReturn(0);
+}
+
+/* Padded index of component j of the exported (active-only) kergs numbering: contact j / nc, normal or
+   tangential j % nc; FCLib always has 2 components per contact. */
+static inline PetscInt KergsFCLibIndex(PetscInt j, PetscInt nc) { return (j / nc) * KERGS_FCLIB_SPACEDIM + j % nc; }
+
+/* Compressed columns of the padded W from the sequential submatrix Wa (rows and columns of the active
+   contacts). Frictionless: each contact gets a tangential unknown with W_tt = W_nn and no coupling, so the
+   padded problem has the same normal solution and r_t = 0. Rows are visited in increasing padded order, so
+   row indices come out sorted inside each column. */
+static PetscErrorCode KergsFCLibBuildCSC(Mat Wa, PetscInt nc, KergsFCLibProblem *p)
+{
+  const PetscInt     nrows = p->na * nc;
+  PetscInt          *count, *next, ncols;
+  const PetscInt    *cols;
+  const PetscScalar *vals;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscCalloc2(p->m + 1, &count, p->m, &next));
+  p->nnz = 0;
+  for (PetscInt i = 0; i < nrows; i++) {
+    PetscCall(MatGetRow(Wa, i, &ncols, &cols, NULL));
+    for (PetscInt e = 0; e < ncols; e++) count[KergsFCLibIndex(cols[e], nc)]++;
+    p->nnz += ncols;
+    PetscCall(MatRestoreRow(Wa, i, &ncols, &cols, NULL));
+    if (p->padded) {
+      count[KergsFCLibIndex(i, nc) + 1]++;
+      p->nnz++;
+    }
+  }
+  PetscCheck(p->nnz < INT_MAX && p->m < INT_MAX, PETSC_COMM_SELF, PETSC_ERR_SUP,
+             "FCLib export: W with %" PetscInt_FMT " entries does not fit FCLib's int indices", p->nnz);
+  /* at least one entry each: libfclib exits on a NULL array, even an empty one */
+  PetscCall(PetscMalloc3(p->m + 1, &p->colptr, PetscMax(p->nnz, 1), &p->rowind, PetscMax(p->nnz, 1), &p->val));
+  p->colptr[0] = 0;
+  for (PetscInt j = 0; j < p->m; j++) {
+    p->colptr[j + 1] = p->colptr[j] + (int)count[j];
+    next[j]          = p->colptr[j];
+  }
+  for (PetscInt i = 0; i < nrows; i++) {
+    const PetscInt pi   = KergsFCLibIndex(i, nc);
+    PetscReal      diag = 0.0;
+    PetscCall(MatGetRow(Wa, i, &ncols, &cols, &vals));
+    for (PetscInt e = 0; e < ncols; e++) {
+      const PetscInt pj   = KergsFCLibIndex(cols[e], nc);
+      p->rowind[next[pj]] = (int)pi;
+      p->val[next[pj]++]  = PetscRealPart(vals[e]);
+      if (cols[e] == i) diag = PetscRealPart(vals[e]);
+    }
+    PetscCall(MatRestoreRow(Wa, i, &ncols, &cols, &vals));
+    if (p->padded) { /* row pi + 1 holds only its diagonal, W_tt = W_nn */
+      p->rowind[next[pi + 1]] = (int)(pi + 1);
+      p->val[next[pi + 1]++]  = diag;
+    }
+  }
+  PetscCall(PetscFree2(count, next));
+  PetscFunctionReturn(0);
+}
+
+/* q, mu, r from the gathered packs; u = W r + q, the local velocity of the exported problem. */
+static PetscErrorCode KergsFCLibBuildVectors(const PetscReal *pack, KergsFCLibProblem *p)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc4(PetscMax(p->m, 1), &p->q, PetscMax(p->na, 1), &p->mu, PetscMax(p->m, 1), &p->r, PetscMax(p->m, 1), &p->u));
+  for (PetscInt a = 0; a < p->na; a++) {
+    const PetscReal *pk = pack + a * KERGS_FCLIB_PACK;
+    p->q[2 * a]         = pk[0];
+    p->q[2 * a + 1]     = pk[1];
+    p->mu[a]            = pk[2];
+    p->r[2 * a]         = pk[3];
+    p->r[2 * a + 1]     = pk[4];
+  }
+  for (PetscInt i = 0; i < p->m; i++) p->u[i] = p->q[i];
+  for (PetscInt j = 0; j < p->m; j++)
+    for (int e = p->colptr[j]; e < p->colptr[j + 1]; e++) p->u[p->rowind[e]] += p->val[e] * p->r[j];
+  PetscFunctionReturn(0);
+}
+
+/* Rank 0: write path.tmp with libfclib, then rename it to path; msg is set on failure. */
+static PetscErrorCode KergsFCLibWrite(KergsScene scene, KergsFCLibProblem *p, const char path[], char msg[], size_t len)
+{
+  KergsFCLibWriteLocalFn    write_local    = NULL;
+  KergsFCLibWriteSolutionFn write_solution = NULL;
+  char                      tmp[PETSC_MAX_PATH_LEN], title[PETSC_MAX_PATH_LEN + 64], description[256], math[256];
+  struct fclib_matrix       W;
+  struct fclib_info         info;
+  struct fclib_local        problem;
+  struct fclib_solution     solution;
+
+  PetscFunctionBeginUser;
+  KergsFCLibLoad(&write_local, &write_solution, msg, len);
+  if (msg[0]) PetscFunctionReturn(0);
+  PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
+  PetscCall(PetscSNPrintf(title, sizeof(title), "kergs %s step %" PetscInt_FMT, scene ? scene->name : "", scene ? scene->step : 0));
+  PetscCall(PetscSNPrintf(description, sizeof(description),
+                          "2D disks, time %g, %" PetscInt_FMT " active contacts%s; unknowns per contact normal then tangential",
+                          scene ? (double)scene->time : 0.0, p->na,
+                          p->padded ? ", frictionless (tangential components padded: W_tt = W_nn, q_t = 0, mu = 0)" : ""));
+  PetscCall(PetscSNPrintf(
+      math, sizeof(math),
+      "W = H_f^T M^-1 H_f symmetric positive semi-definite (singular in confined packings); solution r is kergs' impulse, u = W r + q"));
+  W = (struct fclib_matrix){
+      .nzmax = (int)p->nnz, .m = (int)p->m, .n = (int)p->m, .p = p->colptr, .i = p->rowind, .x = p->val, .nz = -1, .info = NULL};
+  info    = (struct fclib_info){.title = title, .description = description, .math_info = math};
+  problem = (struct fclib_local){
+      .W = &W, .V = NULL, .R = NULL, .mu = p->mu, .q = p->q, .s = NULL, .spacedim = KERGS_FCLIB_SPACEDIM, .info = &info};
+  solution = (struct fclib_solution){.v = NULL, .u = p->u, .r = p->r, .l = NULL};
+  (void)remove(tmp); /* libfclib refuses to write a local problem into a file that already holds one */
+  if (!write_local(&problem, tmp))
+    snprintf(msg, len, "libfclib could not write the local problem to %s", tmp);
+  else if (p->m > 0 && !write_solution(&solution, tmp)) /* libfclib exits on an empty solution: none then */
+    snprintf(msg, len, "libfclib could not write the solution to %s", tmp);
+  else if (rename(tmp, path))
+    snprintf(msg, len, "Cannot rename %s to %s", tmp, path);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsOperators ops, const PetscBool *active, const char path[])
+{
+  MPI_Comm          comm = ops->comm;
+  PetscMPIInt       rank;
+  PetscInt          nc = ops->ncomp, rstart, rend, vlo, vhi, *rows = NULL;
+  PetscReal        *pack = NULL;
+  IS                is;
+  Mat              *sub;
+  KergsFCLibProblem p                                 = {0};
+  char              msg[2 * PETSC_MAX_PATH_LEN + 128] = "";
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsInitializePackage());
+  PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "FCLib export: empty file name");
+  PetscCheck(nc == 1 || nc == KERGS_FCLIB_SPACEDIM, comm, PETSC_ERR_SUP,
+             "FCLib export: %" PetscInt_FMT " components per contact; FCLib 2D needs 1 (padded) or 2", nc);
+  PetscCheck(ops->W && ops->vd, comm, PETSC_ERR_ORDER, "FCLib export to %s: assemble the operators (W, v^d) first", path);
+  PetscCheck(!contacts->n || active, comm, PETSC_ERR_ARG_NULL, "FCLib export to %s: no active-contact flags", path);
+  PetscCall(MatGetOwnershipRange(ops->W, &rstart, &rend));
+  PetscCall(VecGetOwnershipRange(ops->vd, &vlo, &vhi));
+  PetscCheck(rend - rstart == contacts->n * nc && vlo == rstart && vhi == rend, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ,
+             "FCLib export to %s: W rows [%" PetscInt_FMT ", %" PetscInt_FMT ") and v^d [%" PetscInt_FMT ", %" PetscInt_FMT
+             ") do not match this rank's %" PetscInt_FMT " contacts x %" PetscInt_FMT " components",
+             path, rstart, rend, vlo, vhi, contacts->n, nc);
+  PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
+  PetscCall(KergsFileMakeParentDir(comm, path));
+  PetscCall(KergsFCLibGather(contacts, ops, active, rstart, &p.na, &rows, &pack));
+  /* W restricted to the active contacts, as one sequential matrix on rank 0 (empty elsewhere) */
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, p.na * nc, rows, PETSC_USE_POINTER, &is));
+  PetscCall(MatCreateSubMatrices(ops->W, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    p.m      = KERGS_FCLIB_SPACEDIM * p.na;
+    p.padded = (PetscBool)(nc == 1);
+    PetscCall(KergsFCLibBuildCSC(sub[0], nc, &p));
+    PetscCall(KergsFCLibBuildVectors(pack, &p));
+    PetscCall(KergsFCLibWrite(scene, &p, path, msg, sizeof(msg)));
+    PetscCall(KergsFCLibProblemFree(&p));
+  }
+  PetscCall(MatDestroySubMatrices(1, &sub));
+  PetscCall(ISDestroy(&is));
+  PetscCall(PetscFree2(rows, pack));
+  PetscCallMPI(MPI_Bcast(msg, (int)sizeof(msg), MPI_CHAR, 0, comm));
+  PetscCheck(msg[0] == 0, comm, PETSC_ERR_FILE_WRITE, "FCLib export: %s", msg);
+  PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}

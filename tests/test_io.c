@@ -1,0 +1,810 @@
+/* io tests (1 and 2 ranks): results file (stats and snapshots round-trip exactly, atomic rename, 1-D stats,
+   NaN fill, -output_none), sample write/read round-trip and its errors (truncated, missing, not HDF5, wrong
+   layout), FCLib export of a hand-built W (read back with libfclib's own reader) and PETSc's HDF5 still
+   working after it. The scene, contacts and operators are built by hand from the headers.
+   Option: -dir <directory> for the files written (default test_io_out). */
+#define _GNU_SOURCE /* RTLD_DEEPBIND */
+#include <kergs/results.h>
+#include <kergs/sample.h>
+#include <kergs/fclib_export.h>
+#include <petscviewerhdf5.h>
+#include <dlfcn.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <fclib.h>
+
+#ifndef KERGS_FCLIB_LIBRARY
+#define KERGS_FCLIB_LIBRARY "libfclib.so.0"
+#endif
+
+#define NDISKS 7
+#define NWALLS 2
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Checks: every rank agrees on the outcome, one line per check. */
+
+static PetscErrorCode Expect(MPI_Comm comm, PetscBool ok, const char what[])
+{
+  PetscBool all;
+
+  PetscFunctionBeginUser;
+  PetscCall(MPIU_Allreduce(&ok, &all, 1, MPIU_BOOL, MPI_LAND, comm));
+  PetscCheck(all, comm, PETSC_ERR_PLIB, "FAILED: %s", what);
+  PetscCall(PetscPrintf(comm, "  ok  %s\n", what));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode FileExists(MPI_Comm comm, const char path[], PetscBool *exists)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  *exists = PETSC_FALSE;
+  if (rank == 0) PetscCall(PetscTestFile(path, 'r', exists));
+  PetscCallMPI(MPI_Bcast(exists, 1, MPIU_BOOL, 0, comm));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* A hand-built scene: NDISKS disks on a slightly irregular row, two walls, values with inexact binary
+   fractions so that any rounding on the way shows. Contacts: (i, i+1) for every i, and disk 0 on wall 0. */
+
+static PetscReal DiskX(PetscInt i, PetscInt d, PetscInt step)
+{
+  return d == 0 ? 2.0 * i + 1.0 / 3.0 + 0.01 * step : 0.1 * PetscSinReal((PetscReal)i) + 1.0 / 7.0;
+}
+
+static PetscErrorCode SceneBuild(MPI_Comm comm, KergsScene *scene)
+{
+  KergsScene  s;
+  PetscMPIInt rank, size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscCalloc1(1, &s));
+  s->comm = comm;
+  PetscCall(PetscStrncpy(s->name, "iotest", sizeof(s->name)));
+  s->ndisks = NDISKS;
+  PetscCall(PetscCalloc1(NDISKS, &s->id));
+  PetscCall(PetscCalloc1(KERGS_DIM * NDISKS, &s->x));
+  PetscCall(PetscCalloc1(KERGS_NROT * NDISKS, &s->rot));
+  PetscCall(PetscCalloc1(KERGS_DIM * NDISKS, &s->v));
+  PetscCall(PetscCalloc1(KERGS_NROT * NDISKS, &s->omega));
+  PetscCall(PetscCalloc1(NDISKS, &s->radius));
+  PetscCall(PetscCalloc1(NDISKS, &s->mass));
+  PetscCall(PetscCalloc1(NDISKS, &s->inertia));
+  PetscCall(PetscCalloc1(NDISKS, &s->material));
+  for (PetscInt i = 0; i < NDISKS; i++) {
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      s->x[KERGS_DIM * i + d] = DiskX(i, d, 0);
+      s->v[KERGS_DIM * i + d] = (d ? -0.3 : 0.7) / (i + 3);
+    }
+    s->rot[i]      = 0.1 * i - 1.0 / 3.0;
+    s->omega[i]    = 1.0 / (i + 11);
+    s->radius[i]   = 1.0 - 0.05 * i;
+    s->material[i] = i % 2;
+    s->id[i]       = 1000 + 3 * i;
+  }
+  s->dstart = (rank * NDISKS) / size; /* contiguous ranges */
+  s->dend   = ((rank + 1) * NDISKS) / size;
+  s->nwalls = NWALLS;
+  PetscCall(PetscCalloc1(NWALLS, &s->walls));
+  for (PetscInt w = 0; w < NWALLS; w++) {
+    s->walls[w].a[0]     = -1.0 + w * 16.0;
+    s->walls[w].a[1]     = w ? 2.0 : -2.0;
+    s->walls[w].b[0]     = -1.0 + w * 16.0;
+    s->walls[w].b[1]     = w ? -2.0 : 2.0;
+    s->walls[w].infinite = (PetscBool)(w == 1);
+  }
+  s->nmaterials = 2;
+  PetscCall(PetscCalloc1(2, &s->density));
+  PetscCall(PetscCalloc1(4, &s->mu));
+  s->density[0] = s->density[1] = 1.0;
+  s->frictional                 = PETSC_TRUE;
+  s->step                       = 0;
+  s->time                       = 1.0 / 3.0;
+  *scene                        = s;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneFree(KergsScene *s)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree((*s)->id));
+  PetscCall(PetscFree((*s)->x));
+  PetscCall(PetscFree((*s)->rot));
+  PetscCall(PetscFree((*s)->v));
+  PetscCall(PetscFree((*s)->omega));
+  PetscCall(PetscFree((*s)->radius));
+  PetscCall(PetscFree((*s)->mass));
+  PetscCall(PetscFree((*s)->inertia));
+  PetscCall(PetscFree((*s)->material));
+  PetscCall(PetscFree((*s)->walls));
+  PetscCall(PetscFree((*s)->density));
+  PetscCall(PetscFree((*s)->mu));
+  PetscCall(PetscFree(*s));
+  PetscFunctionReturn(0);
+}
+
+/* Global contact g: g < NDISKS - 1 is disk-disk (g, g+1); g = NDISKS - 1 is disk 0 on wall 0. Contacts are
+   owned by the owner of disk a; sorted by (a, kind, b) as in detect. */
+static void ContactOfGlobal(PetscInt g, PetscInt step, KergsContact *c)
+{
+  memset(c, 0, sizeof(*c));
+  if (g < NDISKS - 1) {
+    c->kind = KERGS_CONTACT_DISK_DISK;
+    c->a    = g;
+    c->b    = g + 1;
+    c->n[0] = -1.0;
+  } else {
+    c->kind = KERGS_CONTACT_DISK_WALL;
+    c->a    = 0;
+    c->b    = 0;
+    c->n[0] = 1.0;
+  }
+  c->t[0] = -c->n[1];
+  c->t[1] = c->n[0];
+  c->gap  = -1e-3 * (g + 1) / 3.0;
+  c->mu   = 0.3 + 0.01 * g;
+  c->r[0] = 0.5 + g + step / 3.0;
+  c->r[1] = 0.1 * g - 1.0 / 7.0;
+  c->v[0] = 1e-3 * g;
+  c->v[1] = -1e-3 * g;
+}
+
+/* Global order of contacts: by disk a, then disk-disk before disk-wall. */
+static PetscInt ContactGlobalAt(PetscInt pos)
+{
+  /* positions: contact (0,1), wall contact of disk 0, (1,2), (2,3), ... */
+  if (pos == 0) return 0;
+  if (pos == 1) return NDISKS - 1;
+  return pos - 1;
+}
+
+static PetscErrorCode ContactsBuild(KergsScene scene, PetscInt step, KergsContacts *contacts)
+{
+  KergsContacts ct;
+  PetscInt      n = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscCalloc1(1, &ct));
+  ct->comm = scene->comm;
+  PetscCall(PetscCalloc1(NDISKS, &ct->c));
+  ct->nalloc  = NDISKS;
+  ct->start   = -1;
+  ct->nglobal = NDISKS;
+  for (PetscInt pos = 0; pos < NDISKS; pos++) {
+    KergsContact c;
+    ContactOfGlobal(ContactGlobalAt(pos), step, &c);
+    if (c.a >= scene->dstart && c.a < scene->dend) {
+      if (ct->start < 0) ct->start = pos;
+      ct->c[n++] = c;
+    }
+  }
+  ct->n = n;
+  if (ct->start < 0) ct->start = 0;
+  *contacts = ct;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ContactsFree(KergsContacts *ct)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree((*ct)->c));
+  PetscCall(PetscFree(*ct));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Reading back with PetscViewerHDF5 */
+
+/* Load dataset name of the current group into a new array replicated on every rank (N entries). */
+static PetscErrorCode LoadAll(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt N, PetscInt bs, PetscReal **all)
+{
+  Vec                vec, seq;
+  VecScatter         toall;
+  const PetscScalar *a;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecCreate(comm, &vec));
+  PetscCall(VecSetSizes(vec, PETSC_DECIDE, N));
+  PetscCall(VecSetBlockSize(vec, bs));
+  PetscCall(VecSetType(vec, VECMPI));
+  PetscCall(PetscObjectSetName((PetscObject)vec, name));
+  PetscCall(VecLoad(vec, viewer));
+  PetscCall(VecScatterCreateToAll(vec, &toall, &seq));
+  PetscCall(VecScatterBegin(toall, vec, seq, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(toall, vec, seq, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(PetscMalloc1(N, all));
+  PetscCall(VecGetArrayRead(seq, &a));
+  for (PetscInt i = 0; i < N; i++) (*all)[i] = PetscRealPart(a[i]);
+  PetscCall(VecRestoreArrayRead(seq, &a));
+  PetscCall(VecScatterDestroy(&toall));
+  PetscCall(VecDestroy(&seq));
+  PetscCall(VecDestroy(&vec));
+  PetscFunctionReturn(0);
+}
+
+/* Shape of dataset path (absolute) as HDF5 stores it. */
+static PetscErrorCode DatasetShape(PetscViewer viewer, const char path[], int *ndims, hsize_t dims[2])
+{
+  hid_t file, dset, space;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5GetFileId(viewer, &file));
+  dset = H5Dopen2(file, path, H5P_DEFAULT);
+  PetscCheck(dset >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "No dataset %s", path);
+  space   = H5Dget_space(dset);
+  *ndims  = H5Sget_simple_extent_ndims(space);
+  dims[0] = dims[1] = 0;
+  if (*ndims >= 1 && *ndims <= 2) H5Sget_simple_extent_dims(space, dims, NULL);
+  H5Sclose(space);
+  H5Dclose(dset);
+  PetscFunctionReturn(0);
+}
+
+static PetscBool SameArray(const PetscReal *a, const PetscReal *b, PetscInt n)
+{
+  for (PetscInt i = 0; i < n; i++)
+    if (a[i] != b[i]) return PETSC_FALSE;
+  return PETSC_TRUE;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Results file */
+
+#define NSTEPS 5
+
+static PetscReal StatEnergy(PetscInt k) { return 1.0 / (k + 3.0); }
+
+/* Writes NSTEPS steps with -output_every 2: snapshots at steps 0, 2, 4 and the last (5). */
+static PetscErrorCode WriteResults(KergsScene scene, const char path[])
+{
+  KergsResults  res;
+  KergsContacts ct;
+  PetscBool     due;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsSetValue(NULL, "-output", path));
+  PetscCall(PetscOptionsSetValue(NULL, "-output_every", "2"));
+  PetscCall(KergsResultsCreate(scene->comm, &res));
+  PetscCall(KergsResultsSetFromOptions(res));
+  PetscCall(KergsResultsOpen(res));
+  for (PetscInt k = 0; k <= NSTEPS; k++) {
+    scene->step = k;
+    scene->time = k * 0.1 + 1.0 / 3.0;
+    for (PetscInt i = 0; i < NDISKS; i++) scene->x[KERGS_DIM * i] = DiskX(i, 0, k);
+    PetscCall(ContactsBuild(scene, k, &ct));
+    PetscCall(KergsResultsSnapshotDue(res, k, (PetscBool)(k == NSTEPS), &due));
+    if (due) {
+      PetscCall(KergsResultsSnapshot(res, scene, ct));
+      PetscCall(KergsResultsSnapshot(res, scene, ct)); /* same step again: ignored */
+    }
+    PetscCall(ContactsFree(&ct));
+    if (k == NSTEPS) break;
+    PetscCall(KergsResultsRecord(res, "step", (PetscReal)k));
+    PetscCall(KergsResultsRecord(res, "energy", StatEnergy(k)));
+    if (k >= 2) PetscCall(KergsResultsRecord(res, "late", -StatEnergy(k)));
+    PetscCall(KergsResultsEndStep(res));
+  }
+  PetscCall(KergsResultsClose(res));
+  PetscCall(KergsResultsDestroy(&res));
+  PetscCall(PetscOptionsClearValue(NULL, "-output"));
+  PetscCall(PetscOptionsClearValue(NULL, "-output_every"));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode CheckStats(PetscViewer viewer, MPI_Comm comm)
+{
+  PetscReal *step, *energy, *late;
+  PetscBool  ok = PETSC_TRUE, nanfill = PETSC_TRUE;
+  int        ndims;
+  hsize_t    dims[2];
+  PetscInt   nrows = -1;
+
+  PetscFunctionBeginUser;
+  PetscCall(DatasetShape(viewer, "/stats/energy", &ndims, dims));
+  PetscCall(Expect(comm, (PetscBool)(ndims == 1 && dims[0] == NSTEPS), "stats: /stats/energy is a 1-D dataset of one entry per step"));
+  PetscCall(PetscViewerHDF5ReadAttribute(viewer, "/stats", "nrows", PETSC_INT, NULL, &nrows));
+  PetscCall(Expect(comm, (PetscBool)(nrows == NSTEPS), "stats: attribute nrows = number of steps"));
+  PetscCall(PetscViewerHDF5PushGroup(viewer, "/stats"));
+  PetscCall(LoadAll(viewer, comm, "step", NSTEPS, 1, &step));
+  PetscCall(LoadAll(viewer, comm, "energy", NSTEPS, 1, &energy));
+  PetscCall(LoadAll(viewer, comm, "late", NSTEPS, 1, &late));
+  PetscCall(PetscViewerHDF5PopGroup(viewer));
+  for (PetscInt k = 0; k < NSTEPS; k++) {
+    if (step[k] != (PetscReal)k || energy[k] != StatEnergy(k)) ok = PETSC_FALSE;
+    if (k < 2 && !PetscIsNanReal(late[k])) nanfill = PETSC_FALSE;
+    if (k >= 2 && late[k] != -StatEnergy(k)) nanfill = PETSC_FALSE;
+  }
+  PetscCall(Expect(comm, ok, "stats: step and energy read back exactly (VecLoad)"));
+  PetscCall(Expect(comm, nanfill, "stats: a statistic added at step 2 is NaN before, exact after"));
+  PetscCall(PetscFree(step));
+  PetscCall(PetscFree(energy));
+  PetscCall(PetscFree(late));
+  PetscFunctionReturn(0);
+}
+
+/* The last snapshot (k = 3, step 5): positions, radii, walls, contacts and impulses. */
+static PetscErrorCode CheckSnapshot(PetscViewer viewer, KergsScene scene)
+{
+  MPI_Comm  comm = scene->comm;
+  PetscInt  step = -1, nsnap = -1, ncontacts = -1, nsnapattr = -1;
+  PetscReal time = -1, *x, *radius, *walls, *id, *r, *a, *b, *kind, xexp[KERGS_DIM * NDISKS];
+  PetscBool has, okr = PETSC_TRUE, okab = PETSC_TRUE;
+  int       ndims;
+  hsize_t   dims[2];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5HasGroup(viewer, "/snapshots/000003", &has));
+  nsnap = has ? 4 : 0;
+  PetscCall(PetscViewerHDF5HasGroup(viewer, "/snapshots/000004", &has));
+  if (has) nsnap = 5;
+  PetscCall(PetscViewerHDF5ReadAttribute(viewer, "/", "nsnapshots", PETSC_INT, NULL, &nsnapattr));
+  PetscCall(Expect(comm, (PetscBool)(nsnap == 4 && nsnapattr == 4),
+                   "snapshots: -output_every 2 over 5 steps gives 4 (steps 0, 2, 4, 5), repeats ignored"));
+  PetscCall(PetscViewerHDF5PushGroup(viewer, "/snapshots/000003"));
+  PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "step", PETSC_INT, NULL, &step));
+  PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "time", PETSC_REAL, NULL, &time));
+  PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "ncontacts", PETSC_INT, NULL, &ncontacts));
+  PetscCall(Expect(comm, (PetscBool)(step == NSTEPS && time == NSTEPS * 0.1 + 1.0 / 3.0 && ncontacts == NDISKS),
+                   "snapshot: attributes step, time, ncontacts"));
+  PetscCall(LoadAll(viewer, comm, "x", KERGS_DIM * NDISKS, KERGS_DIM, &x));
+  PetscCall(LoadAll(viewer, comm, "radius", NDISKS, 1, &radius));
+  PetscCall(LoadAll(viewer, comm, "id", NDISKS, 1, &id));
+  PetscCall(LoadAll(viewer, comm, "walls", NWALLS * 2 * KERGS_DIM, 2 * KERGS_DIM, &walls));
+  PetscCall(LoadAll(viewer, comm, "r", KERGS_MAXCOMP * NDISKS, KERGS_MAXCOMP, &r));
+  PetscCall(LoadAll(viewer, comm, "a", NDISKS, 1, &a));
+  PetscCall(LoadAll(viewer, comm, "b", NDISKS, 1, &b));
+  PetscCall(LoadAll(viewer, comm, "kind", NDISKS, 1, &kind));
+  PetscCall(PetscViewerHDF5PopGroup(viewer));
+  for (PetscInt i = 0; i < NDISKS; i++)
+    for (PetscInt d = 0; d < KERGS_DIM; d++) xexp[KERGS_DIM * i + d] = DiskX(i, d, NSTEPS);
+  PetscCall(Expect(comm, SameArray(x, xexp, KERGS_DIM * NDISKS), "snapshot: positions of step 5 round-trip exactly"));
+  PetscCall(Expect(comm, SameArray(radius, scene->radius, NDISKS), "snapshot: radii round-trip exactly"));
+  {
+    PetscBool okid = PETSC_TRUE;
+    for (PetscInt i = 0; i < NDISKS; i++)
+      if (id[i] != (PetscReal)scene->id[i]) okid = PETSC_FALSE;
+    PetscCall(Expect(comm, okid, "snapshot: grain ids (stored as reals) round-trip"));
+  }
+  PetscCall(Expect(comm, (PetscBool)(walls[0] == -1.0 && walls[3] == 2.0 && walls[4] == 15.0 && walls[7] == -2.0),
+                   "snapshot: walls hold endpoints a, b per row"));
+  for (PetscInt pos = 0; pos < NDISKS; pos++) {
+    KergsContact c;
+    ContactOfGlobal(ContactGlobalAt(pos), NSTEPS, &c);
+    if (r[KERGS_MAXCOMP * pos] != c.r[0] || r[KERGS_MAXCOMP * pos + 1] != c.r[1]) okr = PETSC_FALSE;
+    if (a[pos] != c.a || b[pos] != c.b || kind[pos] != (c.kind == KERGS_CONTACT_DISK_WALL ? 1.0 : 0.0)) okab = PETSC_FALSE;
+  }
+  PetscCall(Expect(comm, okr, "snapshot: contact impulses (normal, tangential) round-trip exactly, in global contact order"));
+  PetscCall(Expect(comm, okab, "snapshot: contact bodies a, b and kinds round-trip"));
+  PetscCall(DatasetShape(viewer, "/snapshots/000003/x", &ndims, dims));
+  PetscCall(Expect(comm, (PetscBool)(ndims == 2 && dims[0] == NDISKS && dims[1] == KERGS_DIM), "snapshot: x is stored as (ndisks, 2)"));
+  PetscCall(DatasetShape(viewer, "/snapshots/000003/r", &ndims, dims));
+  PetscCall(
+      Expect(comm, (PetscBool)(ndims == 2 && dims[0] == NDISKS && dims[1] == KERGS_MAXCOMP), "snapshot: r is stored as (ncontacts, 2)"));
+  PetscCall(PetscFree(x));
+  PetscCall(PetscFree(radius));
+  PetscCall(PetscFree(id));
+  PetscCall(PetscFree(walls));
+  PetscCall(PetscFree(r));
+  PetscCall(PetscFree(a));
+  PetscCall(PetscFree(b));
+  PetscCall(PetscFree(kind));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode TestResults(KergsScene scene, const char dir[])
+{
+  MPI_Comm     comm = scene->comm;
+  char         path[PETSC_MAX_PATH_LEN], tmp[PETSC_MAX_PATH_LEN];
+  PetscBool    exists, tmpexists;
+  PetscViewer  viewer;
+  KergsResults res;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscPrintf(comm, "results file\n"));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/sub/results.h5", dir));
+  PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
+  PetscCall(WriteResults(scene, path));
+  PetscCall(FileExists(comm, path, &exists));
+  PetscCall(FileExists(comm, tmp, &tmpexists));
+  PetscCall(Expect(comm, (PetscBool)(exists && !tmpexists), "close: the final file exists (directory created), the .tmp does not"));
+  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
+  PetscCall(CheckStats(viewer, comm));
+  PetscCall(CheckSnapshot(viewer, scene));
+  PetscCall(PetscViewerDestroy(&viewer));
+
+  /* a run that dies before Close leaves only the temporary file */
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/died.h5", dir));
+  PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
+  PetscCall(PetscOptionsSetValue(NULL, "-output", path));
+  PetscCall(KergsResultsCreate(comm, &res));
+  PetscCall(KergsResultsSetFromOptions(res));
+  PetscCall(KergsResultsOpen(res));
+  PetscCall(KergsResultsRecord(res, "step", 0.0));
+  PetscCall(KergsResultsEndStep(res));
+  PetscCall(KergsResultsDestroy(&res));
+  PetscCall(FileExists(comm, path, &exists));
+  PetscCall(FileExists(comm, tmp, &tmpexists));
+  PetscCall(Expect(comm, (PetscBool)(!exists && tmpexists), "not closed: only the .tmp is left"));
+
+  /* -output_none: no file at all */
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/none.h5", dir));
+  PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
+  PetscCall(PetscOptionsSetValue(NULL, "-output", path));
+  PetscCall(PetscOptionsSetValue(NULL, "-output_none", "1"));
+  PetscCall(KergsResultsCreate(comm, &res));
+  PetscCall(KergsResultsSetFromOptions(res));
+  PetscCall(KergsResultsOpen(res));
+  PetscCall(KergsResultsRecord(res, "step", 0.0));
+  PetscCall(KergsResultsEndStep(res));
+  PetscCall(KergsResultsSnapshot(res, scene, NULL));
+  PetscCall(KergsResultsClose(res));
+  PetscCall(KergsResultsDestroy(&res));
+  PetscCall(PetscOptionsClearValue(NULL, "-output"));
+  PetscCall(PetscOptionsClearValue(NULL, "-output_none"));
+  PetscCall(FileExists(comm, path, &exists));
+  PetscCall(FileExists(comm, tmp, &tmpexists));
+  PetscCall(Expect(comm, (PetscBool)(!exists && !tmpexists), "-output_none: no results file"));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Sample */
+
+/* A scene from KergsSceneCreate with the two materials of the hand-built one. */
+static PetscErrorCode TargetSceneCreate(MPI_Comm comm, KergsScene *scene)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneCreate(comm, scene));
+  PetscCall(PetscFree((*scene)->density));
+  PetscCall(PetscFree((*scene)->mu));
+  (*scene)->nmaterials = 2;
+  PetscCall(PetscMalloc1(2, &(*scene)->density));
+  PetscCall(PetscCalloc1(4, &(*scene)->mu));
+  (*scene)->density[0] = (*scene)->density[1] = 1.0;
+  PetscFunctionReturn(0);
+}
+
+/* Reading path must fail with a PETSc error whose message names the file; the scene keeps its disks. */
+static PetscErrorCode ExpectReadError(KergsScene target, const char path[], const char what[])
+{
+  PetscErrorCode ierr;
+  char          *specific = NULL;
+  const char    *base     = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+  PetscInt       before   = target->ndisks;
+  char           line[PETSC_MAX_PATH_LEN + 128];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = KergsSampleRead(target, path);
+  PetscCall(PetscPopErrorHandler());
+  if (ierr) PetscCall(PetscErrorMessage(ierr, NULL, &specific));
+  PetscCall(PetscSNPrintf(line, sizeof(line), "sample: %s gives a PETSc error naming the file", what));
+  PetscCall(Expect(target->comm, (PetscBool)(ierr != 0 && specific && strstr(specific, base)), line));
+  if (specific) PetscCall(PetscPrintf(target->comm, "      (%s)\n", specific));
+  PetscCall(Expect(target->comm, (PetscBool)(target->ndisks == before), "sample: a failed read leaves the scene's disks unchanged"));
+  PetscFunctionReturn(0);
+}
+
+/* Rank 0 writes the first half of src's bytes to dst. */
+static PetscErrorCode TruncatedCopy(MPI_Comm comm, const char src[], const char dst[])
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    FILE *in = fopen(src, "rb"), *out = fopen(dst, "wb");
+    long  size;
+    char *buf;
+    PetscCheck(in && out, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot copy %s to %s", src, dst);
+    fseek(in, 0, SEEK_END);
+    size = ftell(in);
+    fseek(in, 0, SEEK_SET);
+    PetscCall(PetscMalloc1(size, &buf));
+    PetscCheck(fread(buf, 1, (size_t)size, in) == (size_t)size, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "Cannot read %s", src);
+    PetscCheck(fwrite(buf, 1, (size_t)(size / 2), out) == (size_t)(size / 2), PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write %s",
+               dst);
+    PetscCall(PetscFree(buf));
+    fclose(in);
+    fclose(out);
+  }
+  PetscCallMPI(MPI_Barrier(comm));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode WriteText(MPI_Comm comm, const char path[])
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    FILE *f = fopen(path, "w");
+    PetscCheck(f, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot write %s", path);
+    fprintf(f, "x y radius\n0 0 1\n");
+    fclose(f);
+  }
+  PetscCallMPI(MPI_Barrier(comm));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode TestSample(KergsScene scene, const char dir[])
+{
+  MPI_Comm   comm = scene->comm;
+  char       path[PETSC_MAX_PATH_LEN], bad[PETSC_MAX_PATH_LEN];
+  KergsScene target;
+  PetscBool  ok = PETSC_TRUE, exists;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscPrintf(comm, "sample file\n"));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/sample.h5", dir));
+  scene->time = 2.0 / 3.0;
+  PetscCall(KergsSampleWrite(scene, path));
+  PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s.tmp", path));
+  PetscCall(FileExists(comm, bad, &exists));
+  PetscCall(Expect(comm, (PetscBool)!exists, "sample: written atomically (no .tmp left)"));
+  PetscCall(TargetSceneCreate(comm, &target));
+  PetscCall(KergsSampleRead(target, path));
+  ok = (PetscBool)(target->ndisks == NDISKS && target->time == scene->time);
+  if (ok) {
+    ok = (PetscBool)(SameArray(target->x, scene->x, KERGS_DIM * NDISKS) && SameArray(target->v, scene->v, KERGS_DIM * NDISKS) &&
+                     SameArray(target->rot, scene->rot, KERGS_NROT * NDISKS) &&
+                     SameArray(target->omega, scene->omega, KERGS_NROT * NDISKS) && SameArray(target->radius, scene->radius, NDISKS));
+    for (PetscInt i = 0; i < NDISKS; i++)
+      if (target->id[i] != scene->id[i] || target->material[i] != scene->material[i]) ok = PETSC_FALSE;
+  }
+  PetscCall(Expect(comm, ok, "sample: write/read round-trips x, v, rot, omega, radius, material, id, time exactly"));
+
+  PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s/sample_half.h5", dir));
+  PetscCall(TruncatedCopy(comm, path, bad));
+  PetscCall(ExpectReadError(target, bad, "a truncated file (first half of the bytes)"));
+  PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s/no_such_sample.h5", dir));
+  PetscCall(ExpectReadError(target, bad, "a missing file"));
+  PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s/sample_text.h5", dir));
+  PetscCall(WriteText(comm, bad));
+  PetscCall(ExpectReadError(target, bad, "a text file"));
+  PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s/sub/results.h5", dir));
+  PetscCall(ExpectReadError(target, bad, "an HDF5 file without /sample"));
+  PetscCall(KergsSceneDestroy(&target));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* FCLib export */
+
+/* Hand-built W over contact components (global index i = contact * nc + comp): a symmetric band
+   W_ii = 2 + i/10, W_i,i+1 = W_i+1,i = -1/3 - i/100, W_i,i+2 = 1/7 (coupling across contacts). */
+static PetscReal WEntry(PetscInt i, PetscInt j)
+{
+  const PetscInt lo = PetscMin(i, j), d = PetscAbsInt(i - j);
+  if (d == 0) return 2.0 + i / 10.0;
+  if (d == 1) return -1.0 / 3.0 - lo / 100.0;
+  if (d == 2) return 1.0 / 7.0;
+  return 0.0;
+}
+
+static PetscReal VdEntry(PetscInt i) { return -1.0 - i / 30.0; }
+
+/* Active flag of global contact position pos: every contact except position 2. */
+static PetscBool ActiveAt(PetscInt pos) { return (PetscBool)(pos != 2); }
+
+static PetscErrorCode OperatorsBuild(KergsContacts ct, PetscInt nc, KergsOperators *ops)
+{
+  KergsOperators o;
+  PetscInt       lo, hi, N = ct->nglobal * nc;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscCalloc1(1, &o));
+  o->comm  = ct->comm;
+  o->ncomp = nc;
+  PetscCall(MatCreateAIJ(ct->comm, ct->n * nc, ct->n * nc, N, N, 5, NULL, 4, NULL, &o->W));
+  PetscCall(MatGetOwnershipRange(o->W, &lo, &hi));
+  for (PetscInt i = lo; i < hi; i++)
+    for (PetscInt j = PetscMax(0, i - 2); j <= PetscMin(N - 1, i + 2); j++) PetscCall(MatSetValue(o->W, i, j, WEntry(i, j), INSERT_VALUES));
+  PetscCall(MatAssemblyBegin(o->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(o->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatCreateVecs(o->W, NULL, &o->vd));
+  for (PetscInt i = lo; i < hi; i++) PetscCall(VecSetValue(o->vd, i, VdEntry(i), INSERT_VALUES));
+  PetscCall(VecAssemblyBegin(o->vd));
+  PetscCall(VecAssemblyEnd(o->vd));
+  *ops = o;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode OperatorsFree(KergsOperators *o)
+{
+  PetscFunctionBeginUser;
+  PetscCall(MatDestroy(&(*o)->W));
+  PetscCall(VecDestroy(&(*o)->vd));
+  PetscCall(PetscFree(*o));
+  PetscFunctionReturn(0);
+}
+
+typedef struct fclib_local *(*ReadLocalFn)(const char *);
+typedef struct fclib_solution *(*ReadSolutionFn)(const char *);
+typedef void (*DeleteLocalFn)(struct fclib_local *);
+typedef void (*DeleteSolutionsFn)(struct fclib_solution *, int);
+
+/* Compare the file (read with libfclib's reader, rank 0) with the expected padded problem. */
+static PetscErrorCode CheckFCLibFile(MPI_Comm comm, const char path[], PetscInt nc, PetscBool *ok, char why[], size_t len)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  *ok    = PETSC_TRUE;
+  why[0] = 0;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    void                  *h = dlopen(KERGS_FCLIB_LIBRARY, RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
+    ReadLocalFn            read_local;
+    ReadSolutionFn         read_solution;
+    DeleteLocalFn          delete_local;
+    DeleteSolutionsFn      delete_solutions;
+    struct fclib_local    *L;
+    struct fclib_solution *S;
+    PetscInt               act[NDISKS], na = 0, m;
+    PetscReal             *dense, *expect;
+
+    if (!h) h = dlopen("libfclib.so.0", RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
+    PetscCheck(h, PETSC_COMM_SELF, PETSC_ERR_LIB, "Cannot dlopen libfclib: %s", dlerror());
+    *(void **)&read_local       = dlsym(h, "fclib_read_local");
+    *(void **)&read_solution    = dlsym(h, "fclib_read_solution");
+    *(void **)&delete_local     = dlsym(h, "fclib_delete_local");
+    *(void **)&delete_solutions = dlsym(h, "fclib_delete_solutions");
+    PetscCheck(read_local && read_solution && delete_local && delete_solutions, PETSC_COMM_SELF, PETSC_ERR_LIB,
+               "libfclib lacks its readers");
+    for (PetscInt pos = 0; pos < NDISKS; pos++)
+      if (ActiveAt(pos)) act[na++] = pos;
+    m = 2 * na;
+    L = read_local(path);
+    S = read_solution(path);
+    PetscCheck(L && S, PETSC_COMM_SELF, PETSC_ERR_FILE_READ, "libfclib cannot read %s", path);
+    if (L->spacedim != 2 || L->W->m != m || L->W->n != m || L->W->nz != -1) {
+      *ok = PETSC_FALSE;
+      snprintf(why, len, "spacedim %d, W %d x %d, nz %d", L->spacedim, L->W->m, L->W->n, L->W->nz);
+    }
+    PetscCall(PetscCalloc2(m * m, &dense, m * m, &expect));
+    for (int j = 0; *ok && j < m; j++) {
+      if (L->W->p[j + 1] < L->W->p[j]) *ok = PETSC_FALSE;
+      for (int e = L->W->p[j]; *ok && e < L->W->p[j + 1]; e++) {
+        if (e > L->W->p[j] && L->W->i[e] <= L->W->i[e - 1]) *ok = PETSC_FALSE; /* sorted, no duplicates */
+        dense[L->W->i[e] * m + j] = L->W->x[e];
+      }
+    }
+    if (!*ok && !why[0]) snprintf(why, len, "CSC pointers or row indices not increasing");
+    /* expected: W restricted to active contacts; frictionless: padded diagonal tangential rows */
+    for (PetscInt a = 0; a < na; a++)
+      for (PetscInt b = 0; b < na; b++)
+        for (PetscInt ca = 0; ca < 2; ca++)
+          for (PetscInt cb = 0; cb < 2; cb++) {
+            PetscReal w = 0.0;
+            if (ca < nc && cb < nc)
+              w = WEntry(act[a] * nc + ca, act[b] * nc + cb);
+            else if (nc == 1 && a == b && ca == 1 && cb == 1)
+              w = WEntry(act[a], act[a]);
+            expect[(2 * a + ca) * m + 2 * b + cb] = w;
+          }
+    if (*ok && !SameArray(dense, expect, m * m)) {
+      *ok = PETSC_FALSE;
+      snprintf(why, len, "W differs from the hand-built matrix");
+    }
+    for (PetscInt a = 0; *ok && a < na; a++) {
+      KergsContact c;
+      PetscReal    u[2];
+      ContactOfGlobal(ContactGlobalAt(act[a]), 0, &c);
+      if (L->q[2 * a] != VdEntry(act[a] * nc) || L->q[2 * a + 1] != (nc == 2 ? VdEntry(act[a] * nc + 1) : 0.0))
+        snprintf(why, len, "q of contact %d", (int)a);
+      else if (L->mu[a] != (nc == 2 ? c.mu : 0.0))
+        snprintf(why, len, "mu of contact %d", (int)a);
+      else if (S->r[2 * a] != c.r[0] || S->r[2 * a + 1] != (nc == 2 ? c.r[1] : 0.0))
+        snprintf(why, len, "solution r of contact %d", (int)a);
+      for (PetscInt ca = 0; !why[0] && ca < 2; ca++) { /* u = W r + q */
+        u[ca] = L->q[2 * a + ca];
+        for (PetscInt j = 0; j < m; j++) u[ca] += expect[(2 * a + ca) * m + j] * S->r[j];
+        if (PetscAbsReal(u[ca] - S->u[2 * a + ca]) > 1e-14 * (1 + PetscAbsReal(u[ca])))
+          snprintf(why, len, "solution u of contact %d", (int)a);
+      }
+      if (why[0]) *ok = PETSC_FALSE;
+    }
+    PetscCall(PetscFree2(dense, expect));
+    delete_local(L);
+    delete_solutions(S, 1);
+  }
+  PetscCallMPI(MPI_Bcast(ok, 1, MPIU_BOOL, 0, comm));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode CheckFCLibEmpty(MPI_Comm comm, const char path[], PetscBool *ok)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  *ok = PETSC_FALSE;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    void               *h = dlopen(KERGS_FCLIB_LIBRARY, RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
+    ReadLocalFn         read_local;
+    DeleteLocalFn       delete_local;
+    struct fclib_local *L;
+
+    if (!h) h = dlopen("libfclib.so.0", RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
+    PetscCheck(h, PETSC_COMM_SELF, PETSC_ERR_LIB, "Cannot dlopen libfclib: %s", dlerror());
+    *(void **)&read_local   = dlsym(h, "fclib_read_local");
+    *(void **)&delete_local = dlsym(h, "fclib_delete_local");
+    PetscCheck(read_local && delete_local, PETSC_COMM_SELF, PETSC_ERR_LIB, "libfclib lacks its readers");
+    L   = read_local(path);
+    *ok = (PetscBool)(L && L->spacedim == 2 && L->W->m == 0 && L->W->n == 0 && L->W->nz == -1 && L->W->p[0] == 0);
+    if (L) delete_local(L);
+  }
+  PetscCallMPI(MPI_Bcast(ok, 1, MPIU_BOOL, 0, comm));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode TestFCLib(KergsScene scene, const char dir[])
+{
+  MPI_Comm       comm = scene->comm;
+  KergsContacts  ct;
+  KergsOperators ops;
+  PetscBool     *active, ok, exists;
+  char           path[PETSC_MAX_PATH_LEN], why[256], line[512];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscPrintf(comm, "FCLib export\n"));
+  PetscCall(ContactsBuild(scene, 0, &ct));
+  PetscCall(PetscMalloc1(ct->n, &active));
+  for (PetscInt k = 0; k < ct->n; k++) active[k] = ActiveAt(ct->start + k);
+  for (PetscInt nc = 2; nc >= 1; nc--) {
+    PetscCall(OperatorsBuild(ct, nc, &ops));
+    PetscCall(PetscSNPrintf(path, sizeof(path), "%s/fclib_nc%d.h5", dir, (int)nc));
+    PetscCall(KergsFCLibExport(scene, ct, ops, active, path));
+    PetscCall(FileExists(comm, path, &exists));
+    PetscCall(PetscSNPrintf(line, sizeof(line), "fclib (%s): file %s written", nc == 2 ? "frictional" : "frictionless", path));
+    PetscCall(Expect(comm, exists, line));
+    PetscCall(CheckFCLibFile(comm, path, nc, &ok, why, sizeof(why)));
+    PetscCall(PetscSNPrintf(line, sizeof(line),
+                            "fclib (%s): fclib_read_local gives W (CSC, active contacts only%s), q, mu, r, u = W r + q %s",
+                            nc == 2 ? "frictional" : "frictionless", nc == 1 ? ", tangential padded" : "", why));
+    PetscCall(Expect(comm, ok, line));
+    PetscCall(OperatorsFree(&ops));
+  }
+  /* no active contact: an empty problem (m = 0), still a valid FCLib file */
+  for (PetscInt k = 0; k < ct->n; k++) active[k] = PETSC_FALSE;
+  PetscCall(OperatorsBuild(ct, 2, &ops));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/fclib_empty.h5", dir));
+  PetscCall(KergsFCLibExport(scene, ct, ops, active, path));
+  PetscCall(CheckFCLibEmpty(comm, path, &ok));
+  PetscCall(Expect(comm, ok, "fclib: no active contact gives an empty problem (W 0 x 0) that libfclib reads back"));
+  PetscCall(OperatorsFree(&ops));
+  PetscCall(PetscFree(active));
+  PetscCall(ContactsFree(&ct));
+  PetscFunctionReturn(0);
+}
+
+int main(int argc, char **argv)
+{
+  KergsScene scene;
+  char       dir[PETSC_MAX_PATH_LEN] = "test_io_out";
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, "kergs io tests"));
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-dir", dir, sizeof(dir), NULL));
+  {
+    char probe[PETSC_MAX_PATH_LEN + 16];
+    PetscCall(PetscSNPrintf(probe, sizeof(probe), "%s/probe", dir));
+    PetscCall(KergsFileMakeParentDir(PETSC_COMM_WORLD, probe)); /* creates dir */
+  }
+  PetscCall(SceneBuild(PETSC_COMM_WORLD, &scene));
+  /* FCLib first: PETSc's (parallel) HDF5 must still work after libfclib's serial HDF5 ran in this process */
+  PetscCall(TestFCLib(scene, dir));
+  PetscCall(TestResults(scene, dir));
+  PetscCall(TestSample(scene, dir));
+  PetscCall(SceneFree(&scene));
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "io tests passed\n"));
+  PetscCall(PetscFinalize());
+  return 0;
+}
