@@ -531,7 +531,7 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
 {
   PetscReal box[4] = {0, 0, 1, 1}, alert;
   PetscInt  nnames;
-  PetscBool alert_set = PETSC_FALSE, box_set = PETSC_FALSE, open_top = PETSC_FALSE, names_set;
+  PetscBool alert_set = PETSC_FALSE, box_set = PETSC_FALSE, open_top = PETSC_FALSE, names_set, help;
   char    **names;
   PetscInt  cap;
 
@@ -565,7 +565,8 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
     scene->alert = 0.1 * mean;
   }
   PetscCall(SceneUpdateFrictional(scene));
-  PetscCall(KergsSceneCheck(scene));
+  PetscCall(PetscOptionsHasHelp(NULL, &help));
+  if (!help) PetscCall(KergsSceneCheck(scene)); /* -help alone lists the options of an empty scene */
   PetscFunctionReturn(0);
 }
 

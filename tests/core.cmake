@@ -16,7 +16,11 @@ kergs_bad_input(unknown_option "unknown option -disks_radios" -options_file case
 kergs_bad_input(negative_radius "radius.*-0.5" -options_file cases/confine5.opts -disks_radius -0.5)
 kergs_bad_input(nan_position "(nan|finite)" -options_file cases/confine5.opts -disks_x 0.5,nan,1.5,0.52,2.5,0.49,3.5,0.515,4.5,0.5)
 kergs_bad_input(overlap "grains 1 and 2 overlap" -options_file cases/confine5.opts -disks_x 0.5,0.5,1.5,0.5,2.2,0.5,3.5,0.5,4.5,0.5)
-kergs_bad_input(truncated_sample "truncated.h5" -options_file cases/confine500.opts -sample_input tests/data/truncated.h5)
+# a truncated copy of the shipped sample, made before the test runs
+add_test(NAME make_truncated_sample COMMAND sh -c "head -c 3000 ${CMAKE_SOURCE_DIR}/cases/deposit500.h5 > ${CMAKE_BINARY_DIR}/truncated.h5")
+set_tests_properties(make_truncated_sample PROPERTIES FIXTURES_SETUP truncated_sample)
+kergs_bad_input(truncated_sample "truncated.h5" -options_file cases/confine500.opts -sample_input ${CMAKE_BINARY_DIR}/truncated.h5)
+set_tests_properties(bad_input_truncated_sample PROPERTIES FIXTURES_REQUIRED truncated_sample)
 kergs_bad_input(missing_sample "no_such_sample.h5" -options_file cases/confine500.opts -sample_input tests/data/no_such_sample.h5)
 kergs_bad_input(bad_solver "solver_type" -options_file cases/confine5.opts -solver_type nlgz)
 kergs_bad_input(bad_dt "dt" -options_file cases/confine5.opts -dt -1)
