@@ -19,6 +19,8 @@ static PetscErrorCode KergsSolverRegisterAll(void)
   PetscFunctionBeginUser;
   if (KergsSolverList) PetscFunctionReturn(0);
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGS, KergsSolverCreate_NLGS));
+  PetscCall(KergsSolverRegister(KERGS_SOLVER_NLKERGS, KergsSolverCreate_NLKerGS));
+  PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGSJAC, KergsSolverCreate_NLGSJac));
   PetscFunctionReturn(0);
 }
 
@@ -66,8 +68,8 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
   PetscCall(PetscOptionsReal("-solver_tol", "Tolerance of the convergence criterion", "", s->tol, &s->tol, NULL));
   PetscCall(PetscOptionsEnum("-solver_criterion", "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, LMGC90 Maxm), natural (natural-map residual, Siconos)", "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
   if (!s->ops.solve || set) PetscCall(KergsSolverSetType(s, type));
-  if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(s, PetscOptionsObject));
   PetscOptionsEnd();
+  if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(s, NULL));
   PetscCheck(s->max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_max_it %" PetscInt_FMT " must be at least 1", s->max_it);
   PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number", (double)s->tol);
   PetscFunctionReturn(0);
@@ -99,7 +101,7 @@ PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsConta
 
 /* Sweeps until the chosen criterion is below tol or max_it sweeps were done (Algorithm 2's loop).
    At exit the natural-map residual is recomputed from r, whatever the criterion. */
-PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, const PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *stats)
+PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *stats)
 {
   KergsSweepMeasures m;
   PetscReal          value = 0.0;
@@ -114,7 +116,8 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, const Petsc
   if (nglobal > 0) {
     stats->converged = PETSC_FALSE;
     for (PetscInt k = 1; k <= s->max_it; k++) {
-      PetscCall(KergsSweepRun(s->sweep, ops->r, ops->vd, extra, Wdiag, &m));
+      if (s->ops.presweep) PetscCall((*s->ops.presweep)(s, ops, extra));
+      PetscCall(KergsSweepRun(s->iterate_sweep ? s->iterate_sweep : s->sweep, ops->r, ops->vd, extra, Wdiag, &m));
       stats->iterations = k;
       switch (s->criterion) {
       case KERGS_CRITERION_QUAD:
@@ -153,6 +156,19 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscCall(PetscTime(&t1));
   stats->seconds = t1 - t0;
   PetscCall(PetscLogEventEnd(KERGS_Solve, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverRecordStats(KergsSolver s, KergsOperators ops, KergsResults res)
+{
+  MatInfo info;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetInfo(ops->HfT, MAT_GLOBAL_SUM, &info));
+  PetscCall(KergsResultsRecord(res, "nnz_Hf", info.nz_used));
+  PetscCall(MatGetInfo(ops->W, MAT_GLOBAL_SUM, &info));
+  PetscCall(KergsResultsRecord(res, "nnz_W", info.nz_used));
+  if (s->ops.record) PetscCall((*s->ops.record)(s, res));
   PetscFunctionReturn(0);
 }
 

@@ -1,15 +1,21 @@
 /* kergs solver: solves the per-step problem W r - v = -v^d with the contact law (eq. 1, 2).
    Variants are types registered by name, chosen with -solver_type (like KSPType):
-     nlgs  Algorithm 2 (plain NLGS)
-   Options: -solver_max_it (paper: 150), -solver_tol, -solver_criterion quad|maxm|natural. */
+     nlgs     Algorithm 2 (plain NLGS on W)
+     nlkergs  Algorithm 3 (NLKerGS-P) on an explicitly stored W~ = W + omega N N^T: small problems, verification
+     nlgsjac  Algorithm 6 (NLGS-Jac): Gauss-Seidel on W, Jacobi on the dense part omega N N^T, never stored
+   Options: -solver_max_it (paper: 150), -solver_tol, -solver_criterion quad|maxm|natural; the regularised types
+   add -solver_omega, -solver_omega_factor, the kernel's (-kernel_*) and the predictor's (-predictor_*). */
 #ifndef KERGS_SOLVER_H
 #define KERGS_SOLVER_H
 
 #include <kergs/operators.h>
 #include <kergs/nlgs.h>
+#include <kergs/results.h>
 
 typedef const char *KergsSolverType;
-#define KERGS_SOLVER_NLGS "nlgs"
+#define KERGS_SOLVER_NLGS    "nlgs"
+#define KERGS_SOLVER_NLKERGS "nlkergs"
+#define KERGS_SOLVER_NLGSJAC "nlgsjac"
 
 typedef enum {
   KERGS_CRITERION_QUAD,
@@ -29,11 +35,15 @@ typedef struct {
 
 typedef struct _p_KergsSolver *KergsSolver;
 typedef struct {
-  PetscErrorCode (*setfromoptions)(KergsSolver, PetscOptionItems *);
+  PetscErrorCode (*setfromoptions)(KergsSolver, PetscOptionItems *); /* called after the common options, outside their block (NULL items): a type opens its own */
   PetscErrorCode (*setup)(KergsSolver, KergsScene, KergsContacts, KergsOperators);
   PetscErrorCode (*solve)(KergsSolver, KergsScene, KergsContacts, KergsOperators, KergsSolveStats *);
   PetscErrorCode (*view)(KergsSolver, PetscViewer);
   PetscErrorCode (*destroy)(KergsSolver);
+  /* optional: before every sweep, update the extra right-hand side from the current r (NLGS-Jac's Jacobi part) */
+  PetscErrorCode (*presweep)(KergsSolver, KergsOperators, PetscReal *extra);
+  /* optional: record the type's own statistics of the step */
+  PetscErrorCode (*record)(KergsSolver, KergsResults);
 } KergsSolverOps;
 
 struct _p_KergsSolver {
@@ -44,7 +54,8 @@ struct _p_KergsSolver {
   PetscInt       max_it;
   PetscReal      tol;
   KergsCriterion criterion;
-  KergsSweep     sweep;
+  KergsSweep     sweep;         /* Gauss-Seidel on W; also computes the physical residual */
+  KergsSweep     iterate_sweep; /* when set, the sweeps run on this one instead (nlkergs: on W~) */
   PetscReal     *mu;     /* per local contact */
   PetscBool     *active; /* per local contact */
   PetscInt       nalloc;
@@ -59,9 +70,14 @@ PETSC_EXTERN PetscErrorCode KergsSolverView(KergsSolver, PetscViewer);
 PETSC_EXTERN PetscErrorCode KergsSolverDestroy(KergsSolver *);
 /* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */
 PETSC_EXTERN PetscErrorCode KergsSolverSetUpSweep(KergsSolver, KergsScene, KergsContacts, KergsOperators);
-/* Shared by the types: run sweeps until the criterion or max_it, extra/diag as in KergsSweepRun. */
-PETSC_EXTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, const PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *);
+/* Shared by the types: run sweeps until the criterion or max_it, extra/diag as in KergsSweepRun; when the type
+   has a presweep hook, extra (one entry per local component) is updated by it before every sweep. */
+PETSC_EXTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *);
+/* Statistics of the step common to every type (sizes of H_f and W) and the type's own. */
+PETSC_EXTERN PetscErrorCode KergsSolverRecordStats(KergsSolver, KergsOperators, KergsResults);
 
 PETSC_EXTERN PetscErrorCode KergsSolverCreate_NLGS(KergsSolver);
+PETSC_EXTERN PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver);
+PETSC_EXTERN PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver);
 
 #endif
