@@ -1,0 +1,32 @@
+/* kergs predictor type "none": r~ = 0 (Algorithm 3 without prediction; the correction then pins the kernel
+   part of r to zero). */
+#include <kergs/predictor.h>
+
+static PetscErrorCode KergsPredictorPredict_None(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+                                                 const PetscBool *active, Vec rtilde)
+{
+  PetscFunctionBeginUser;
+  (void)p;
+  (void)scene;
+  (void)contacts;
+  (void)ops;
+  (void)active;
+  PetscCall(VecZeroEntries(rtilde));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KergsPredictorView_None(KergsPredictor p, PetscViewer viewer)
+{
+  PetscFunctionBeginUser;
+  (void)p;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "r~ = 0\n"));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPredictorCreate_None(KergsPredictor p)
+{
+  PetscFunctionBeginUser;
+  p->ops.predict = KergsPredictorPredict_None;
+  p->ops.view    = KergsPredictorView_None;
+  PetscFunctionReturn(0);
+}
