@@ -42,5 +42,13 @@ out = {
     "peak_memory_bytes_per_grain": float(s["peak_memory"][-1] / grains),
     "peak_memory_above_baseline_bytes_per_grain": float((s["peak_memory"][-1] - s["baseline_memory"][-1]) / grains),
     "mean_violation_last": float(s["mean_violation"][-1]),
+    "residual_mean": float(np.mean(s["residual"][k])),
+    "nnz_W": float(np.mean(s["nnz_W"][k])) if "nnz_W" in s else None,
 }
+# kernel-regularised solvers (issue 3): the projector's factorization, diagonal blocks, prediction
+for name in ("factor_seconds", "diag_seconds", "predict_seconds", "nnz_factor", "kernel_dimension", "rank_Hf", "omega"):
+    if name in s:
+        out[name] = float(np.nanmean(s[name][k]))
+if out.get("nnz_factor") and out.get("nnz_W"):
+    out["factor_over_nnz_W"] = out["nnz_factor"] / out["nnz_W"]
 print(json.dumps(out))

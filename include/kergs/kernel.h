@@ -49,6 +49,27 @@ struct _p_KergsKernel {
   /* work */
   Vec xr, yr, ar, br;           /* reduced contact and DOF vectors */
   VecScatter to_reduced;        /* all contact components -> kept ones */
+  /* added with the implementation (src/kernel.c) */
+  PetscReal null_pivot_tol;     /* -kernel_null_pivot_tol: MUMPS CNTL(3); CHOLMOD is rejected above condition 1/tol */
+  PetscReal check_tol;          /* -kernel_check_tol: largest |H_f P x| / |H_f x| accepted after each factorization */
+  PetscInt  diag_batch;         /* -kernel_diag_batch: contacts per rank in one block of right-hand sides (exact diag) */
+  PetscInt  floating_dofs;      /* DOFs of bodies (grains and free walls) without contact */
+  PetscInt  single_contact_grains; /* grains with exactly one contact before peeling */
+  PetscInt  kept_dofs, kept_comps; /* sizes of the reduced problem: rows of A, rows of Hr */
+  PetscInt  *kept_offset;       /* per local contact: local index of its first component in xr, -1 if peeled */
+  PetscReal check_error;        /* this step's |H_f P x| / |H_f x| on a pseudo-random x */
+  PetscReal cond_estimate;      /* CHOLMOD only: |A|_1 |A^-1 v|_1 / |v|_1 for a pseudo-random v (0 otherwise) */
+  PetscBool fell_back;          /* CHOLMOD was chosen but MUMPS used this step (CHOLMOD rejected, or A singular by its sizes) */
+  PetscBool nnz_known;          /* nnz_factor was reported by the package (MUMPS INFOG(29)) */
+  PetscInt  nsetups, symbolic_reuses, fallbacks; /* over the kernel's life */
+  PetscInt  cholmod_pause;      /* set-ups left before CHOLMOD is tried again after a rejection */
+  PetscInt  napply;             /* projector applications since the last SetUp */
+  PetscReal apply_seconds;      /* their total time */
+  PetscInt  pattern_n, pattern_nnz; /* local rows and nonzeros of the A that F's symbolic factor was made for */
+  unsigned long long pattern_hash; /* hash of its local CSR pattern */
+  const PetscBool *active;      /* per local contact (KergsKernelSetActive); NULL: every contact */
+  PetscBool active_only;        /* -kernel_active_only: H_f over the active contacts instead of all potential ones */
+  PetscInt  inactive_contacts;  /* contacts left out because inactive: r = 0 there, not an unknown */
 };
 
 PETSC_EXTERN PetscErrorCode KergsKernelCreate(MPI_Comm, KergsKernel *);
@@ -56,6 +77,10 @@ PETSC_EXTERN PetscErrorCode KergsKernelSetFromOptions(KergsKernel);
 /* Build and factor A for this step's H_f (ops->HfT); counts and timings as above. Collective. */
 PETSC_EXTERN PetscErrorCode KergsKernelSetUp(KergsKernel, KergsScene, KergsContacts, KergsOperators);
 PETSC_EXTERN PetscErrorCode KergsKernelSetOmega(KergsKernel, PetscReal omega);
+/* The active contacts of the step. With -kernel_active_only, H_f is restricted to them (the law fixes r = 0 on
+   the others) and P is zero on the other components; by default H_f spans every potential contact, as in
+   Algorithm 1. The array must live until the next SetUp. NULL: every contact is active. */
+PETSC_EXTERN PetscErrorCode KergsKernelSetActive(KergsKernel, const PetscBool *active);
 /* y = P x (x, y over all contact components, layout of ops->r) */
 PETSC_EXTERN PetscErrorCode KergsKernelProject(KergsKernel, Vec x, Vec y);
 /* the MATSHELL Z = omega P (valid until the next SetUp) */

@@ -88,6 +88,7 @@ PetscErrorCode KergsRegularisedSetUp(KergsSolver s, KergsRegularised *reg, Kergs
   PetscCall(EstimateNormW(ops->W, reg->power_its, &reg->normW));
   reg->omega = reg->omega_fixed > 0 ? reg->omega_fixed : reg->omega_factor * reg->normW;
   if (reg->omega <= 0) reg->omega = 1.0; /* no contact carries anything: any omega will do */
+  PetscCall(KergsKernelSetActive(reg->kernel, s->active)); /* the unknowns: active contacts only */
   PetscCall(KergsKernelSetUp(reg->kernel, scene, contacts, ops));
   PetscCall(KergsKernelSetOmega(reg->kernel, reg->omega));
   PetscCall(PetscTime(&t0));
