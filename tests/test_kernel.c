@@ -4,31 +4,9 @@
    (null pivots), and timings on a few thousand grains. Runs on 1 and 2 ranks; every check is global. */
 static const char help[] = "kergs kernel projector tests.\n";
 
-#include <kergs/kergs.h>
+#include "testing.h"
 #include <kergs/kernel.h>
 #include <petscblaslapack.h>
-
-static PetscInt nfail = 0;
-
-static PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, PetscReal want)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s %-72s got %.6g want %.6g\n", ok ? "ok  " : "FAIL", what, (double)got, (double)want));
-  if (!ok) nfail++;
-  PetscFunctionReturn(0);
-}
-
-/* A fresh stepper configured only by the given options (the options database is reset). */
-static PetscErrorCode MakeStepper(const char *opts, KergsStepper *st)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscOptionsClear(NULL));
-  PetscCall(PetscOptionsInsertString(NULL, opts));
-  PetscCall(PetscOptionsInsertString(NULL, "-output_none -quiet"));
-  PetscCall(KergsStepperCreate(PETSC_COMM_WORLD, st));
-  PetscCall(KergsStepperSetFromOptions(*st));
-  PetscFunctionReturn(0);
-}
 
 /* This step's contacts and operators at the current positions. */
 static PetscErrorCode Assemble(KergsStepper st)

@@ -2,42 +2,7 @@
    Runs on 1 and 2 ranks; every check is global. */
 static const char help[] = "kergs physics tests: column, slopes, wedged pair, momentum balance, adjoint of H, non-convergence.\n";
 
-#include <kergs/kergs.h>
-
-static PetscInt nfail = 0;
-
-static PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, PetscReal want)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s %-60s got %.10g want %.10g\n", ok ? "ok  " : "FAIL", what, (double)got, (double)want));
-  if (!ok) nfail++;
-  PetscFunctionReturn(0);
-}
-
-/* A fresh stepper configured only by the given options (the options database is reset). */
-static PetscErrorCode MakeStepper(const char *opts, KergsStepper *st)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscOptionsClear(NULL));
-  PetscCall(PetscOptionsInsertString(NULL, opts));
-  PetscCall(PetscOptionsInsertString(NULL, "-output_none -quiet"));
-  PetscCall(KergsStepperCreate(PETSC_COMM_WORLD, st));
-  PetscCall(KergsStepperSetFromOptions(*st));
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode LastStat(KergsResults res, const char *name, PetscReal *value)
-{
-  PetscFunctionBeginUser;
-  *value = PETSC_MAX_REAL;
-  for (PetscInt s = 0; s < res->nstats; s++) {
-    PetscBool same;
-    PetscCall(PetscStrcmp(res->statname[s], name, &same));
-    if (same && res->nrows > 0) *value = res->statvalues[s][res->nrows - 1];
-  }
-  PetscCheck(*value != PETSC_MAX_REAL, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "No statistic %s recorded", name);
-  PetscFunctionReturn(0);
-}
+#include "testing.h"
 
 /* A column of N disks on a floor carries its cumulative weight: the contact below disk k carries
    (N - k) m g dt, with no tangential impulse, and nothing moves. */
@@ -313,8 +278,8 @@ static PetscErrorCode TestInfeasibleRow(void)
   }
   PetscCall(Check((PetscBool)(st->nonconverged == st->scene->nsteps), "straight row: every solve reports non-convergence", st->nonconverged, st->scene->nsteps));
   PetscCall(Check((PetscBool)(st->max_violation <= disp + 1e-12), "straight row: interpenetration <= wall displacement", st->max_violation, disp));
-  PetscCall(LastStat(st->results, "mean_violation", &mean));
-  PetscCall(LastStat(st->results, "active", &nactive));
+  PetscCall(StatAt(st->results, "mean_violation", -1, &mean));
+  PetscCall(StatAt(st->results, "active", -1, &nactive));
   /* the wall's travel is shared among the contacts of the row: their interpenetrations add up to it */
   PetscCall(Check((PetscBool)(mean * nactive > 0.5 * disp && mean * nactive <= disp + 1e-12), "straight row: the wall's motion became interpenetration", mean * nactive, disp));
   PetscCall(KergsStepperDestroy(&st));
@@ -332,8 +297,8 @@ static PetscErrorCode TestConvergedResidual(void)
   PetscCall(MakeStepper("-options_file cases/two_disks_wedged.opts -wall_right_velocity 0,0 -steps 20 -solver_criterion natural -solver_tol 1e-9 -solver_max_it 10000", &st));
   for (PetscInt s = 0; s < 20; s++) {
     PetscCall(KergsStepperStep(st));
-    PetscCall(LastStat(st->results, "converged", &conv));
-    PetscCall(LastStat(st->results, "residual", &res));
+    PetscCall(StatAt(st->results, "converged", -1, &conv));
+    PetscCall(StatAt(st->results, "residual", -1, &res));
     if (conv > 0.5) nconv++;
     if (conv > 0.5 && !(res < 1e-9)) PetscCall(Check(PETSC_FALSE, "converged step has residual < tol", res, 1e-9));
   }
@@ -354,7 +319,9 @@ int main(int argc, char **argv)
   PetscCall(TestAdjoint());
   PetscCall(TestInfeasibleRow());
   PetscCall(TestConvergedResidual());
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
-  PetscCall(PetscFinalize());
-  return nfail ? 1 : 0;
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
 }

@@ -4,30 +4,8 @@
    Runs on 1 and 2 ranks; every check is global. */
 static const char help[] = "kergs predictor tests: column, single disk closed forms, inactive contacts, 1 vs 2 ranks, options.\n";
 
-#include <kergs/kergs.h>
+#include "testing.h"
 #include <kergs/predictor.h>
-
-static PetscInt nfail = 0;
-
-static PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, PetscReal want)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s %-72s got %.10g want %.10g\n", ok ? "ok  " : "FAIL", what, (double)got, (double)want));
-  if (!ok) nfail++;
-  PetscFunctionReturn(0);
-}
-
-/* A fresh stepper on comm configured only by the given options (the options database is reset). */
-static PetscErrorCode MakeStepper(MPI_Comm comm, const char *opts, KergsStepper *st)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscOptionsClear(NULL));
-  PetscCall(PetscOptionsInsertString(NULL, opts));
-  PetscCall(PetscOptionsInsertString(NULL, "-output_none -quiet"));
-  PetscCall(KergsStepperCreate(comm, st));
-  PetscCall(KergsStepperSetFromOptions(*st));
-  PetscFunctionReturn(0);
-}
 
 /* Run nsteps steps, then build the next step's problem: detect, assemble, and mark the active contacts
    (g^- <= 0, the paper's gap rule). */
@@ -249,7 +227,7 @@ static PetscErrorCode TestColumn(PetscReal mu)
       "-lattice_origin 0,0.1 -walls floor -wall_floor_a -1,0 -wall_floor_b 1,0 -wall_floor_infinite -alert 0.01 -solver_tol 1e-13 "
       "-solver_max_it 20000",
       (double)mu, N));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, opts, &st));
+  PetscCall(MakeStepperOn(PETSC_COMM_WORLD, opts, &st));
   /* lattice gaps of +1e-17 keep contacts inactive until each disk has fallen for a step: N + 4 steps settle it */
   PetscCall(Prepare(st, N + 4, &active));
   PetscCall(PetscSNPrintf(what, sizeof(what), "%s: %" PetscInt_FMT " contacts, components per contact", lab, N));
@@ -336,7 +314,7 @@ static PetscErrorCode TestSingleDisk(PetscReal theta, PetscReal v0)
                     "-gravity 0,%g -dt %g -theta %g -disks_source list -disks_x 0,%.17g -disks_radius %g -disks_velocity 0,%g -walls floor "
                     "-wall_floor_a -1,0 -wall_floor_b 1,0 -wall_floor_infinite -alert 0.01",
                     (double)G, (double)dt, (double)theta, (double)(R - delta), (double)R, (double)v0));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, opts, &st));
+  PetscCall(MakeStepperOn(PETSC_COMM_WORLD, opts, &st));
   PetscCall(Prepare(st, 0, &active));
   m = st->scene->mass[0];
   g = st->contacts->nglobal == 1 && st->contacts->n == 1 ? st->contacts->c[0].gap : 0;
@@ -420,7 +398,7 @@ static PetscErrorCode TestInactive(void)
   char           what[128], opts[128];
 
   PetscFunctionBeginUser;
-  PetscCall(MakeStepper(PETSC_COMM_WORLD,
+  PetscCall(MakeStepperOn(PETSC_COMM_WORLD,
                         "-gravity 0,-10 -dt 1e-3 -friction 0.2 -disks_source list -disks_x 0,0.0999,0,0.3039 -disks_radius 0.1 -walls "
                         "floor -wall_floor_a -1,0 "
                         "-wall_floor_b 1,0 -wall_floor_infinite -alert 0.01",
@@ -556,9 +534,9 @@ static PetscErrorCode TestLatticeRanks(void)
 
   PetscFunctionBeginUser;
   PetscCall(LatticeOptions(opts, sizeof(opts)));
-  PetscCall(MakeStepper(PETSC_COMM_SELF, opts, &seq));
+  PetscCall(MakeStepperOn(PETSC_COMM_SELF, opts, &seq));
   PetscCall(Prepare(seq, 0, &aseq));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, opts, &par));
+  PetscCall(MakeStepperOn(PETSC_COMM_WORLD, opts, &par));
   PetscCall(Prepare(par, 0, &apar));
   PetscCall(ContactKeys(seq, &kseq));
   PetscCall(ContactKeys(par, &kpar));

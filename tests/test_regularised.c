@@ -4,31 +4,8 @@
    that hits the cap says so), and the regularised solvers must agree with each other. */
 static const char help[] = "kergs regularised solver tests.\n";
 
-#include <kergs/kergs.h>
+#include "testing.h"
 #include <kergs/kernel.h>
-
-static PetscInt nfail = 0;
-
-static PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, PetscReal want)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s %-72s got %.6g want %.6g\n", ok ? "ok  " : "FAIL", what, (double)got, (double)want));
-  if (!ok) nfail++;
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode Stat(KergsResults res, const char *name, PetscInt row, PetscReal *value)
-{
-  PetscFunctionBeginUser;
-  *value = PETSC_MAX_REAL;
-  for (PetscInt s = 0; s < res->nstats; s++) {
-    PetscBool same;
-    PetscCall(PetscStrcmp(res->statname[s], name, &same));
-    if (same) *value = res->statvalues[s][row];
-  }
-  PetscCheck(*value != PETSC_MAX_REAL, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "No statistic %s", name);
-  PetscFunctionReturn(0);
-}
 
 /* Run a scene to the end; report whether everything stayed finite and how many steps claimed convergence
    although their recorded criterion was above the tolerance (must be none). */
@@ -38,17 +15,13 @@ static PetscErrorCode RunScene(const char *opts, PetscInt *nonconverged, PetscBo
   PetscReal    ek, vmax, conv, crit;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscOptionsClear(NULL));
-  PetscCall(PetscOptionsInsertString(NULL, opts));
-  PetscCall(PetscOptionsInsertString(NULL, "-output_none -quiet"));
-  PetscCall(KergsStepperCreate(PETSC_COMM_WORLD, &st));
-  PetscCall(KergsStepperSetFromOptions(st));
+  PetscCall(MakeStepper(opts, &st));
   *finite = PETSC_TRUE;
   *honest = PETSC_TRUE;
   for (PetscInt s = 0; s < st->scene->nsteps; s++) {
     PetscCall(KergsStepperStep(st));
-    PetscCall(Stat(st->results, "converged", s, &conv));
-    PetscCall(Stat(st->results, "criterion", s, &crit));
+    PetscCall(StatAt(st->results, "converged", s, &conv));
+    PetscCall(StatAt(st->results, "criterion", s, &crit));
     if (conv > 0.5 && !(crit < st->solver->tol)) *honest = PETSC_FALSE;
     if (PetscIsInfOrNanReal(crit)) *finite = PETSC_FALSE;
   }
@@ -139,7 +112,9 @@ int main(int argc, char **argv)
   }
   PetscCall(KergsStepperDestroy(&a));
   PetscCall(KergsStepperDestroy(&b));
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
-  PetscCall(PetscFinalize());
-  return nfail ? 1 : 0;
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
 }
