@@ -67,8 +67,15 @@ static PetscErrorCode SetUpDofLayout(KergsOperators ops, KergsScene scene)
   ops->ngiven       = KERGS_DIM * ng;
   nfree_local       = (scene->dend - scene->dstart) * ops->ndof_disk + (rank == size - 1 ? KERGS_DIM * nf : 0);
   ngiven_local      = rank == 0 ? ops->ngiven : 0;
-  if (ops->Vf && ops->nfree_local == nfree_local) PetscFunctionReturn(0);
+  {
+    /* keep the DOF vectors only when no rank's layout changed (a renumbering may change some ranks only, and
+       rebuilding is collective) */
+    PetscInt changed = (PetscInt)(!ops->Vf || ops->nfree_local != nfree_local || ops->dstart != scene->dstart);
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_MAX, ops->comm));
+    if (!changed) PetscFunctionReturn(0);
+  }
   ops->nfree_local = nfree_local;
+  ops->dstart      = scene->dstart;
   PetscCall(VecDestroy(&ops->Vf));
   PetscCall(VecDestroy(&ops->Minv));
   PetscCall(VecDestroy(&ops->Rd));

@@ -34,6 +34,7 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   PetscCall(KergsOperatorsCreate(comm, &st->ops));
   PetscCall(KergsSolverCreate(comm, &st->solver));
   PetscCall(KergsResultsCreate(comm, &st->results));
+  PetscCall(KergsPartitionCreate(comm, &st->partition));
   *stepper = st;
   PetscFunctionReturn(0);
 }
@@ -49,6 +50,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
     PetscCall(PetscSNPrintf(st->results->path, sizeof(st->results->path), "results/%s.h5", name));
   }
   PetscCall(KergsResultsSetFromOptions(st->results));
+  PetscCall(KergsPartitionSetFromOptions(st->partition));
   PetscOptionsBegin(st->comm, NULL, "Time stepping options", NULL);
   PetscCall(PetscOptionsReal("-stop_at_rest", "Stop once every disk is slower than this speed, after the packing has moved faster (0: run all -steps)", "", st->rest_speed, &st->rest_speed, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "", st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
@@ -186,6 +188,7 @@ static PetscErrorCode RecordStep(KergsStepper st, const KergsSolveStats *ss, Pet
   PetscCall(KergsResultsRecord(res, "peak_memory", peak));
   PetscCall(KergsResultsRecord(res, "baseline_memory", st->baseline_rss));
   PetscCall(KergsSolverRecordStats(st->solver, st->ops, res));
+  PetscCall(KergsPartitionRecord(st->partition, st->scene, st->contacts, ss->sweep_seconds, res));
   PetscCall(KergsResultsEndStep(res));
   if (!st->quiet)
     PetscCall(PetscPrintf(st->comm, "step %5" PetscInt_FMT " t %-10.5g contacts %6" PetscInt_FMT " active %6" PetscInt_FMT " sweeps %4" PetscInt_FMT "%s residual %8.2e violation mean %8.2e max %8.2e solve %.3g s\n", st->scene->step, (double)st->scene->time,
@@ -201,6 +204,9 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscReal      *vold, *wold, *wvold;
 
   PetscFunctionBeginUser;
+  /* initial partition before the first detection, then checks every -partition_check_every steps, with the
+     contacts of the previous step (after its solve): renumbers the disks and their contacts when due */
+  PetscCall(KergsPartitionUpdate(st->partition, sc, st->contacts, NULL));
   PetscCall(PetscTime(&t0));
   PetscCall(KergsContactsDetect(st->contacts, sc));
   if (sc->step == 0) PetscCall(CheckInitialOverlaps(st));
@@ -255,6 +261,7 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
   PetscCall(PetscPrintf(st->comm, "kergs: %" PetscInt_FMT " steps%s, %" PetscInt_FMT " not converged (cap %" PetscInt_FMT " sweeps), largest interpenetration %.3g, kinetic energy %.3g, fastest grain %.3g\n", sc->step, rest ? " (at rest)" : "", st->nonconverged, st->solver->max_it,
                         (double)st->max_violation, (double)ek, (double)vmax));
+  if (st->partition->view) PetscCall(KergsPartitionView(st->partition, PETSC_VIEWER_STDOUT_(st->comm)));
   if (st->results->enabled) PetscCall(PetscPrintf(st->comm, "kergs: results in %s\n", st->results->path));
   if (st->sample_out[0]) PetscCall(PetscPrintf(st->comm, "kergs: sample in %s\n", st->sample_out));
   if (st->fclib_step >= 0 && st->fclib_step < sc->step) PetscCall(PetscPrintf(st->comm, "kergs: FCLib problem of step %" PetscInt_FMT " in %s\n", st->fclib_step, st->fclib_path));
@@ -265,6 +272,7 @@ PetscErrorCode KergsStepperDestroy(KergsStepper *st)
 {
   PetscFunctionBeginUser;
   if (!*st) PetscFunctionReturn(0);
+  PetscCall(KergsPartitionDestroy(&(*st)->partition));
   PetscCall(KergsResultsDestroy(&(*st)->results));
   PetscCall(KergsSolverDestroy(&(*st)->solver));
   PetscCall(KergsOperatorsDestroy(&(*st)->ops));

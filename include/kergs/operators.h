@@ -33,6 +33,7 @@ struct _p_KergsOperators {
   Vec r, v;           /* contact impulses and local velocities */
   Vec R;              /* H_f r */
   PetscInt   nfree, nfree_local, ngiven; /* free DOFs (global, local), given DOFs */
+  PetscInt   dstart;                      /* first disk of this rank when the DOF vectors were built */
   VecScatter vf_all;  /* V_f to every rank (the scene state is replicated) */
   Vec        vf_seq;
 };

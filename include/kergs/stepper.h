@@ -6,6 +6,7 @@
 
 #include <kergs/solver.h>
 #include <kergs/results.h>
+#include <kergs/partition.h>
 
 typedef struct _p_KergsStepper *KergsStepper;
 struct _p_KergsStepper {
@@ -15,6 +16,7 @@ struct _p_KergsStepper {
   KergsOperators ops;
   KergsSolver    solver;
   KergsResults   results;
+  KergsPartition partition;      /* ownership of the grains by the ranks (-partition_*) */
   PetscReal      rest_speed;     /* -stop_at_rest: stop once every disk is slower than this (0: never) */
   char           sample_out[PETSC_MAX_PATH_LEN]; /* -sample_output */
   PetscInt       fclib_step;     /* -fclib_step: export this step's problem (-1: none) */

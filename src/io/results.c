@@ -215,7 +215,7 @@ static PetscErrorCode KergsResultsColumn(KergsResults res, const char name[], Pe
 
 PetscErrorCode KergsResultsRecord(KergsResults res, const char name[], PetscReal value)
 {
-  PetscInt col;
+  PetscInt col = -1;
 
   PetscFunctionBeginUser;
   /* kept in memory even with -output_none: the run's callers read them */

@@ -1,0 +1,114 @@
+/* kergs partition: which rank owns which grain (DESIGN.md section 6, issue 4).
+
+   The scene state is replicated and rank p owns the contiguous index range [dstart, dend) of the disks, so a
+   partition is realised by RENUMBERING the disks: the grains of part 0 first, then those of part 1, and so on.
+   Grain ids (scene->id) are persistent and travel with the grains; so do the contact impulses (warm start).
+
+   Types (-partition_type):
+     contiguous  the even split of KergsSceneSetDisks, never changed
+     geometric   sort by a Hilbert space-filling-curve key of the centres, cut into chunks of equal work
+     metis       METIS k-way on the grain graph (vertices: grains, weight 1 + number of contacts; edges: disk-disk
+                 contacts), recomputed when the work imbalance or the edge cut grows past the thresholds. The
+                 initial partition (no contacts yet) and partitions of graphs too sparse to describe the packing
+                 (mean degree below KERGS_PARTITION_MIN_DEGREE) are geometric; such a partition is provisional and
+                 replaced by METIS at the first check where the graph is dense enough. METIS runs on rank 0 (the
+                 graph is gathered there, the new order broadcast), with a fixed seed, on the graph in grain-id order
+                 (so that a graph that changed little gets a similar partition), and with light edges along the
+                 Hilbert curve (-partition_metis_curve) so that grains without contacts stay with their neighbours.
+                 When METIS misses the imbalance tolerance (tiny graphs) and the geometric partition meets it, the
+                 geometric one is used. Parts are matched to the ranks that own most of their grains already.
+   On one rank nothing is ever renumbered (every type is then the contiguous one).
+
+   Measures: the work of a grain is 1 + its number of contacts (disk-disk and disk-wall); the work of a rank is
+   the sum over the grains it owns; imbalance = max over ranks of the work / mean work. The edge cut is the
+   number of disk-disk contacts whose grains are owned by different ranks. The ghosts of a rank are the grains
+   owned elsewhere within the alert distance of one of its grains (the other end of a cut contact): the grains
+   that a code with distributed state would copy. */
+#ifndef KERGS_PARTITION_H
+#define KERGS_PARTITION_H
+
+#include <kergs/results.h>
+
+typedef enum { KERGS_PARTITION_CONTIGUOUS, KERGS_PARTITION_GEOMETRIC, KERGS_PARTITION_METIS } KergsPartitionType;
+PETSC_EXTERN const char *const KergsPartitionTypes[];
+
+/* A METIS partition needs a contact graph of at least this mean degree (2 edges / grains); below, geometric. */
+#define KERGS_PARTITION_MIN_DEGREE 1.0
+/* Weight of a contact edge in METIS's graph, against 1 for an edge between consecutive grains along the Hilbert
+   curve (-partition_metis_curve). */
+#define KERGS_PARTITION_CONTACT_WEIGHT 8
+
+/* Measures of the current partition (global, the same on every rank, except the per-rank fields). */
+typedef struct {
+  PetscInt  edgecut;         /* disk-disk contacts between grains of different ranks */
+  PetscInt  ghosts;          /* sum over ranks of their ghost grains */
+  PetscReal imbalance;       /* max rank work / mean rank work (1 when there is no work) */
+  PetscReal imbalance_bound; /* lower bound of any partition's imbalance: max(1, ranks / grains) */
+  PetscReal work_max, work_mean;
+  PetscInt  edges; /* disk-disk contacts (edges of the grain graph) */
+  /* this rank */
+  PetscInt  my_grains, my_contacts, my_ghosts;
+  PetscReal my_work;
+} KergsPartitionMeasures;
+
+/* Repartitioning rule, checked every check_every steps: repartition when
+     imbalance >= imbalance_tol * imbalance_bound and imbalance > imbalance_base (it grew since the last partition;
+       with imbalance_tol = 1 the second condition is dropped: a repartition at every check), or
+     edgecut > edgecut_growth * max(edgecut_base, 1), or
+     the partition is provisional and the graph is dense enough for METIS. */
+typedef struct _p_KergsPartition *KergsPartition;
+struct _p_KergsPartition {
+  MPI_Comm           comm;
+  KergsPartitionType type;
+  PetscReal          imbalance_tol;  /* -partition_imbalance_tol (default 1.10) */
+  PetscReal          edgecut_growth; /* -partition_edgecut_growth (default 1.25) */
+  PetscInt           check_every;    /* -partition_check_every: steps between checks (0: never) */
+  PetscBool          view;           /* -partition_view: one line per rank and step */
+  PetscInt           metis_seed;     /* -partition_metis_seed */
+  PetscBool          metis_curve;    /* -partition_metis_curve: Hilbert-curve edges in METIS's graph */
+  /* state */
+  PetscBool              initialized;    /* the initial partition was done */
+  PetscBool              provisional;    /* type metis, METIS not run yet: replace once the graph is dense enough */
+  PetscInt               edgecut_base;   /* edge cut right after the last partition (-1: unknown, set at the next check) */
+  PetscReal              imbalance_base; /* imbalance right after the last partition, on the graph it was computed from */
+  PetscInt               nrepartitions;  /* partitions computed after the initial one */
+  PetscInt               nmoved;         /* grains that changed rank, summed over every partition */
+  PetscInt               last_method;    /* method of the latest partition (a KergsPartitionType) */
+  PetscLogDouble         seconds;        /* time spent partitioning and renumbering */
+  KergsPartitionMeasures last;           /* latest measures (KergsPartitionRecord) */
+};
+
+PETSC_EXTERN PetscErrorCode KergsPartitionCreate(MPI_Comm, KergsPartition *);
+PETSC_EXTERN PetscErrorCode KergsPartitionSetType(KergsPartition, KergsPartitionType);
+/* -partition_type, -partition_imbalance_tol, -partition_edgecut_growth, -partition_check_every, -partition_view,
+   -partition_metis_curve, -partition_metis_seed. Default type: metis on more than one rank, contiguous on one. */
+PETSC_EXTERN PetscErrorCode KergsPartitionSetFromOptions(KergsPartition);
+/* Collective. Compute a partition of the scene's disks with the object's type (contiguous: the even split; metis
+   falls back to geometric on a sparse graph or with more ranks than grains) from the contacts' graph, and
+   renumber the scene and the contacts accordingly. No-op on one rank. */
+PETSC_EXTERN PetscErrorCode KergsPartitionApply(KergsPartition, KergsScene, KergsContacts);
+/* Collective; the time-loop hook, called before each step's detection: the initial partition at the first call,
+   then every check_every steps (scene->step a multiple of it) measure the partition with the contacts of the
+   previous step and repartition when past the thresholds (or when provisional). repartitioned (may be NULL):
+   whether the disks were renumbered, the initial partition included (the same on every rank). */
+PETSC_EXTERN PetscErrorCode KergsPartitionUpdate(KergsPartition, KergsScene, KergsContacts, PetscBool *repartitioned);
+/* Collective: edge cut, work imbalance, ghosts, per-rank counts of the current partition and contacts. */
+PETSC_EXTERN PetscErrorCode KergsPartitionMeasure(KergsPartition, KergsScene, KergsContacts, KergsPartitionMeasures *);
+/* Collective: measure, record "edge_cut", "imbalance", "ghosts", "repartitions" (cumulative) in the results,
+   and with -partition_view print one line per rank (grains, ghosts, contacts, work, sweep_seconds: this rank's
+   sweep time) and one summary line. */
+PETSC_EXTERN PetscErrorCode KergsPartitionRecord(KergsPartition, KergsScene, KergsContacts, PetscReal sweep_seconds, KergsResults);
+PETSC_EXTERN PetscErrorCode KergsPartitionView(KergsPartition, PetscViewer);
+PETSC_EXTERN PetscErrorCode KergsPartitionDestroy(KergsPartition *);
+
+/* Collective, the migration itself: renumber the disks so that new index k holds old disk order[k]; rank p then
+   owns counts[p] disks, after those of ranks 0 .. p-1. order (a permutation of 0 .. ndisks-1) and counts (one per
+   rank, summing to ndisks) must be the same on every rank. Every per-disk array of the scene is permuted, dstart
+   and dend are set, and the contacts (owned and sorted by (a, kind, b) in the new numbering, disk-disk pairs with
+   a > b swapped with their frame flipped: n, t -> -n, -t, ra <-> rb, impulse and velocity components unchanged)
+   are moved to their new owners and left as the current list, so that the next detection carries their
+   impulses over. Returns the number of grains that changed rank (global) in nmoved (may be NULL). */
+PETSC_EXTERN PetscErrorCode KergsPartitionRenumber(KergsScene, KergsContacts, const PetscInt order[], const PetscInt counts[],
+                                                   PetscInt *nmoved);
+
+#endif

@@ -1,0 +1,968 @@
+/* kergs partition: ownership of the grains by the ranks (DESIGN.md section 6, issue 4).
+
+   The disk state is replicated and rank p owns the index range [dstart, dend), so a partition is realised by
+   renumbering the disks part after part ("migration" moves nothing but indices). A partition is computed on
+   rank 0 from the grain graph gathered there (vertices: grains with work 1 + contacts; edges: disk-disk
+   contacts), broadcast as the new order of the disks, and applied identically everywhere; the contacts follow
+   their grains with their impulses, so that the next detection warm-starts them (Algorithm 1). */
+#include <kergs/partition.h>
+#include <metis.h>
+#include <stdint.h>
+
+const char *const KergsPartitionTypes[] = {"contiguous", "geometric", "metis", "KergsPartitionType", "KERGS_PARTITION_", NULL};
+
+static PetscLogEvent KERGS_Partition;
+
+/* Side of the Hilbert-curve grid: 2^16 cells, keys below 2^32. */
+#define KERGS_HILBERT_ORDER 16
+
+static PetscErrorCode PartitionRegisterEvent(void)
+{
+  static PetscBool registered = PETSC_FALSE;
+  PetscClassId     classid;
+
+  PetscFunctionBeginUser;
+  if (registered) PetscFunctionReturn(0);
+  registered = PETSC_TRUE;
+  PetscCall(PetscClassIdRegister("KergsPartition", &classid));
+  PetscCall(PetscLogEventRegister("KergsPartition", classid, &KERGS_Partition));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionCreate(MPI_Comm comm, KergsPartition *partition)
+{
+  KergsPartition p;
+  PetscMPIInt    size;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsInitializePackage());
+  PetscCall(PartitionRegisterEvent());
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscNew(&p));
+  p->comm           = comm;
+  p->type           = size > 1 ? KERGS_PARTITION_METIS : KERGS_PARTITION_CONTIGUOUS;
+  p->imbalance_tol  = 1.10;
+  p->edgecut_growth = 1.25;
+  p->check_every    = 10;
+  p->metis_seed     = 2013;
+  p->metis_curve    = PETSC_TRUE;
+  p->edgecut_base   = -1;
+  p->last_method    = KERGS_PARTITION_CONTIGUOUS;
+  p->imbalance_base = 1.0;
+  *partition        = p;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionSetType(KergsPartition p, KergsPartitionType type)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(type >= KERGS_PARTITION_CONTIGUOUS && type <= KERGS_PARTITION_METIS, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Unknown partition type %d (see -partition_type)", (int)type);
+  p->type = type;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
+{
+  PetscFunctionBeginUser;
+  PetscOptionsBegin(p->comm, NULL, "Partition options (ownership of the grains by the ranks)", NULL);
+  PetscCall(PetscOptionsEnum(
+      "-partition_type", "contiguous (even split by index, never changed), geometric (Hilbert curve), metis (k-way on the contact graph)",
+      "KergsPartitionSetType", KergsPartitionTypes, (PetscEnum)p->type, (PetscEnum *)&p->type, NULL));
+  PetscCall(PetscOptionsReal(
+      "-partition_imbalance_tol",
+      "Repartition when the max rank work / mean work reaches this factor and grew since the last partition (1: at every check)", "",
+      p->imbalance_tol, &p->imbalance_tol, NULL));
+  PetscCall(PetscOptionsReal("-partition_edgecut_growth",
+                             "Repartition when the edge cut exceeds this factor times max(1, the cut right after the last partition)", "",
+                             p->edgecut_growth, &p->edgecut_growth, NULL));
+  PetscCall(PetscOptionsInt("-partition_check_every", "Steps between two checks of the partition (0: never repartition)", "",
+                            p->check_every, &p->check_every, NULL));
+  PetscCall(PetscOptionsBool("-partition_view", "Print per step and rank: grains, ghosts, contacts, work, sweep time; and the edge cut", "",
+                             p->view, &p->view, NULL));
+  PetscCall(PetscOptionsBool(
+      "-partition_metis_curve",
+      "Join consecutive grains along a Hilbert curve by light edges in METIS's graph (locality for grains without contacts)", "",
+      p->metis_curve, &p->metis_curve, NULL));
+  PetscCall(PetscOptionsInt("-partition_metis_seed", "Seed of METIS's random choices (fixed: reproducible partitions)", "", p->metis_seed,
+                            &p->metis_seed, NULL));
+  PetscOptionsEnd();
+  PetscCheck(p->imbalance_tol >= 1.0 && !PetscIsInfOrNanReal(p->imbalance_tol), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-partition_imbalance_tol %g must be at least 1 (max work / mean work)", (double)p->imbalance_tol);
+  PetscCheck(p->edgecut_growth > 0.0 && !PetscIsInfOrNanReal(p->edgecut_growth), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-partition_edgecut_growth %g must be positive", (double)p->edgecut_growth);
+  PetscCheck(p->check_every >= 0, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-partition_check_every %" PetscInt_FMT " must be non-negative (0: never)", p->check_every);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionDestroy(KergsPartition *p)
+{
+  PetscFunctionBeginUser;
+  if (!p || !*p) PetscFunctionReturn(0);
+  PetscCall(PetscFree(*p));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionView(KergsPartition p, PetscViewer viewer)
+{
+  PetscFunctionBeginUser;
+  if (!viewer) PetscCall(PetscViewerASCIIGetStdout(p->comm, &viewer));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Partition: %s, check every %" PetscInt_FMT " steps, imbalance tol %g, edge cut growth %g\n",
+                                   KergsPartitionTypes[p->type], p->check_every, (double)p->imbalance_tol, (double)p->edgecut_growth));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer, "%" PetscInt_FMT " repartitions after the initial one (latest: %s%s), %" PetscInt_FMT " grains moved in all, %.3g s\n",
+      p->nrepartitions, KergsPartitionTypes[p->last_method], p->provisional ? ", provisional" : "", p->nmoved, (double)p->seconds));
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer, "latest measures: edge cut %" PetscInt_FMT " of %" PetscInt_FMT " edges, imbalance %.4g, ghosts %" PetscInt_FMT "\n",
+      p->last.edgecut, p->last.edges, (double)p->last.imbalance, p->last.ghosts));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* Ownership ranges                                                                                           */
+
+/* ranges[p] .. ranges[p+1]: the disks of rank p (size + 1 entries), checked to tile [0, ndisks) in rank order. */
+static PetscErrorCode GetRanges(KergsScene sc, PetscInt **ranges)
+{
+  PetscMPIInt size;
+  PetscInt    mine[2] = {sc->dstart, sc->dend}, *all;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(PetscMalloc1(2 * size, &all));
+  PetscCallMPI(MPI_Allgather(mine, 2, MPIU_INT, all, 2, MPIU_INT, sc->comm));
+  PetscCall(PetscMalloc1(size + 1, ranges));
+  for (PetscMPIInt q = 0; q < size; q++) {
+    PetscCheck(all[2 * q] == (q ? all[2 * q - 1] : 0) && all[2 * q] <= all[2 * q + 1], sc->comm, PETSC_ERR_ARG_WRONGSTATE,
+               "Scene %s: rank %d owns disks [%" PetscInt_FMT ", %" PetscInt_FMT "), not the continuation of the previous rank's range",
+               sc->name, q, all[2 * q], all[2 * q + 1]);
+    (*ranges)[q] = all[2 * q];
+  }
+  (*ranges)[size] = size ? all[2 * size - 1] : 0;
+  PetscCheck((*ranges)[size] == sc->ndisks, sc->comm, PETSC_ERR_ARG_WRONGSTATE,
+             "Scene %s: the ranks own %" PetscInt_FMT " disks, not %" PetscInt_FMT, sc->name, (*ranges)[size], sc->ndisks);
+  PetscCall(PetscFree(all));
+  PetscFunctionReturn(0);
+}
+
+/* The rank owning disk i: the largest q with ranges[q] <= i (empty ranks have ranges[q] = ranges[q+1] and are
+   skipped because a later rank starts at the same index). */
+static inline PetscMPIInt OwnerOf(const PetscInt ranges[], PetscMPIInt size, PetscInt i)
+{
+  PetscMPIInt lo = 0, hi = size - 1;
+
+  while (lo < hi) {
+    PetscMPIInt mid = (lo + hi + 1) / 2;
+    if (ranges[mid] <= i)
+      lo = mid;
+    else
+      hi = mid - 1;
+  }
+  return lo;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* Measures                                                                                                   */
+
+/* Work (1 + contacts per grain, summed over a rank's grains), edge cut and ghosts from each rank's own contacts.
+   Contacts sorted by (a, kind, b) and ownership by contiguous ranges make this cheap: a cut contact is owned by
+   the lower rank (a < b); the owner's ghosts are the distinct b of its cut contacts (grains of higher ranks), and
+   rank q's ghosts from lower ranks are, for each such rank, its distinct grains a with a contact to q. */
+PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsContacts ct, KergsPartitionMeasures *m)
+{
+  PetscMPIInt rank, size;
+  PetscInt   *ranges, *buf, *offb, noffb = 0, distinct_b = 0, lasta = -1;
+  PetscMPIInt lastq = -1;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
+  PetscCallMPI(MPI_Comm_size(p->comm, &size));
+  PetscCall(GetRanges(sc, &ranges));
+  /* buf: work per rank [0, size), ghosts from lower ranks per rank [size, 2 size), edges, cut, distinct b */
+  PetscCall(PetscCalloc1(2 * size + 3, &buf));
+  PetscCall(PetscMalloc1(ct->n + 1, &offb));
+  buf[rank] += sc->dend - sc->dstart;
+  for (PetscInt k = 0; k < ct->n; k++) {
+    const KergsContact *c = &ct->c[k];
+    PetscMPIInt         q;
+
+    buf[rank]++;
+    if (c->kind != KERGS_CONTACT_DISK_DISK) continue;
+    q = OwnerOf(ranges, size, c->b);
+    buf[q]++;
+    buf[2 * size]++;
+    if (q == rank) continue;
+    buf[2 * size + 1]++;
+    offb[noffb++] = c->b;
+    if (c->a != lasta || q != lastq) buf[size + q]++; /* b's sorted for a given a: owners come in runs */
+    lasta = c->a;
+    lastq = q;
+  }
+  PetscCall(PetscSortInt(noffb, offb));
+  for (PetscInt k = 0; k < noffb; k++) distinct_b += (k == 0 || offb[k] != offb[k - 1]);
+  buf[2 * size + 2] = distinct_b;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, buf, 2 * size + 3, MPIU_INT, MPI_SUM, p->comm));
+  m->edges       = buf[2 * size];
+  m->edgecut     = buf[2 * size + 1];
+  m->ghosts      = buf[2 * size + 2];
+  m->my_grains   = sc->dend - sc->dstart;
+  m->my_contacts = ct->n;
+  m->my_ghosts   = distinct_b + buf[size + rank];
+  m->my_work     = (PetscReal)buf[rank];
+  m->work_max    = 0;
+  m->work_mean   = 0;
+  for (PetscMPIInt q = 0; q < size; q++) {
+    m->ghosts += buf[size + q];
+    m->work_max = PetscMax(m->work_max, (PetscReal)buf[q]);
+    m->work_mean += (PetscReal)buf[q];
+  }
+  m->work_mean /= size;
+  m->imbalance = m->work_mean > 0 ? m->work_max / m->work_mean : 1.0;
+  /* no partition beats max(1, size / ndisks): a rank holds at least one grain's work once ranks outnumber grains */
+  m->imbalance_bound = sc->ndisks > 0 ? PetscMax(1.0, (PetscReal)size / (PetscReal)sc->ndisks) : 1.0;
+  PetscCall(PetscFree(offb));
+  PetscCall(PetscFree(buf));
+  PetscCall(PetscFree(ranges));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionRecord(KergsPartition p, KergsScene sc, KergsContacts ct, PetscReal sweep_seconds, KergsResults res)
+{
+  KergsPartitionMeasures *m = &p->last;
+  PetscMPIInt             rank;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsPartitionMeasure(p, sc, ct, m));
+  PetscCall(KergsResultsRecord(res, "edge_cut", (PetscReal)m->edgecut));
+  PetscCall(KergsResultsRecord(res, "imbalance", m->imbalance));
+  PetscCall(KergsResultsRecord(res, "ghosts", (PetscReal)m->ghosts));
+  PetscCall(KergsResultsRecord(res, "repartitions", (PetscReal)p->nrepartitions));
+  if (!p->view) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
+  PetscCall(PetscSynchronizedPrintf(p->comm,
+                                    "[partition] step %5" PetscInt_FMT " rank %3d: grains %6" PetscInt_FMT " ghosts %6" PetscInt_FMT
+                                    " contacts %7" PetscInt_FMT " work %8.0f sweep %.3g s\n",
+                                    sc->step, rank, m->my_grains, m->my_ghosts, m->my_contacts, (double)m->my_work, (double)sweep_seconds));
+  PetscCall(PetscSynchronizedFlush(p->comm, PETSC_STDOUT));
+  PetscCall(PetscPrintf(p->comm,
+                        "[partition] step %5" PetscInt_FMT ": %s, edge cut %" PetscInt_FMT " of %" PetscInt_FMT
+                        " contact edges, imbalance %.4f, ghosts %" PetscInt_FMT ", repartitions %" PetscInt_FMT "\n",
+                        sc->step, KergsPartitionTypes[p->last_method], m->edgecut, m->edges, (double)m->imbalance, m->ghosts,
+                        p->nrepartitions));
+  PetscFunctionReturn(0);
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* Renumbering (migration)                                                                                    */
+
+static PetscErrorCode PermuteReals(PetscInt n, PetscInt bs, const PetscInt order[], PetscReal *a, PetscReal *tmp)
+{
+  PetscFunctionBeginUser;
+  if (!a) PetscFunctionReturn(0);
+  for (PetscInt k = 0; k < n; k++)
+    for (PetscInt d = 0; d < bs; d++) tmp[bs * k + d] = a[bs * order[k] + d];
+  PetscCall(PetscArraycpy(a, tmp, bs * n));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode PermuteInts(PetscInt n, const PetscInt order[], PetscInt *a, PetscInt *tmp)
+{
+  PetscFunctionBeginUser;
+  if (!a) PetscFunctionReturn(0);
+  for (PetscInt k = 0; k < n; k++) tmp[k] = a[order[k]];
+  PetscCall(PetscArraycpy(a, tmp, n));
+  PetscFunctionReturn(0);
+}
+
+/* Every per-disk array of the scene (see scene.h): new disk k is old disk order[k]. */
+static PetscErrorCode PermuteScene(KergsScene sc, const PetscInt order[])
+{
+  const PetscInt n = sc->ndisks;
+  PetscReal     *rtmp;
+  PetscInt      *itmp;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc2(KERGS_DIM * n, &rtmp, n, &itmp));
+  PetscCall(PermuteReals(n, KERGS_DIM, order, sc->x, rtmp));
+  PetscCall(PermuteReals(n, KERGS_NROT, order, sc->rot, rtmp));
+  PetscCall(PermuteReals(n, KERGS_DIM, order, sc->v, rtmp));
+  PetscCall(PermuteReals(n, KERGS_NROT, order, sc->omega, rtmp));
+  PetscCall(PermuteReals(n, 1, order, sc->radius, rtmp));
+  PetscCall(PermuteReals(n, 1, order, sc->mass, rtmp));
+  PetscCall(PermuteReals(n, 1, order, sc->inertia, rtmp));
+  PetscCall(PermuteInts(n, order, sc->material, itmp));
+  PetscCall(PermuteInts(n, order, sc->id, itmp));
+  PetscCall(PetscFree2(rtmp, itmp));
+  PetscFunctionReturn(0);
+}
+
+/* The same (a, kind, b) order as detection's. */
+static int CompareContactKeys(const void *x, const void *y)
+{
+  const KergsContact *p = (const KergsContact *)x, *q = (const KergsContact *)y;
+
+  if (p->a != q->a) return p->a < q->a ? -1 : 1;
+  if (p->kind != q->kind) return p->kind < q->kind ? -1 : 1;
+  if (p->b != q->b) return p->b < q->b ? -1 : 1;
+  return 0;
+}
+
+/* A contact in the new numbering. A disk-disk pair whose new a exceeds its new b is swapped: body a becomes
+   old b, so n -> -n and t = (-n_y, n_x) -> -t, and ra <-> rb. The impulse keeps its components: the force on the
+   new a (old b) was -(r_n n + r_t t) = r_n (-n) + r_t (-t), and its torque -R_b r_t = -R_a' r_t; the relative
+   velocity components v_n = n.(u_a - u_b), v_t = t.(u_a - u_b) - ra w_a - rb w_b are unchanged likewise. */
+static void RenumberContact(KergsContact *c, const PetscInt old2new[])
+{
+  c->a = old2new[c->a];
+  if (c->kind != KERGS_CONTACT_DISK_DISK) return;
+  c->b = old2new[c->b];
+  if (c->a > c->b) {
+    PetscInt  i = c->a;
+    PetscReal r = c->ra;
+
+    c->a  = c->b;
+    c->b  = i;
+    c->ra = c->rb;
+    c->rb = r;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      c->n[d] = -c->n[d];
+      c->t[d] = -c->t[d];
+    }
+  }
+}
+
+/* Send every renumbered contact to the rank owning its (new) body a; the received list replaces ct->c, sorted,
+   as the current list (detection makes it the previous one and carries the impulses over). */
+static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt old2new[], const PetscInt newranges[], PetscMPIInt rank,
+                                      PetscMPIInt size)
+{
+  PetscMPIInt  *scount, *sdispl, *rcount, *rdispl, *dest;
+  KergsContact *sendbuf, *recvbuf;
+  MPI_Datatype  ctype;
+  PetscInt      nrecv = 0, *fill;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscCalloc4(size, &scount, size, &sdispl, size, &rcount, size, &rdispl));
+  PetscCall(PetscMalloc3(ct->n + 1, &dest, ct->n + 1, &sendbuf, size, &fill));
+  for (PetscInt k = 0; k < ct->n; k++) {
+    KergsContact c = ct->c[k];
+    RenumberContact(&c, old2new);
+    dest[k] = OwnerOf(newranges, size, c.a);
+    scount[dest[k]]++;
+    ct->c[k] = c;
+  }
+  for (PetscMPIInt q = 1; q < size; q++) sdispl[q] = sdispl[q - 1] + scount[q - 1];
+  for (PetscMPIInt q = 0; q < size; q++) fill[q] = sdispl[q];
+  for (PetscInt k = 0; k < ct->n; k++) sendbuf[fill[dest[k]]++] = ct->c[k];
+  PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, ct->comm));
+  for (PetscMPIInt q = 0; q < size; q++) {
+    rdispl[q] = (PetscMPIInt)nrecv;
+    nrecv += rcount[q];
+  }
+  PetscCall(PetscMalloc1(nrecv + 1, &recvbuf));
+  PetscCallMPI(MPI_Type_contiguous((PetscMPIInt)sizeof(KergsContact), MPI_BYTE, &ctype));
+  PetscCallMPI(MPI_Type_commit(&ctype));
+  PetscCallMPI(MPI_Alltoallv(sendbuf, scount, sdispl, ctype, recvbuf, rcount, rdispl, ctype, ct->comm));
+  PetscCallMPI(MPI_Type_free(&ctype));
+  qsort(recvbuf, (size_t)nrecv, sizeof(KergsContact), CompareContactKeys);
+  PetscCall(PetscFree(ct->c));
+  ct->c      = recvbuf;
+  ct->n      = nrecv;
+  ct->nalloc = nrecv + 1;
+  ct->nprev  = 0; /* the previous list is in the old numbering: it is superseded by this one */
+  ct->start  = 0;
+  PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));
+  if (rank == 0) ct->start = 0; /* MPI_Exscan leaves rank 0's result undefined */
+  PetscCall(PetscFree4(scount, sdispl, rcount, rdispl));
+  PetscCall(PetscFree3(dest, sendbuf, fill));
+  PetscFunctionReturn(0);
+}
+
+/* order must be a permutation and counts a split of ndisks over the ranks, the same on every rank (checked
+   here on the local copy; the caller guarantees equality across ranks, e.g. by a broadcast). */
+static PetscErrorCode CheckRenumbering(KergsScene sc, const PetscInt order[], const PetscInt counts[], PetscMPIInt size, PetscInt *old2new)
+{
+  PetscInt total = 0;
+
+  PetscFunctionBeginUser;
+  for (PetscMPIInt q = 0; q < size; q++) {
+    PetscCheck(counts[q] >= 0, sc->comm, PETSC_ERR_ARG_OUTOFRANGE, "Renumbering of scene %s: rank %d gets %" PetscInt_FMT " disks",
+               sc->name, q, counts[q]);
+    total += counts[q];
+  }
+  PetscCheck(total == sc->ndisks, sc->comm, PETSC_ERR_ARG_WRONG,
+             "Renumbering of scene %s: the ranks get %" PetscInt_FMT " disks in all, not %" PetscInt_FMT, sc->name, total, sc->ndisks);
+  for (PetscInt i = 0; i < sc->ndisks; i++) old2new[i] = -1;
+  for (PetscInt k = 0; k < sc->ndisks; k++) {
+    PetscCheck(order[k] >= 0 && order[k] < sc->ndisks && old2new[order[k]] < 0, sc->comm, PETSC_ERR_ARG_WRONG,
+               "Renumbering of scene %s: new disk %" PetscInt_FMT " takes old disk %" PetscInt_FMT ", out of range or taken twice",
+               sc->name, k, order[k]);
+    old2new[order[k]] = k;
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionRenumber(KergsScene sc, KergsContacts ct, const PetscInt order[], const PetscInt counts[], PetscInt *nmoved)
+{
+  PetscMPIInt rank, size;
+  PetscInt   *old2new, *oldranges, *newranges, moved = 0;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
+  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(PetscMalloc2(sc->ndisks + 1, &old2new, size + 1, &newranges));
+  PetscCall(CheckRenumbering(sc, order, counts, size, old2new));
+  PetscCall(GetRanges(sc, &oldranges));
+  newranges[0] = 0;
+  for (PetscMPIInt q = 0; q < size; q++) newranges[q + 1] = newranges[q] + counts[q];
+  for (PetscInt k = 0; k < sc->ndisks; k++) moved += OwnerOf(oldranges, size, order[k]) != OwnerOf(newranges, size, k);
+  PetscCall(PermuteScene(sc, order));
+  sc->dstart = newranges[rank];
+  sc->dend   = newranges[rank + 1];
+  if (ct) PetscCall(MigrateContacts(ct, old2new, newranges, rank, size));
+  if (nmoved) *nmoved = moved;
+  PetscCall(PetscFree(oldranges));
+  PetscCall(PetscFree2(old2new, newranges));
+  PetscFunctionReturn(0);
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* Computing a partition (rank 0)                                                                             */
+
+/* The grain graph on rank 0: CSR adjacency of the disk-disk contacts and the work of each grain. */
+typedef struct {
+  PetscInt  n, nedges;
+  PetscInt *xadj, *adj; /* n + 1, 2 nedges */
+  PetscInt *work;       /* 1 + contacts (disk-disk and disk-wall) per grain */
+} GrainGraph;
+
+static PetscErrorCode GrainGraphDestroy(GrainGraph *g)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree3(g->xadj, g->adj, g->work));
+  PetscFunctionReturn(0);
+}
+
+/* Gather every rank's contacts as pairs (a, b) (b = -1 for a wall) to rank 0 and build the graph there. */
+static PetscErrorCode GatherGrainGraph(KergsScene sc, KergsContacts ct, GrainGraph *g)
+{
+  PetscMPIInt rank, size, nmine = (PetscMPIInt)(2 * ct->n), *counts = NULL, *displs = NULL;
+  PetscInt   *mine, *all = NULL, nall = 0, *fill;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
+  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(PetscMemzero(g, sizeof(*g)));
+  PetscCall(PetscMalloc1(nmine + 1, &mine));
+  for (PetscInt k = 0; k < ct->n; k++) {
+    mine[2 * k]     = ct->c[k].a;
+    mine[2 * k + 1] = ct->c[k].kind == KERGS_CONTACT_DISK_DISK ? ct->c[k].b : -1;
+  }
+  if (rank == 0) PetscCall(PetscMalloc2(size, &counts, size, &displs));
+  PetscCallMPI(MPI_Gather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, 0, sc->comm));
+  if (rank == 0) {
+    for (PetscMPIInt q = 0; q < size; q++) {
+      displs[q] = (PetscMPIInt)nall;
+      nall += counts[q];
+    }
+  }
+  PetscCall(PetscMalloc1(nall + 1, &all));
+  PetscCallMPI(MPI_Gatherv(mine, nmine, MPIU_INT, all, counts, displs, MPIU_INT, 0, sc->comm));
+  PetscCall(PetscFree(mine));
+  if (rank == 0) {
+    const PetscInt n = sc->ndisks;
+
+    g->n = n;
+    for (PetscInt k = 0; k < nall / 2; k++) g->nedges += all[2 * k + 1] >= 0;
+    PetscCall(PetscCalloc3(n + 1, &g->xadj, 2 * g->nedges + 1, &g->adj, n + 1, &g->work));
+    for (PetscInt i = 0; i < n; i++) g->work[i] = 1;
+    for (PetscInt k = 0; k < nall / 2; k++) {
+      const PetscInt a = all[2 * k], b = all[2 * k + 1];
+      PetscCheck(a >= 0 && a < n && b < n, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "Contact (%" PetscInt_FMT ", %" PetscInt_FMT ") outside the %" PetscInt_FMT " disks of scene %s", a, b, n, sc->name);
+      g->work[a]++;
+      if (b < 0) continue;
+      g->work[b]++;
+      g->xadj[a + 1]++;
+      g->xadj[b + 1]++;
+    }
+    for (PetscInt i = 0; i < n; i++) g->xadj[i + 1] += g->xadj[i];
+    PetscCall(PetscMalloc1(n + 1, &fill));
+    PetscCall(PetscArraycpy(fill, g->xadj, n));
+    for (PetscInt k = 0; k < nall / 2; k++) {
+      const PetscInt a = all[2 * k], b = all[2 * k + 1];
+      if (b < 0) continue;
+      g->adj[fill[a]++] = b;
+      g->adj[fill[b]++] = a;
+    }
+    PetscCall(PetscFree(fill));
+    PetscCall(PetscFree2(counts, displs));
+  }
+  PetscCall(PetscFree(all));
+  PetscFunctionReturn(0);
+}
+
+/* Index along a Hilbert curve of the cell (x, y) of a 2^KERGS_HILBERT_ORDER grid. At each level the quadrant
+   gives two bits of the index (visiting order lower-left, upper-left, upper-right, lower-right), and the cell is
+   mapped into the frame of that quadrant's sub-curve: transposed in the first quadrant, transposed and mirrored
+   in the last, unchanged in the two upper ones. */
+static uint64_t HilbertIndex(uint32_t x, uint32_t y)
+{
+  uint64_t index = 0;
+
+  for (uint32_t half = 1u << (KERGS_HILBERT_ORDER - 1); half > 0; half >>= 1) {
+    const uint32_t right = (x & half) ? 1 : 0, up = (y & half) ? 1 : 0;
+    const uint32_t quadrant = right ? (up ? 2 : 3) : (up ? 1 : 0);
+
+    index += (uint64_t)quadrant * half * half;
+    x &= half - 1;
+    y &= half - 1;
+    if (!up) {
+      uint32_t t;
+      if (right) { /* mirror in the anti-diagonal */
+        x = half - 1 - x;
+        y = half - 1 - y;
+      }
+      t = x; /* transpose */
+      x = y;
+      y = t;
+    }
+  }
+  return index;
+}
+
+typedef struct {
+  uint64_t key;
+  PetscInt disk;
+} CurveEntry;
+
+static int CompareCurveEntries(const void *x, const void *y)
+{
+  const CurveEntry *p = (const CurveEntry *)x, *q = (const CurveEntry *)y;
+
+  if (p->key != q->key) return p->key < q->key ? -1 : 1;
+  return p->disk < q->disk ? -1 : (p->disk > q->disk ? 1 : 0);
+}
+
+/* seq[k]: the k-th disk along the Hilbert curve of a square grid over the bounding box of the centres (one cell size
+   for both axes, so that the curve keeps the packing's aspect); ties by index. */
+static PetscErrorCode HilbertOrder(KergsScene sc, PetscInt seq[])
+{
+  const PetscInt n = sc->ndisks;
+  PetscReal      lo[KERGS_DIM], hi[KERGS_DIM], extent = 0, scale;
+  CurveEntry    *e;
+
+  PetscFunctionBeginUser;
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    lo[d] = PETSC_MAX_REAL;
+    hi[d] = -PETSC_MAX_REAL;
+  }
+  for (PetscInt i = 0; i < n; i++)
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      lo[d] = PetscMin(lo[d], sc->x[KERGS_DIM * i + d]);
+      hi[d] = PetscMax(hi[d], sc->x[KERGS_DIM * i + d]);
+    }
+  for (PetscInt d = 0; d < KERGS_DIM; d++) extent = PetscMax(extent, hi[d] - lo[d]);
+  scale = extent > 0 ? ((PetscReal)((1u << KERGS_HILBERT_ORDER) - 1)) / extent : 0.0;
+  PetscCall(PetscMalloc1(n + 1, &e));
+  for (PetscInt i = 0; i < n; i++) {
+    uint32_t cell[KERGS_DIM];
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      PetscReal s = (sc->x[KERGS_DIM * i + d] - lo[d]) * scale;
+      cell[d]     = (uint32_t)PetscMin(PetscMax(s, 0.0), (PetscReal)((1u << KERGS_HILBERT_ORDER) - 1));
+    }
+    e[i].key  = HilbertIndex(cell[0], cell[1]);
+    e[i].disk = i;
+  }
+  qsort(e, (size_t)n, sizeof(CurveEntry), CompareCurveEntries);
+  for (PetscInt k = 0; k < n; k++) seq[k] = e[k].disk;
+  PetscCall(PetscFree(e));
+  PetscFunctionReturn(0);
+}
+
+/* Geometric partition: the disks along the Hilbert curve (seq, also the order within the parts) cut into nparts
+   chunks of equal work; part[i] is the part of disk i. */
+static PetscErrorCode GeometricPartition(KergsScene sc, const PetscInt work[], PetscInt nparts, PetscInt part[], PetscInt seq[])
+{
+  const PetscInt n     = sc->ndisks;
+  PetscReal      total = 0, before = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(HilbertOrder(sc, seq));
+  for (PetscInt i = 0; i < n; i++) total += (PetscReal)work[i];
+  /* the k-th disk goes to the part containing the middle of its work interval [before, before + w) */
+  for (PetscInt k = 0; k < n; k++) {
+    const PetscInt i = seq[k];
+    PetscInt       q = (PetscInt)PetscFloorReal((PetscReal)nparts * (before + 0.5 * work[i]) / total);
+    part[i]          = PetscMin(PetscMax(q, 0), nparts - 1);
+    before += (PetscReal)work[i];
+  }
+  PetscFunctionReturn(0);
+}
+
+/* METIS k-way on the grain graph, vertex weights = work, fixed seed; returns METIS's status.
+   The graph is given to METIS in the order of the grain ids (canon: disks sorted by id), which do not change when
+   the disks are renumbered: METIS's answer depends on the vertex order, and this way a graph that changed little
+   since the last partition gets a similar partition (few grains move).
+   With curve (the disks along the Hilbert curve), consecutive disks along it are also joined, by edges of weight 1
+   against KERGS_PARTITION_CONTACT_WEIGHT for a contact: grains or clusters without contacts to the rest (rattlers,
+   grains still falling) then go with their spatial neighbours instead of wherever METIS's balancing puts them. */
+static PetscErrorCode MetisPartition(const GrainGraph *g, const PetscInt canon[], const PetscInt *curve, PetscInt nparts, PetscInt seed,
+                                     PetscInt part[], int *status)
+{
+  const PetscInt n     = g->n;
+  idx_t          nvtxs = (idx_t)n, ncon = 1, np = (idx_t)nparts, objval = 0, options[METIS_NOPTIONS];
+  idx_t         *xadj, *adj, *adjw, *vwgt, *mpart;
+  PetscInt      *prev, *next, *rank, nz = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc5(n + 1, &xadj, 2 * g->nedges + 2 * n + 1, &adj, 2 * g->nedges + 2 * n + 1, &adjw, n + 1, &vwgt, n + 1, &mpart));
+  PetscCall(PetscMalloc3(n + 1, &prev, n + 1, &next, n + 1, &rank));
+  for (PetscInt v = 0; v < n; v++) rank[canon[v]] = v; /* METIS vertex of each disk */
+  for (PetscInt i = 0; i < n; i++) prev[i] = next[i] = -1;
+  for (PetscInt k = 0; curve && k + 1 < n; k++) {
+    next[curve[k]]     = curve[k + 1];
+    prev[curve[k + 1]] = curve[k];
+  }
+  for (PetscInt v = 0; v < n; v++) {
+    const PetscInt i        = canon[v];
+    PetscInt       chain[2] = {prev[i], next[i]};
+    xadj[v]                 = (idx_t)nz;
+    vwgt[v]                 = (idx_t)g->work[i];
+    for (PetscInt k = g->xadj[i]; k < g->xadj[i + 1]; k++) {
+      adj[nz]    = (idx_t)rank[g->adj[k]];
+      adjw[nz++] = KERGS_PARTITION_CONTACT_WEIGHT;
+    }
+    for (PetscInt c = 0; c < 2; c++) { /* a curve neighbour that is also a contact keeps the contact's edge only */
+      PetscBool dup = PETSC_FALSE;
+      if (chain[c] < 0) continue;
+      for (PetscInt k = g->xadj[i]; k < g->xadj[i + 1]; k++) dup = (PetscBool)(dup || g->adj[k] == chain[c]);
+      if (dup) continue;
+      adj[nz]    = (idx_t)rank[chain[c]];
+      adjw[nz++] = 1;
+    }
+  }
+  xadj[n] = (idx_t)nz;
+  METIS_SetDefaultOptions(options);
+  options[METIS_OPTION_SEED]      = (idx_t)seed;
+  options[METIS_OPTION_NUMBERING] = 0;
+  *status = METIS_PartGraphKway(&nvtxs, &ncon, xadj, adj, vwgt, NULL, adjw, &np, NULL, NULL, options, &objval, mpart);
+  for (PetscInt v = 0; v < n; v++) part[canon[v]] = (PetscInt)mpart[v];
+  for (PetscInt i = 0; *status == METIS_OK && i < n; i++)
+    if (part[i] < 0 || part[i] >= nparts) *status = METIS_ERROR;
+  PetscCall(PetscFree3(prev, next, rank));
+  PetscCall(PetscFree5(xadj, adj, adjw, vwgt, mpart));
+  PetscFunctionReturn(0);
+}
+
+/* canon[v]: the disk of the v-th smallest grain id (ties, which valid scenes do not have, by index). */
+static PetscErrorCode IdOrder(KergsScene sc, PetscInt canon[])
+{
+  PetscInt *ids;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(sc->ndisks + 1, &ids));
+  for (PetscInt i = 0; i < sc->ndisks; i++) {
+    ids[i]   = sc->id[i];
+    canon[i] = i;
+  }
+  PetscCall(PetscSortIntWithArray(sc->ndisks, ids, canon));
+  PetscCall(PetscFree(ids));
+  PetscFunctionReturn(0);
+}
+
+typedef struct {
+  PetscInt label, rank, overlap;
+} LabelOverlap;
+
+static int CompareLabelRank(const void *x, const void *y)
+{
+  const LabelOverlap *p = (const LabelOverlap *)x, *q = (const LabelOverlap *)y;
+
+  if (p->label != q->label) return p->label < q->label ? -1 : 1;
+  return p->rank < q->rank ? -1 : (p->rank > q->rank ? 1 : 0);
+}
+
+static int CompareOverlapDesc(const void *x, const void *y)
+{
+  const LabelOverlap *p = (const LabelOverlap *)x, *q = (const LabelOverlap *)y;
+
+  if (p->overlap != q->overlap) return p->overlap > q->overlap ? -1 : 1;
+  return CompareLabelRank(x, y);
+}
+
+/* Give each part the rank that already owns most of its grains (greedy matching on the overlaps, largest first),
+   so that a new partition close to the current one moves few grains. Parts left over take the free ranks. */
+static PetscErrorCode RelabelParts(PetscInt n, PetscInt nparts, const PetscInt oldranges[], PetscInt part[])
+{
+  LabelOverlap *o;
+  PetscInt     *map, *taken, no = 0, nextfree = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc3(n + 1, &o, nparts, &map, nparts, &taken));
+  for (PetscInt i = 0; i < n; i++) {
+    o[i].label   = part[i];
+    o[i].rank    = OwnerOf(oldranges, (PetscMPIInt)nparts, i);
+    o[i].overlap = 1;
+  }
+  qsort(o, (size_t)n, sizeof(LabelOverlap), CompareLabelRank);
+  for (PetscInt i = 0; i < n; i++) { /* run lengths: one entry per (label, rank) pair */
+    if (no > 0 && o[no - 1].label == o[i].label && o[no - 1].rank == o[i].rank)
+      o[no - 1].overlap++;
+    else
+      o[no++] = o[i];
+  }
+  qsort(o, (size_t)no, sizeof(LabelOverlap), CompareOverlapDesc);
+  for (PetscInt q = 0; q < nparts; q++) map[q] = taken[q] = -1;
+  for (PetscInt k = 0; k < no; k++)
+    if (map[o[k].label] < 0 && taken[o[k].rank] < 0) {
+      map[o[k].label]  = o[k].rank;
+      taken[o[k].rank] = o[k].label;
+    }
+  for (PetscInt q = 0; q < nparts; q++) {
+    if (map[q] >= 0) continue;
+    while (taken[nextfree] >= 0) nextfree++;
+    map[q]          = nextfree;
+    taken[nextfree] = q;
+  }
+  for (PetscInt i = 0; i < n; i++) part[i] = map[part[i]];
+  PetscCall(PetscFree3(o, map, taken));
+  PetscFunctionReturn(0);
+}
+
+/* New order: disks sorted by part, stable in the sequence seq (the order within a part); counts per part. */
+static void OrderByPart(PetscInt n, PetscInt nparts, const PetscInt part[], const PetscInt seq[], PetscInt order[], PetscInt counts[])
+{
+  PetscInt *fill = counts + nparts; /* counts has 2 nparts entries of workspace */
+
+  for (PetscInt q = 0; q < nparts; q++) counts[q] = 0;
+  for (PetscInt i = 0; i < n; i++) counts[part[i]]++;
+  fill[0] = 0;
+  for (PetscInt q = 1; q < nparts; q++) fill[q] = fill[q - 1] + counts[q - 1];
+  for (PetscInt k = 0; k < n; k++) order[fill[part[seq[k]]]++] = seq[k];
+}
+
+/* max part work / mean part work of the new partition; counts[q] grains in part q, in the new order. */
+static PetscErrorCode PartImbalance(const GrainGraph *g, PetscInt nparts, const PetscInt order[], const PetscInt counts[],
+                                    PetscReal *imbalance)
+{
+  PetscReal total = 0, wmax = 0;
+  PetscInt  k = 0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt q = 0; q < nparts; q++) {
+    PetscReal w = 0;
+    for (PetscInt end = k + counts[q]; k < end; k++) w += (PetscReal)g->work[order[k]];
+    total += w;
+    wmax = PetscMax(wmax, w);
+  }
+  *imbalance = total > 0 ? wmax * nparts / total : 1.0;
+  PetscFunctionReturn(0);
+}
+
+static PetscInt EdgeCut(const GrainGraph *g, const PetscInt part[])
+{
+  PetscInt cut = 0;
+
+  for (PetscInt i = 0; i < g->n; i++)
+    for (PetscInt k = g->xadj[i]; k < g->xadj[i + 1]; k++) cut += (g->adj[k] > i && part[g->adj[k]] != part[i]);
+  return cut;
+}
+
+/* What rank 0 computes and broadcasts besides the order (an array of PetscInt, broadcast as such). */
+typedef struct {
+  PetscInt  method;      /* the method used (a KergsPartitionType) */
+  PetscInt  edgecut;     /* cut of the new partition on the graph it was computed from (-1: graph without edges) */
+  PetscInt  status;      /* METIS status (METIS_OK = 1) */
+  PetscInt  metis_tried; /* METIS ran (its result may have been replaced by the geometric one) */
+  PetscReal imbalance;   /* imbalance of the new partition with the graph's work */
+} PartitionOutcome;
+#define KERGS_OUTCOME_LEN 4
+
+/* part (and seq, the order within the parts) by one method. */
+static PetscErrorCode ComputeParts(KergsPartition p, KergsScene sc, const GrainGraph *g, KergsPartitionType method, PetscMPIInt size,
+                                   PetscInt part[], PetscInt seq[], PetscInt *status)
+{
+  const PetscInt n = sc->ndisks;
+
+  PetscFunctionBeginUser;
+  *status = METIS_OK;
+  for (PetscInt i = 0; i < n; i++) seq[i] = i;
+  if (method == KERGS_PARTITION_METIS) {
+    int       st = METIS_ERROR;
+    PetscInt *canon;
+    PetscCall(PetscMalloc1(n + 1, &canon));
+    PetscCall(IdOrder(sc, canon));
+    if (p->metis_curve) PetscCall(HilbertOrder(sc, seq)); /* the order within the parts stays the index order */
+    PetscCall(MetisPartition(g, canon, p->metis_curve ? seq : NULL, size, p->metis_seed, part, &st));
+    PetscCall(PetscFree(canon));
+    for (PetscInt i = 0; i < n; i++) seq[i] = i;
+    *status = st;
+  } else if (method == KERGS_PARTITION_GEOMETRIC) {
+    PetscCall(GeometricPartition(sc, g->work, size, part, seq));
+  } else {
+    for (PetscMPIInt q = 0; q < size; q++) /* the even split of KergsSceneSetDisks: the first n % size ranks get one more */
+      for (PetscInt i = q * (n / size) + PetscMin(q, n % size); i < (q + 1) * (n / size) + PetscMin(q + 1, n % size); i++) part[i] = q;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* From part: relabel against the current ownership (not for contiguous), new order, counts, edge cut, imbalance. */
+static PetscErrorCode FinishParts(const GrainGraph *g, KergsPartitionType method, PetscMPIInt size, const PetscInt oldranges[],
+                                  PetscInt part[], const PetscInt seq[], PetscInt order[], PetscInt counts[], PartitionOutcome *out)
+{
+  PetscFunctionBeginUser;
+  if (method != KERGS_PARTITION_CONTIGUOUS) PetscCall(RelabelParts(g->n, size, oldranges, part));
+  OrderByPart(g->n, size, part, seq, order, counts);
+  out->method  = method;
+  out->status  = METIS_OK;
+  out->edgecut = g->nedges > 0 ? EdgeCut(g, part) : -1;
+  PetscCall(PartImbalance(g, size, order, counts, &out->imbalance));
+  PetscFunctionReturn(0);
+}
+
+/* On rank 0: choose the method (METIS needs a dense enough graph and at least as many grains as ranks), compute the
+   parts and the new order. METIS can miss the balance on tiny graphs (it may leave a part empty): when its
+   imbalance exceeds the tolerance, the geometric partition is taken instead if it is within the tolerance. */
+static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, KergsScene sc, const GrainGraph *g, const PetscInt oldranges[],
+                                             PetscMPIInt size, PetscInt order[], PetscInt counts[], PartitionOutcome *out)
+{
+  const PetscInt     n      = sc->ndisks;
+  PetscBool          dense  = (PetscBool)(2.0 * g->nedges >= KERGS_PARTITION_MIN_DEGREE * n && g->nedges > 0);
+  KergsPartitionType method = p->type;
+  PetscInt          *part, *seq, status;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc2(n + 1, &part, n + 1, &seq));
+  if (method == KERGS_PARTITION_METIS && (!dense || n < size)) method = KERGS_PARTITION_GEOMETRIC;
+  PetscCall(ComputeParts(p, sc, g, method, size, part, seq, &status));
+  out->method      = method;
+  out->status      = status;
+  out->metis_tried = method == KERGS_PARTITION_METIS;
+  if (status == METIS_OK) PetscCall(FinishParts(g, method, size, oldranges, part, seq, order, counts, out));
+  if (status == METIS_OK && method == KERGS_PARTITION_METIS && out->imbalance > p->imbalance_tol) {
+    PetscInt        *order2, *counts2;
+    PartitionOutcome alt;
+
+    PetscCall(PetscMalloc2(n + 1, &order2, 2 * size, &counts2));
+    PetscCall(ComputeParts(p, sc, g, KERGS_PARTITION_GEOMETRIC, size, part, seq, &status));
+    PetscCall(FinishParts(g, KERGS_PARTITION_GEOMETRIC, size, oldranges, part, seq, order2, counts2, &alt));
+    alt.metis_tried = PETSC_TRUE;
+    if (alt.imbalance <= p->imbalance_tol) {
+      PetscCall(PetscInfo(NULL, "METIS partition of imbalance %g replaced by the geometric one of imbalance %g\n", (double)out->imbalance,
+                          (double)alt.imbalance));
+      *out = alt;
+      PetscCall(PetscArraycpy(order, order2, n));
+      PetscCall(PetscArraycpy(counts, counts2, size));
+    }
+    PetscCall(PetscFree2(order2, counts2));
+  }
+  PetscCall(PetscFree2(part, seq));
+  PetscFunctionReturn(0);
+}
+
+/* Compute a partition with the object's type from the current contacts and renumber (collective). */
+static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts ct)
+{
+  PetscMPIInt      rank, size;
+  PetscInt        *order, *counts, *oldranges, moved;
+  GrainGraph       g;
+  PartitionOutcome out = {KERGS_PARTITION_CONTIGUOUS, -1, METIS_OK, PETSC_FALSE, 1.0};
+  PetscLogDouble   t0, t1;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscTime(&t0));
+  PetscCall(PetscLogEventBegin(KERGS_Partition, 0, 0, 0, 0));
+  PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
+  PetscCallMPI(MPI_Comm_size(p->comm, &size));
+  PetscCall(GetRanges(sc, &oldranges));
+  PetscCall(PetscMalloc2(sc->ndisks + 1, &order, 2 * size, &counts));
+  PetscCall(GatherGrainGraph(sc, ct, &g));
+  if (rank == 0) PetscCall(ComputePartitionOnRoot(p, sc, &g, oldranges, size, order, counts, &out));
+  PetscCall(GrainGraphDestroy(&g));
+  {
+    PetscInt v[KERGS_OUTCOME_LEN] = {out.method, out.edgecut, out.status, out.metis_tried};
+    PetscCallMPI(MPI_Bcast(v, KERGS_OUTCOME_LEN, MPIU_INT, 0, p->comm));
+    out.method      = v[0];
+    out.edgecut     = v[1];
+    out.status      = v[2];
+    out.metis_tried = v[3];
+  }
+  PetscCallMPI(MPI_Bcast(&out.imbalance, 1, MPIU_REAL, 0, p->comm));
+  PetscCheck(out.status == METIS_OK, p->comm, PETSC_ERR_LIB,
+             "METIS_PartGraphKway failed (status %" PetscInt_FMT ") partitioning the %" PetscInt_FMT " grains of scene %s into %d parts",
+             out.status, sc->ndisks, sc->name, size);
+  PetscCallMPI(MPI_Bcast(order, (PetscMPIInt)sc->ndisks, MPIU_INT, 0, p->comm));
+  PetscCallMPI(MPI_Bcast(counts, size, MPIU_INT, 0, p->comm));
+  PetscCall(KergsPartitionRenumber(sc, ct, order, counts, &moved));
+  p->last_method    = out.method;
+  p->provisional    = (PetscBool)(p->type == KERGS_PARTITION_METIS && !out.metis_tried);
+  p->edgecut_base   = out.edgecut;
+  p->imbalance_base = out.imbalance;
+  p->nmoved += moved;
+  PetscCall(PetscFree2(order, counts));
+  PetscCall(PetscFree(oldranges));
+  PetscCall(PetscLogEventEnd(KERGS_Partition, 0, 0, 0, 0));
+  PetscCall(PetscTime(&t1));
+  p->seconds += t1 - t0;
+  PetscCall(PetscInfo(NULL,
+                      "Scene %s step %" PetscInt_FMT ": %s partition, edge cut %" PetscInt_FMT ", imbalance %g, %" PetscInt_FMT
+                      " grains moved, %.3g s\n",
+                      sc->name, sc->step, KergsPartitionTypes[out.method], out.edgecut, (double)out.imbalance, moved, (double)(t1 - t0)));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionApply(KergsPartition p, KergsScene sc, KergsContacts ct)
+{
+  PetscMPIInt size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(p->comm, &size));
+  if (size == 1) PetscFunctionReturn(0);
+  PetscCall(Repartition(p, sc, ct));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionUpdate(KergsPartition p, KergsScene sc, KergsContacts ct, PetscBool *repartitioned)
+{
+  KergsPartitionMeasures m;
+  PetscMPIInt            size;
+  PetscBool              dense, due, unbalanced;
+
+  PetscFunctionBeginUser;
+  if (repartitioned) *repartitioned = PETSC_FALSE;
+  PetscCallMPI(MPI_Comm_size(p->comm, &size));
+  if (size == 1 || p->type == KERGS_PARTITION_CONTIGUOUS) {
+    p->initialized = PETSC_TRUE;
+    PetscFunctionReturn(0);
+  }
+  if (!p->initialized) { /* before the first detection: geometric (metis falls back to it without contacts) */
+    PetscCall(Repartition(p, sc, ct));
+    p->initialized = PETSC_TRUE;
+    if (repartitioned) *repartitioned = PETSC_TRUE;
+    PetscFunctionReturn(0);
+  }
+  if (p->check_every == 0 || sc->step % p->check_every != 0) PetscFunctionReturn(0);
+  PetscCall(KergsPartitionMeasure(p, sc, ct, &m));
+  if (p->edgecut_base < 0) p->edgecut_base = m.edgecut; /* the last partition saw no edges: its first measured cut */
+  dense = (PetscBool)(2.0 * m.edges >= KERGS_PARTITION_MIN_DEGREE * sc->ndisks && m.edges > 0 && sc->ndisks >= size);
+  /* an imbalance past the tolerance that is no worse than right after the last partition is what the partitioner
+     could do (a few grains of uneven work): repartitioning again would change nothing, unless forced by tol = 1 */
+  unbalanced =
+      (PetscBool)(m.imbalance >= p->imbalance_tol * m.imbalance_bound && (p->imbalance_tol <= 1.0 || m.imbalance > p->imbalance_base));
+  due = (PetscBool)((p->provisional && dense) || unbalanced ||
+                    (PetscReal)m.edgecut > p->edgecut_growth * (PetscReal)PetscMax(p->edgecut_base, 1));
+  if (!due) PetscFunctionReturn(0);
+  PetscCall(PetscInfo(NULL,
+                      "Scene %s step %" PetscInt_FMT ": repartition (imbalance %g, bound %g; edge cut %" PetscInt_FMT
+                      ", after the last partition %" PetscInt_FMT "%s)\n",
+                      sc->name, sc->step, (double)m.imbalance, (double)m.imbalance_bound, m.edgecut, p->edgecut_base,
+                      p->provisional ? "; provisional" : ""));
+  PetscCall(Repartition(p, sc, ct));
+  p->nrepartitions++;
+  if (repartitioned) *repartitioned = PETSC_TRUE;
+  PetscFunctionReturn(0);
+}

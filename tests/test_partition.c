@@ -1,0 +1,613 @@
+/* Partition and migration (issue 4, DESIGN.md section 6): the physics does not depend on the number of ranks nor on
+   how the grains are numbered and owned. Each check compares a run on PETSC_COMM_WORLD against a reference run of
+   the same scene in the same process (on PETSC_COMM_SELF, or on PETSC_COMM_WORLD with the contiguous layout), grain
+   by grain through the persistent ids, after every step. Runs on 1, 2 and 3 ranks. */
+static const char help[] = "kergs partition tests: same physics on 1 and n ranks, renumbering, warm start across swaps, robustness.\n";
+
+#include <kergs/kergs.h>
+#include <kergs/partition.h>
+
+static PetscInt nfail = 0;
+
+static PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, PetscReal want)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s %-78s got %.6g want %.6g\n", ok ? "ok  " : "FAIL", what, (double)got, (double)want));
+  if (!ok) nfail++;
+  PetscFunctionReturn(0);
+}
+
+/* Frictionless, with a tight natural-map criterion: the velocities are unique, so runs must agree closely. */
+#define TIGHT "-friction 0 -solver_criterion natural -solver_tol 1e-10 -solver_max_it 10000 "
+#define CONFINE5 "-options_file cases/confine5.opts " TIGHT
+/* ~200 disks dropped from a grid into a box: the contact graph grows from nothing to a packing. */
+#define DEPOSIT                                                                                                                            \
+  "-gravity 0,-9.81 -dt 4e-3 -disks_source random -random_n 200 -random_box 0,0,0.4,1.0 -random_radius 0.01,0.02 -random_seed 7 "          \
+  "-box 0,0,0.4,1.2 -box_open_top " TIGHT
+#define FORCE_REPARTITION "-partition_check_every 1 -partition_imbalance_tol 1.0 "
+
+/* A fresh stepper on comm configured only by the given options (the options database is reset). */
+static PetscErrorCode MakeStepper(MPI_Comm comm, const char *opts, const char *extra, KergsStepper *st)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsClear(NULL));
+  PetscCall(PetscOptionsInsertString(NULL, opts));
+  if (extra) PetscCall(PetscOptionsInsertString(NULL, extra));
+  PetscCall(PetscOptionsInsertString(NULL, "-output_none -quiet"));
+  PetscCall(KergsStepperCreate(comm, st));
+  PetscCall(KergsStepperSetFromOptions(*st));
+  PetscFunctionReturn(0);
+}
+
+/* index of each grain id (ids must be a permutation of 0 .. n-1) */
+static PetscErrorCode IndexOfIds(KergsScene sc, PetscInt *where, PetscBool *ok)
+{
+  PetscFunctionBeginUser;
+  *ok = PETSC_TRUE;
+  for (PetscInt i = 0; i < sc->ndisks; i++) where[i] = -1;
+  for (PetscInt i = 0; i < sc->ndisks; i++) {
+    PetscInt id = sc->id[i];
+    if (id < 0 || id >= sc->ndisks || where[id] >= 0)
+      *ok = PETSC_FALSE;
+    else
+      where[id] = i;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Largest difference of velocities (relative to the largest speed) and positions (relative to the smallest
+   radius) between two replicated scenes of the same grains, matched by id. */
+static PetscErrorCode CompareById(KergsScene s, KergsScene t, PetscReal *dv, PetscReal *dx)
+{
+  PetscInt *where;
+  PetscReal vmax = 0, rmin = PETSC_MAX_REAL;
+  PetscBool ok;
+
+  PetscFunctionBeginUser;
+  *dv = *dx = PETSC_MAX_REAL;
+  if (s->ndisks != t->ndisks) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc1(t->ndisks + 1, &where));
+  PetscCall(IndexOfIds(t, where, &ok));
+  if (ok) {
+    *dv = *dx = 0;
+    for (PetscInt i = 0; i < s->ndisks; i++) {
+      rmin = PetscMin(rmin, s->radius[i]);
+      for (PetscInt d = 0; d < KERGS_DIM; d++) vmax = PetscMax(vmax, PetscAbsReal(s->v[KERGS_DIM * i + d]));
+    }
+    for (PetscInt i = 0; i < s->ndisks; i++) {
+      PetscInt j = where[s->id[i]];
+      for (PetscInt d = 0; d < KERGS_DIM; d++) {
+        *dv = PetscMax(*dv, PetscAbsReal(s->v[KERGS_DIM * i + d] - t->v[KERGS_DIM * j + d]));
+        *dx = PetscMax(*dx, PetscAbsReal(s->x[KERGS_DIM * i + d] - t->x[KERGS_DIM * j + d]));
+      }
+      *dv = PetscMax(*dv, PetscAbsReal(s->omega[i] - t->omega[j]) * s->radius[i]);
+    }
+    *dv /= PetscMax(vmax, PETSC_SMALL);
+    *dx /= rmin;
+  }
+  PetscCall(PetscFree(where));
+  PetscFunctionReturn(0);
+}
+
+/* A contact keyed by grain ids: (lower id, higher id, 0) for a disk-disk pair, (id, wall, 1) for a wall. */
+typedef struct {
+  PetscInt  k[3];
+  PetscReal r[KERGS_MAXCOMP];
+} IdContact;
+
+static int CompareIdContacts(const void *x, const void *y)
+{
+  const IdContact *p = (const IdContact *)x, *q = (const IdContact *)y;
+  for (int i = 0; i < 3; i++)
+    if (p->k[i] != q->k[i]) return p->k[i] < q->k[i] ? -1 : 1;
+  return 0;
+}
+
+/* Every rank's contacts keyed by ids, gathered on every rank and sorted. */
+static PetscErrorCode GatherIdContacts(KergsStepper st, PetscInt *n, IdContact **all)
+{
+  KergsScene    sc = st->scene;
+  KergsContacts ct = st->contacts;
+  IdContact    *mine;
+  PetscMPIInt   size, nmine, *counts, *displs;
+  MPI_Datatype  type;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(st->comm, &size));
+  PetscCall(PetscMalloc1(ct->n + 1, &mine));
+  for (PetscInt k = 0; k < ct->n; k++) {
+    const KergsContact *c  = &ct->c[k];
+    PetscInt            ia = sc->id[c->a];
+    if (c->kind == KERGS_CONTACT_DISK_DISK) {
+      PetscInt ib  = sc->id[c->b];
+      mine[k].k[0] = PetscMin(ia, ib);
+      mine[k].k[1] = PetscMax(ia, ib);
+      mine[k].k[2] = 0;
+    } else {
+      mine[k].k[0] = ia;
+      mine[k].k[1] = c->b;
+      mine[k].k[2] = 1;
+    }
+    for (PetscInt d = 0; d < KERGS_MAXCOMP; d++) mine[k].r[d] = c->r[d];
+  }
+  nmine = (PetscMPIInt)ct->n;
+  PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
+  PetscCallMPI(MPI_Allgather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, st->comm));
+  displs[0] = 0;
+  for (PetscMPIInt q = 0; q < size; q++) displs[q + 1] = displs[q] + counts[q];
+  *n = displs[size];
+  PetscCall(PetscMalloc1(*n + 1, all));
+  PetscCallMPI(MPI_Type_contiguous((PetscMPIInt)sizeof(IdContact), MPI_BYTE, &type));
+  PetscCallMPI(MPI_Type_commit(&type));
+  PetscCallMPI(MPI_Allgatherv(mine, nmine, type, *all, counts, displs, type, st->comm));
+  PetscCallMPI(MPI_Type_free(&type));
+  qsort(*all, (size_t)*n, sizeof(IdContact), CompareIdContacts);
+  PetscCall(PetscFree2(counts, displs));
+  PetscCall(PetscFree(mine));
+  PetscFunctionReturn(0);
+}
+
+/* Invariants of a run's layout, global (the same answer on every rank): the owned ranges tile [0, ndisks) in rank
+   order, the ids are a permutation, the replicated state is the same on every rank, every contact is owned by the
+   rank of its body a, disk-disk pairs have a < b, and the lists are sorted by (a, kind, b). */
+static PetscErrorCode LayoutIsValid(KergsStepper st, PetscBool *valid)
+{
+  KergsScene    sc = st->scene;
+  KergsContacts ct = st->contacts;
+  PetscMPIInt   size;
+  PetscInt     *ranges, *where, bad = 0, mine[2] = {sc->dstart, sc->dend};
+  PetscReal     sum[2] = {0, 0}, lo[2], hi[2];
+  PetscBool     ok;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(st->comm, &size));
+  PetscCall(PetscMalloc2(2 * size, &ranges, sc->ndisks + 1, &where));
+  PetscCallMPI(MPI_Allgather(mine, 2, MPIU_INT, ranges, 2, MPIU_INT, st->comm));
+  for (PetscMPIInt q = 0; q < size; q++) bad += ranges[2 * q] != (q ? ranges[2 * q - 1] : 0) || ranges[2 * q + 1] < ranges[2 * q];
+  bad += ranges[2 * size - 1] != sc->ndisks;
+  PetscCall(IndexOfIds(sc, where, &ok));
+  bad += !ok;
+  for (PetscInt i = 0; i < sc->ndisks; i++) {
+    sum[0] += (PetscReal)(sc->id[i] * (i + 1)) + sc->x[KERGS_DIM * i] * (PetscReal)(i + 1);
+    sum[1] += sc->v[KERGS_DIM * i + 1] * (PetscReal)(i + 1);
+  }
+  for (PetscInt k = 0; k < ct->n; k++) {
+    const KergsContact *c = &ct->c[k];
+    bad += c->a < sc->dstart || c->a >= sc->dend || (c->kind == KERGS_CONTACT_DISK_DISK && c->b <= c->a);
+    if (k > 0) {
+      const KergsContact *p = &ct->c[k - 1];
+      bad += p->a > c->a || (p->a == c->a && (p->kind > c->kind || (p->kind == c->kind && p->b >= c->b)));
+    }
+  }
+  PetscCall(MPIU_Allreduce(sum, lo, 2, MPIU_REAL, MPI_MIN, st->comm));
+  PetscCall(MPIU_Allreduce(sum, hi, 2, MPIU_REAL, MPI_MAX, st->comm));
+  bad += lo[0] != hi[0] || lo[1] != hi[1];
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT, MPI_SUM, st->comm));
+  *valid = (PetscBool)(bad == 0);
+  PetscCall(PetscFree2(ranges, where));
+  PetscFunctionReturn(0);
+}
+
+/* The same contact pairs (by ids) in both runs, each exactly once. */
+static PetscErrorCode SameContactSet(KergsStepper s, KergsStepper t, PetscBool *same)
+{
+  IdContact *a, *b;
+  PetscInt   na, nb;
+
+  PetscFunctionBeginUser;
+  PetscCall(GatherIdContacts(s, &na, &a));
+  PetscCall(GatherIdContacts(t, &nb, &b));
+  *same = (PetscBool)(na == nb && s->contacts->nglobal == na && t->contacts->nglobal == nb);
+  for (PetscInt k = 0; *same && k < na; k++)
+    *same = (PetscBool)(CompareIdContacts(&a[k], &b[k]) == 0 && (k == 0 || CompareIdContacts(&a[k - 1], &a[k]) < 0));
+  PetscCall(PetscFree(a));
+  PetscCall(PetscFree(b));
+  PetscFunctionReturn(0);
+}
+
+typedef struct {
+  PetscInt  compared, contact_mismatch, layout_bad, convergence_mismatch, first_unconverged;
+  PetscReal dv, dx;
+} Lockstep;
+
+/* Step a reference and a test run side by side and compare them after every step, as long as the reference's
+   solves converge (a solve stopped by the sweep cap depends on the sweep order, so the runs may part there). */
+static PetscErrorCode RunLockstep(KergsStepper ref, KergsStepper tst, PetscInt nsteps, Lockstep *L)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscMemzero(L, sizeof(*L)));
+  L->first_unconverged = -1;
+  for (PetscInt s = 0; s < nsteps; s++) {
+    PetscInt  nr = ref->nonconverged, nt = tst->nonconverged;
+    PetscBool valid, same                = PETSC_FALSE;
+    PetscReal dv, dx;
+
+    PetscCall(KergsStepperStep(ref));
+    PetscCall(KergsStepperStep(tst));
+    PetscCall(LayoutIsValid(tst, &valid));
+    L->layout_bad += !valid;
+    PetscCall(SameContactSet(ref, tst, &same));
+    if (L->first_unconverged >= 0) continue;
+    if (ref->nonconverged > nr) {
+      L->first_unconverged = s + 1;
+      continue;
+    }
+    L->convergence_mismatch += tst->nonconverged > nt;
+    L->contact_mismatch += !same;
+    PetscCall(CompareById(ref->scene, tst->scene, &dv, &dx));
+    L->dv = PetscMax(L->dv, dv);
+    L->dx = PetscMax(L->dx, dx);
+    L->compared++;
+  }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReportLockstep(const char *label, const Lockstep *L, PetscInt min_compared)
+{
+  char what[256];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: steps compared (reference converged)", label));
+  PetscCall(Check((PetscBool)(L->compared >= min_compared), what, (PetscReal)L->compared, (PetscReal)min_compared));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: velocities by id, relative to the largest speed", label));
+  PetscCall(Check((PetscBool)(L->dv < 1e-6), what, L->dv, 0));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: positions by id, relative to the smallest radius", label));
+  PetscCall(Check((PetscBool)(L->dx < 1e-6), what, L->dx, 0));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: steps whose contact set (by ids) differs", label));
+  PetscCall(Check((PetscBool)(L->contact_mismatch == 0), what, (PetscReal)L->contact_mismatch, 0));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: steps converged in the reference but not in the test", label));
+  PetscCall(Check((PetscBool)(L->convergence_mismatch == 0), what, (PetscReal)L->convergence_mismatch, 0));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: steps with a broken layout (ranges, ids, replicas, ownership)", label));
+  PetscCall(Check((PetscBool)(L->layout_bad == 0), what, (PetscReal)L->layout_bad, 0));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReportPartition(const char *label, KergsStepper st)
+{
+  KergsPartition p = st->partition;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                        "     %s: partition %s (latest %s), %" PetscInt_FMT " repartitions, %" PetscInt_FMT
+                        " grains moved; edge cut %" PetscInt_FMT " of %" PetscInt_FMT " edges, imbalance %.4f, ghosts %" PetscInt_FMT "\n",
+                        label, KergsPartitionTypes[p->type], KergsPartitionTypes[p->last_method], p->nrepartitions, p->nmoved,
+                        p->last.edgecut, p->last.edges, (double)p->last.imbalance, p->last.ghosts));
+  PetscFunctionReturn(0);
+}
+
+/* Same physics on 1 rank (PETSC_COMM_SELF, in this process) and on every rank (default partition: metis). */
+static PetscErrorCode TestSamePhysics(const char *label, const char *opts, PetscInt nsteps, PetscInt min_compared)
+{
+  KergsStepper ref, tst;
+  Lockstep     L;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper(PETSC_COMM_SELF, opts, NULL, &ref));
+  PetscCall(MakeStepper(PETSC_COMM_WORLD, opts, NULL, &tst));
+  PetscCall(RunLockstep(ref, tst, nsteps, &L));
+  PetscCall(ReportLockstep(label, &L, min_compared));
+  PetscCall(ReportPartition(label, tst));
+  PetscCall(KergsStepperDestroy(&ref));
+  PetscCall(KergsStepperDestroy(&tst));
+  PetscFunctionReturn(0);
+}
+
+/* Renumbering keeps physics: METIS repartitioning at every step against the contiguous layout, both on
+   PETSC_COMM_WORLD, and against the 1-rank run for the contact set. */
+static PetscErrorCode TestRenumberingKeepsPhysics(void)
+{
+  KergsStepper ref, tst;
+  Lockstep     L;
+  PetscMPIInt  size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  PetscCall(MakeStepper(PETSC_COMM_WORLD, DEPOSIT, "-partition_type contiguous", &ref));
+  PetscCall(MakeStepper(PETSC_COMM_WORLD, DEPOSIT, "-partition_type metis " FORCE_REPARTITION, &tst));
+  PetscCall(RunLockstep(ref, tst, 50, &L));
+  PetscCall(ReportLockstep("deposit, metis every step vs contiguous", &L, 50));
+  PetscCall(ReportPartition("deposit, metis every step", tst));
+  if (size > 1) {
+    PetscCall(Check((PetscBool)(tst->partition->nrepartitions == 49), "deposit: one repartition per step after the first",
+                    (PetscReal)tst->partition->nrepartitions, 49));
+    PetscCall(Check((PetscBool)(tst->partition->last_method == KERGS_PARTITION_METIS),
+                    "deposit: METIS once the packing has formed (1 = metis)", tst->partition->last_method == KERGS_PARTITION_METIS, 1));
+    /* the generator fills the box row by row: the contiguous split is a stack of layers, of small cut but
+       unbalanced work once the lower layers are packed */
+    PetscCall(Check((PetscBool)(tst->partition->last.imbalance <= 1.10), "deposit: METIS work imbalance within the default tolerance",
+                    tst->partition->last.imbalance, 1.10));
+    PetscCall(Check((PetscBool)(tst->partition->last.imbalance <= ref->partition->last.imbalance),
+                    "deposit: METIS work imbalance <= contiguous", tst->partition->last.imbalance, ref->partition->last.imbalance));
+    PetscCall(ReportPartition("deposit, contiguous", ref));
+  }
+  PetscCall(KergsStepperDestroy(&ref));
+  PetscCall(KergsStepperDestroy(&tst));
+  PetscFunctionReturn(0);
+}
+
+/* Per grain id, the force and torque the contacts put on it (DESIGN.md section 2): r_n n + r_t t and -R_a r_t on
+   body a, the opposite force and -R_b r_t on body b. flip_t: use -r_t for swapped pairs (the wrong claim). */
+static PetscErrorCode ImpulsesById(KergsStepper st, const PetscBool *swapped, PetscBool flip_t, PetscReal *P)
+{
+  KergsScene sc = st->scene;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscArrayzero(P, 3 * sc->ndisks));
+  for (PetscInt k = 0; k < st->contacts->n; k++) {
+    const KergsContact *c  = &st->contacts->c[k];
+    PetscReal           rt = (flip_t && swapped && swapped[k]) ? -c->r[1] : c->r[1];
+    PetscInt            ia = sc->id[c->a];
+    for (PetscInt d = 0; d < 2; d++) P[3 * ia + d] += c->r[0] * c->n[d] + rt * c->t[d];
+    P[3 * ia + 2] += -c->ra * rt;
+    if (c->kind == KERGS_CONTACT_DISK_DISK) {
+      PetscInt ib = sc->id[c->b];
+      for (PetscInt d = 0; d < 2; d++) P[3 * ib + d] -= c->r[0] * c->n[d] + rt * c->t[d];
+      P[3 * ib + 2] += -c->rb * rt;
+    }
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, P, 3 * sc->ndisks, MPIU_REAL, MPI_SUM, st->comm));
+  PetscFunctionReturn(0);
+}
+
+static PetscReal MaxDiff(PetscInt n, const PetscReal *a, const PetscReal *b, PetscReal *scale)
+{
+  PetscReal d = 0;
+
+  *scale = 0;
+  for (PetscInt i = 0; i < n; i++) {
+    d      = PetscMax(d, PetscAbsReal(a[i] - b[i]));
+    *scale = PetscMax(*scale, PetscAbsReal(a[i]));
+  }
+  return d;
+}
+
+/* The swap claim: reversing the numbering makes every disk-disk pair (a, b) become (b, a) with n, t -> -n, -t;
+   the impulse components (r_n, r_t) are unchanged and put the same force and torque on every grain, and the next
+   detection carries them over (warm start). With friction, so that r_t != 0; then without, where the velocities
+   are unique and the run must go on like an untouched one. (With friction the velocities need not be unique: a
+   different sweep order across ranks may converge to another solution.) */
+static PetscErrorCode TestSwapKeepsImpulses(PetscBool frictional)
+{
+  const char *opts =
+      frictional
+          ? "-options_file cases/confine5.opts -solver_criterion natural -solver_tol 1e-12 -solver_max_it 20000 -partition_type contiguous"
+          : "-options_file cases/confine5.opts -partition_type contiguous " TIGHT;
+  const char  *label = frictional ? "swap, frictional" : "swap, frictionless";
+  char         what[256];
+  KergsStepper ref, tst;
+  PetscInt     n, *order, *counts, nbefore, nafter, nswapped = 0, ncarried = 0, npersist = 0, mismatched = 0;
+  PetscMPIInt  size;
+  IdContact   *before, *after;
+  PetscReal   *P0, *P1, *Pw, scale, rtmax = 0;
+  PetscBool   *swapped;
+  Lockstep     L;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  PetscCall(MakeStepper(PETSC_COMM_SELF, opts, NULL, &ref));
+  PetscCall(MakeStepper(PETSC_COMM_WORLD, opts, NULL, &tst));
+  for (PetscInt s = 0; s < 2; s++) {
+    PetscCall(KergsStepperStep(ref));
+    PetscCall(KergsStepperStep(tst));
+  }
+  n = tst->scene->ndisks;
+  PetscCall(PetscMalloc5(n, &order, size, &counts, 3 * n, &P0, 3 * n, &P1, 3 * n, &Pw));
+  PetscCall(GatherIdContacts(tst, &nbefore, &before));
+  PetscCall(ImpulsesById(tst, NULL, PETSC_FALSE, P0));
+  for (PetscInt k = 0; k < nbefore; k++) rtmax = PetscMax(rtmax, PetscAbsReal(before[k].r[1]));
+  /* reverse the numbering; rank q takes as many grains as rank size-1-q had */
+  for (PetscInt k = 0; k < n; k++) order[k] = n - 1 - k;
+  {
+    PetscInt mine = tst->scene->dend - tst->scene->dstart;
+    PetscCallMPI(MPI_Allgather(&mine, 1, MPIU_INT, counts, 1, MPIU_INT, PETSC_COMM_WORLD));
+    for (PetscMPIInt q = 0; q < size / 2; q++) {
+      PetscInt t           = counts[q];
+      counts[q]            = counts[size - 1 - q];
+      counts[size - 1 - q] = t;
+    }
+  }
+  PetscCall(KergsPartitionRenumber(tst->scene, tst->contacts, order, counts, NULL));
+  /* every disk-disk pair was swapped: its frame is flipped relative to the one before (n(id_a -> id_b) = -n) */
+  PetscCall(PetscMalloc1(tst->contacts->n + 1, &swapped));
+  for (PetscInt k = 0; k < tst->contacts->n; k++) {
+    const KergsContact *c = &tst->contacts->c[k];
+    swapped[k]            = (PetscBool)(c->kind == KERGS_CONTACT_DISK_DISK && tst->scene->id[c->a] > tst->scene->id[c->b]);
+    nswapped += swapped[k];
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &nswapped, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
+  PetscCall(GatherIdContacts(tst, &nafter, &after));
+  for (PetscInt k = 0; k < PetscMin(nbefore, nafter); k++)
+    mismatched += CompareIdContacts(&before[k], &after[k]) != 0 || before[k].r[0] != after[k].r[0] || before[k].r[1] != after[k].r[1];
+  mismatched += nbefore != nafter;
+  PetscCall(ImpulsesById(tst, swapped, PETSC_FALSE, P1));
+  PetscCall(ImpulsesById(tst, swapped, PETSC_TRUE, Pw));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: the 4 disk-disk pairs of confine5 are swapped", label));
+  PetscCall(Check((PetscBool)(nswapped == 4), what, (PetscReal)nswapped, 4));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: same pairs (by ids) with the same (r_n, r_t)", label));
+  PetscCall(Check((PetscBool)(mismatched == 0), what, (PetscReal)mismatched, 0));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: same force and torque on every grain, relative", label));
+  PetscCall(Check((PetscBool)(MaxDiff(3 * n, P0, P1, &scale) <= 1e-14 * scale), what, MaxDiff(3 * n, P0, P1, &scale) / scale, 0));
+  if (frictional) {
+    PetscCall(Check((PetscBool)(rtmax > 1e-8), "swap, frictional: some tangential impulse to carry (largest |r_t|)", rtmax, 1e-8));
+    PetscCall(Check((PetscBool)(MaxDiff(3 * n, P0, Pw, &scale) > 1e-6 * scale),
+                    "swap, frictional: flipping r_t instead would change them (control)", MaxDiff(3 * n, P0, Pw, &scale) / scale, 1e-6));
+  }
+  /* the next detection carries every impulse over, by pair */
+  PetscCall(KergsContactsDetect(tst->contacts, tst->scene));
+  PetscCall(PetscFree(after));
+  PetscCall(GatherIdContacts(tst, &nafter, &after));
+  for (PetscInt k = 0; k < tst->contacts->n; k++) npersist += tst->contacts->c[k].persistent;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &npersist, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
+  for (PetscInt k = 0; k < PetscMin(nbefore, nafter); k++)
+    ncarried += CompareIdContacts(&before[k], &after[k]) == 0 && before[k].r[0] == after[k].r[0] && before[k].r[1] == after[k].r[1];
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: detection finds every pair persistent", label));
+  PetscCall(Check((PetscBool)(npersist == nbefore && nafter == nbefore), what, (PetscReal)npersist, (PetscReal)nbefore));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s: detection carries every (r_n, r_t) over", label));
+  PetscCall(Check((PetscBool)(ncarried == nbefore), what, (PetscReal)ncarried, (PetscReal)nbefore));
+  /* the next 2 steps (step 5 does not converge: the row starts to jam) */
+  PetscCall(RunLockstep(ref, tst, 2, &L));
+  if (frictional) {
+    PetscCall(Check((PetscBool)(L.compared == 2 && L.convergence_mismatch == 0), "swap, frictional: the next 2 steps converge",
+                    (PetscReal)(L.compared - L.convergence_mismatch), 2));
+    PetscCall(Check((PetscBool)(L.contact_mismatch == 0 && L.layout_bad == 0),
+                    "swap, frictional: same contacts as the 1-rank run, valid layout", (PetscReal)(L.contact_mismatch + L.layout_bad), 0));
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                          "     swap, frictional: velocities by id differ from the 1-rank run by %.3g of the largest speed (not unique)\n",
+                          (double)L.dv));
+  } else
+    PetscCall(ReportLockstep("swap, frictionless, after reversal", &L, 2));
+  PetscCall(PetscFree(swapped));
+  PetscCall(PetscFree(before));
+  PetscCall(PetscFree(after));
+  PetscCall(PetscFree5(order, counts, P0, P1, Pw));
+  PetscCall(KergsStepperDestroy(&ref));
+  PetscCall(KergsStepperDestroy(&tst));
+  PetscFunctionReturn(0);
+}
+
+/* Robustness: more ranks than grains (a rank owns nothing), all grains on one rank, repartitioning every step. */
+static PetscErrorCode TestRobustness(void)
+{
+  const char *two =
+      "-gravity 0,-9.81 -dt 1e-3 -disks_source list -disks_x 0.5,0.5,1.5,0.52 -disks_radius 0.5 -box 0,0,2,2 -box_open_top " TIGHT;
+  KergsStepper ref, tst;
+  Lockstep     L;
+  PetscMPIInt  size, rank;
+  PetscInt     nowned, nempty;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &rank));
+  /* two grains on every rank, repartitioned (geometric: fewer grains than ranks or no edges) at every step */
+  PetscCall(MakeStepper(PETSC_COMM_SELF, two, NULL, &ref));
+  PetscCall(MakeStepper(PETSC_COMM_WORLD, two, "-partition_type metis -partition_view " FORCE_REPARTITION, &tst));
+  PetscCall(RunLockstep(ref, tst, 5, &L));
+  PetscCall(ReportLockstep("two grains, repartitioned every step", &L, 5));
+  nowned = tst->scene->dend - tst->scene->dstart;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &nowned, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
+  nempty = tst->scene->dend == tst->scene->dstart;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &nempty, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
+  PetscCall(Check((PetscBool)(nowned == 2), "two grains: owned grains summed over ranks", (PetscReal)nowned, 2));
+  PetscCall(
+      Check((PetscBool)(nempty == PetscMax(size - 2, 0)), "two grains: ranks owning nothing", (PetscReal)nempty, PetscMax(size - 2, 0)));
+  PetscCall(KergsStepperDestroy(&ref));
+  PetscCall(KergsStepperDestroy(&tst));
+
+  /* all grains on the first, then on the last rank (the one holding the free walls' DOFs, if any), mid-run */
+  for (PetscInt where = 0; where < 2; where++) {
+    PetscInt *order, *counts, n;
+    char      label[64];
+
+    PetscCall(MakeStepper(PETSC_COMM_SELF, DEPOSIT, NULL, &ref));
+    PetscCall(MakeStepper(PETSC_COMM_WORLD, DEPOSIT, "-partition_type contiguous", &tst));
+    PetscCall(RunLockstep(ref, tst, 5, &L));
+    n = tst->scene->ndisks;
+    PetscCall(PetscMalloc2(n, &order, size, &counts));
+    for (PetscInt k = 0; k < n; k++) order[k] = k;
+    for (PetscMPIInt q = 0; q < size; q++) counts[q] = 0;
+    counts[where ? size - 1 : 0] = n;
+    PetscCall(KergsPartitionRenumber(tst->scene, tst->contacts, order, counts, NULL));
+    PetscCall(RunLockstep(ref, tst, 10, &L));
+    PetscCall(PetscSNPrintf(label, sizeof(label), "deposit, all grains on rank %d", where ? size - 1 : 0));
+    PetscCall(ReportLockstep(label, &L, 10));
+    PetscCall(Check((PetscBool)(tst->scene->dend - tst->scene->dstart == (rank == (where ? size - 1 : 0) ? n : 0)),
+                    "all on one rank: this rank's share", (PetscReal)(tst->scene->dend - tst->scene->dstart),
+                    rank == (where ? size - 1 : 0) ? n : 0));
+    PetscCall(PetscFree2(order, counts));
+    PetscCall(KergsStepperDestroy(&ref));
+    PetscCall(KergsStepperDestroy(&tst));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The repartitioning rule with the default options on a dense packing (confine500): the provisional geometric
+   partition is replaced by METIS at the first check (step 10), nothing happens at the next check while the packing
+   barely moves, and a repartition follows an imbalance (all grains moved onto rank 0) or a grown edge cut (the cut
+   after the last partition halved by hand). On one rank nothing is ever repartitioned. */
+static PetscErrorCode StepTo(KergsStepper st, PetscInt step)
+{
+  PetscFunctionBeginUser;
+  while (st->scene->step < step) PetscCall(KergsStepperStep(st));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode TestThresholds(void)
+{
+  KergsStepper   st;
+  KergsPartition p;
+  PetscMPIInt    size;
+  PetscInt       cut_geometric, cut_metis, *order, *counts, n;
+  PetscReal      imb_forced;
+  PetscBool      valid;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  PetscCall(MakeStepper(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20", NULL, &st));
+  p = st->partition;
+  n = st->scene->ndisks;
+  PetscCall(StepTo(st, 10));
+  cut_geometric = p->last.edgecut;
+  PetscCall(StepTo(st, 11));
+  cut_metis = p->last.edgecut;
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                        "     thresholds: edge cut at step 10 (geometric) %" PetscInt_FMT ", at step 11 (after the check) %" PetscInt_FMT
+                        " of %" PetscInt_FMT " edges; imbalance %.4f\n",
+                        cut_geometric, cut_metis, p->last.edges, (double)p->last.imbalance));
+  if (size == 1) {
+    PetscCall(StepTo(st, 21));
+    PetscCall(Check((PetscBool)(p->nrepartitions == 0 && p->nmoved == 0), "thresholds, 1 rank: never repartitioned",
+                    (PetscReal)p->nrepartitions, 0));
+    PetscCall(KergsStepperDestroy(&st));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(Check((PetscBool)(p->nrepartitions == 1 && p->last_method == KERGS_PARTITION_METIS),
+                  "thresholds: METIS replaces the geometric partition at step 10", (PetscReal)p->nrepartitions, 1));
+  PetscCall(Check((PetscBool)(cut_metis < cut_geometric), "thresholds: METIS edge cut below the geometric one", (PetscReal)cut_metis,
+                  (PetscReal)cut_geometric));
+  PetscCall(StepTo(st, 21));
+  PetscCall(
+      Check((PetscBool)(p->nrepartitions == 1), "thresholds: no repartition at step 20 (little change)", (PetscReal)p->nrepartitions, 1));
+  /* every grain onto rank 0 */
+  PetscCall(PetscMalloc2(n, &order, size, &counts));
+  for (PetscInt k = 0; k < n; k++) order[k] = k;
+  for (PetscMPIInt q = 0; q < size; q++) counts[q] = q ? 0 : n;
+  PetscCall(KergsPartitionRenumber(st->scene, st->contacts, order, counts, NULL));
+  PetscCall(PetscFree2(order, counts));
+  PetscCall(StepTo(st, 30));
+  imb_forced = p->last.imbalance;
+  PetscCall(StepTo(st, 31));
+  PetscCall(Check((PetscBool)(p->nrepartitions == 2), "thresholds: imbalance (all on rank 0) repartitions at step 30",
+                  (PetscReal)p->nrepartitions, 2));
+  PetscCall(Check((PetscBool)(imb_forced > 1.5 && p->last.imbalance <= 1.10), "thresholds: imbalance back within 1.10", p->last.imbalance,
+                  imb_forced));
+  /* a cut that doubled since the last partition */
+  p->edgecut_base = p->last.edgecut / 2;
+  PetscCall(StepTo(st, 41));
+  PetscCall(
+      Check((PetscBool)(p->nrepartitions == 3), "thresholds: grown edge cut repartitions at step 40", (PetscReal)p->nrepartitions, 3));
+  PetscCall(LayoutIsValid(st, &valid));
+  PetscCall(Check(valid, "thresholds: valid layout at the end", valid, 1));
+  PetscCall(ReportPartition("thresholds", st));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+int main(int argc, char **argv)
+{
+  PetscMPIInt size;
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "partition tests on %d rank(s)\n", size));
+  PetscCall(TestSamePhysics("confine5 frictionless, 1 vs n ranks", CONFINE5 "-steps 8", 8, 4));
+  PetscCall(TestSamePhysics("deposit frictionless, 1 vs n ranks", DEPOSIT, 50, 50));
+  PetscCall(TestRenumberingKeepsPhysics());
+  PetscCall(TestSwapKeepsImpulses(PETSC_TRUE));
+  PetscCall(TestSwapKeepsImpulses(PETSC_FALSE));
+  PetscCall(TestRobustness());
+  PetscCall(TestThresholds());
+  PetscCall(PetscOptionsClear(NULL));
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failure(s)\n", nfail ? "FAILED" : "PASSED", nfail));
+  PetscCall(PetscFinalize());
+  return nfail ? 1 : 0;
+}
