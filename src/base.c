@@ -1,7 +1,7 @@
 /* kergs: log events of the phases of a step, registered once. */
 #include <kergs/base.h>
 
-PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO;
+PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO, KERGS_Exchange;
 
 PetscErrorCode KergsInitializePackage(void)
 {
@@ -18,5 +18,6 @@ PetscErrorCode KergsInitializePackage(void)
   PetscCall(PetscLogEventRegister("KergsSweep", classid, &KERGS_Sweep));
   PetscCall(PetscLogEventRegister("KergsUpdate", classid, &KERGS_Update));
   PetscCall(PetscLogEventRegister("KergsIO", classid, &KERGS_IO));
+  PetscCall(PetscLogEventRegister("KergsExchange", classid, &KERGS_Exchange));
   PetscFunctionReturn(0);
 }

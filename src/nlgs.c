@@ -250,8 +250,10 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   if (mr != m || mv != m) SETERRQ(s->comm, PETSC_ERR_ARG_SIZ, "KergsSweepRun: r and vd need %" PetscInt_FMT " local entries (have %" PetscInt_FMT ", %" PetscInt_FMT ")", m, mr, mv);
   PetscCall(PetscLogEventBegin(KERGS_Sweep, 0, 0, 0, 0));
   if (s->ghost_scatter) {
+    PetscCall(PetscLogEventBegin(KERGS_Exchange, 0, 0, 0, 0));
     PetscCall(VecScatterBegin(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
     PetscCall(VecScatterEnd(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
     PetscCall(VecGetArrayRead(s->rghost, &rg));
     OffProcessProduct(m, s->bi, s->bj, s->ba, rg, s->boff);
     PetscCall(VecRestoreArrayRead(s->rghost, &rg));

@@ -327,8 +327,10 @@ PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene sce
   PetscCall(VecPointwiseMult(ops->R, ops->R, ops->Minv));
   PetscCall(VecAXPY(ops->Vf, 1.0, ops->R));
   /* the scene state is replicated: every rank receives all of V_f */
+  PetscCall(PetscLogEventBegin(KERGS_Exchange, 0, 0, 0, 0));
   PetscCall(VecScatterBegin(ops->vf_all, ops->Vf, ops->vf_seq, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterEnd(ops->vf_all, ops->Vf, ops->vf_seq, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
   PetscCall(VecGetArrayRead(ops->vf_seq, &vf));
   for (PetscInt i = 0; i < scene->ndisks; i++) {
     for (PetscInt d = 0; d < KERGS_DIM; d++) scene->v[KERGS_DIM * i + d] = vf[i * nd + d];

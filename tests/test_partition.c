@@ -601,6 +601,7 @@ int main(int argc, char **argv)
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "partition tests on %d rank(s)\n", size));
   PetscCall(TestSamePhysics("confine5 frictionless, 1 vs n ranks", CONFINE5 "-steps 8", 8, 4));
   PetscCall(TestSamePhysics("deposit frictionless, 1 vs n ranks", DEPOSIT, 50, 50));
+  PetscCall(TestSamePhysics("confine500 frictionless, 1 vs n ranks", "-options_file cases/confine500.opts -steps 5 " TIGHT, 5, 5));
   PetscCall(TestRenumberingKeepsPhysics());
   PetscCall(TestSwapKeepsImpulses(PETSC_TRUE));
   PetscCall(TestSwapKeepsImpulses(PETSC_FALSE));

@@ -14,6 +14,8 @@
 
 /* Log events, one per phase, so that -log_view explains the time of a step. */
 PETSC_EXTERN PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO;
+/* Communication between ranks: the ghost impulses of each sweep, the velocities gathered after each step. */
+PETSC_EXTERN PetscLogEvent KERGS_Exchange;
 PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
 
 #endif
