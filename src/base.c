@@ -2,6 +2,7 @@
 #include <kergs/base.h>
 
 PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO, KERGS_Exchange;
+PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
 
 PetscErrorCode KergsInitializePackage(void)
 {
@@ -19,5 +20,10 @@ PetscErrorCode KergsInitializePackage(void)
   PetscCall(PetscLogEventRegister("KergsUpdate", classid, &KERGS_Update));
   PetscCall(PetscLogEventRegister("KergsIO", classid, &KERGS_IO));
   PetscCall(PetscLogEventRegister("KergsExchange", classid, &KERGS_Exchange));
+  PetscCall(PetscLogEventRegister("KergsFactor", classid, &KERGS_Factor));
+  PetscCall(PetscLogEventRegister("KergsKernelDiag", classid, &KERGS_KernelDiag));
+  PetscCall(PetscLogEventRegister("KergsKernelApply", classid, &KERGS_KernelApply));
+  PetscCall(PetscLogEventRegister("KergsPredict", classid, &KERGS_Predict));
+  PetscCall(PetscLogEventRegister("KergsPartition", classid, &KERGS_Partition));
   PetscFunctionReturn(0);
 }

@@ -30,31 +30,12 @@ const char *const KergsKernelDiags[] = {"exact", "bound", "KergsKernelDiag", "KE
 /* Options of the kernel's factorizations: -kernel_mat_mumps_icntl_14 50, -kernel_mat_cholmod_print 3, ... */
 #define KERGS_KERNEL_FACTOR_PREFIX "kernel_"
 
-static PetscClassId  KERGS_KERNEL_CLASSID;
-static PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply;
-
-/* The package's class id is private to src/base.c: the kernel's events get a class of their own. */
-static PetscErrorCode KergsKernelRegisterEvents(void)
-{
-  static PetscBool registered = PETSC_FALSE;
-
-  PetscFunctionBeginUser;
-  if (registered) PetscFunctionReturn(0);
-  registered = PETSC_TRUE;
-  PetscCall(KergsInitializePackage());
-  PetscCall(PetscClassIdRegister("KergsKernel", &KERGS_KERNEL_CLASSID));
-  PetscCall(PetscLogEventRegister("KergsFactor", KERGS_KERNEL_CLASSID, &KERGS_Factor));
-  PetscCall(PetscLogEventRegister("KergsKernelDiag", KERGS_KERNEL_CLASSID, &KERGS_KernelDiag));
-  PetscCall(PetscLogEventRegister("KergsKernelApply", KERGS_KERNEL_CLASSID, &KERGS_KernelApply));
-  PetscFunctionReturn(0);
-}
-
 PetscErrorCode KergsKernelCreate(MPI_Comm comm, KergsKernel *kernel)
 {
   KergsKernel k;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsKernelRegisterEvents());
+  PetscCall(KergsInitializePackage());
   PetscCall(PetscNew(&k));
   k->comm           = comm;
   k->diagtype       = KERGS_KERNEL_DIAG_BOUND; /* exact costs seconds at 20,000 grains against milliseconds */

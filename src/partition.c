@@ -11,23 +11,8 @@
 
 const char *const KergsPartitionTypes[] = {"contiguous", "geometric", "metis", "KergsPartitionType", "KERGS_PARTITION_", NULL};
 
-static PetscLogEvent KERGS_Partition;
-
 /* Side of the Hilbert-curve grid: 2^16 cells, keys below 2^32. */
 #define KERGS_HILBERT_ORDER 16
-
-static PetscErrorCode PartitionRegisterEvent(void)
-{
-  static PetscBool registered = PETSC_FALSE;
-  PetscClassId     classid;
-
-  PetscFunctionBeginUser;
-  if (registered) PetscFunctionReturn(0);
-  registered = PETSC_TRUE;
-  PetscCall(PetscClassIdRegister("KergsPartition", &classid));
-  PetscCall(PetscLogEventRegister("KergsPartition", classid, &KERGS_Partition));
-  PetscFunctionReturn(0);
-}
 
 PetscErrorCode KergsPartitionCreate(MPI_Comm comm, KergsPartition *partition)
 {
@@ -36,7 +21,6 @@ PetscErrorCode KergsPartitionCreate(MPI_Comm comm, KergsPartition *partition)
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
-  PetscCall(PartitionRegisterEvent());
   PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(PetscNew(&p));
   p->comm           = comm;

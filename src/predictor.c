@@ -4,7 +4,6 @@
 #include <kergs/predictor.h>
 
 static PetscFunctionList KergsPredictorList = NULL;
-static PetscLogEvent     KERGS_Predict      = 0;
 
 PetscErrorCode KergsPredictorRegister(const char name[], PetscErrorCode (*create)(KergsPredictor))
 {
@@ -13,12 +12,11 @@ PetscErrorCode KergsPredictorRegister(const char name[], PetscErrorCode (*create
   PetscFunctionReturn(0);
 }
 
-/* Forget the registry and the event at PetscFinalize (PETSc may be initialized again). */
+/* Forget the registry at PetscFinalize (PETSc may be initialized again). */
 static PetscErrorCode KergsPredictorFinalizePackage(void)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscFunctionListDestroy(&KergsPredictorList));
-  KERGS_Predict = 0;
   PetscFunctionReturn(0);
 }
 
@@ -34,26 +32,13 @@ static PetscErrorCode KergsPredictorRegisterAll(void)
   PetscFunctionReturn(0);
 }
 
-/* The log event, registered once, after the package's own events. */
-static PetscErrorCode KergsPredictorRegisterEvent(void)
-{
-  PetscClassId classid;
-
-  PetscFunctionBeginUser;
-  if (KERGS_Predict) PetscFunctionReturn(0);
-  PetscCall(KergsInitializePackage());
-  PetscCall(PetscClassIdRegister("KergsPredictor", &classid));
-  PetscCall(PetscLogEventRegister("KergsPredict", classid, &KERGS_Predict));
-  PetscFunctionReturn(0);
-}
-
 PetscErrorCode KergsPredictorCreate(MPI_Comm comm, KergsPredictor *predictor)
 {
   KergsPredictor p;
 
   PetscFunctionBeginUser;
   PetscCall(KergsPredictorRegisterAll());
-  PetscCall(KergsPredictorRegisterEvent());
+  PetscCall(KergsInitializePackage());
   PetscCall(PetscNew(&p));
   p->comm      = comm;
   p->eta       = 1e-6; /* relative: see predictor.h */

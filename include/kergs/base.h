@@ -16,6 +16,8 @@
 PETSC_EXTERN PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO;
 /* Communication between ranks: the ghost impulses of each sweep, the velocities gathered after each step. */
 PETSC_EXTERN PetscLogEvent KERGS_Exchange;
+/* The kernel projector (factorization, diagonal blocks of Z, applications), the predictor, the partition. */
+PETSC_EXTERN PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
 PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
 
 #endif
