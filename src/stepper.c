@@ -44,11 +44,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscFunctionBeginUser;
   PetscCall(KergsSceneSetFromOptions(st->scene));
   PetscCall(KergsSolverSetFromOptions(st->solver));
-  if (!st->results->path[0]) {
-    /* default results name from the scene */
-    const char *name = st->scene->name[0] ? st->scene->name : "kergs";
-    PetscCall(PetscSNPrintf(st->results->path, sizeof(st->results->path), "results/%s.h5", name));
-  }
+  PetscCall(KergsResultsSetSceneName(st->results, st->scene->name)); /* default -output: results/<scene>.h5 */
   PetscCall(KergsResultsSetFromOptions(st->results));
   PetscCall(KergsPartitionSetFromOptions(st->partition));
   PetscOptionsBegin(st->comm, NULL, "Time stepping options", NULL);
@@ -202,6 +198,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   KergsSolveStats ss;
   PetscLogDouble  t0, t1, t2;
   PetscReal      *vold, *wold, *wvold;
+  PetscBool       due;
 
   PetscFunctionBeginUser;
   /* initial partition before the first detection, then checks every -partition_check_every steps, with the
@@ -226,7 +223,8 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   sc->step++;
   PetscCall(PetscLogEventEnd(KERGS_Update, 0, 0, 0, 0));
   st->io_seconds = 0;
-  if (st->results->snapshot_every > 0 && sc->step % st->results->snapshot_every == 0 && sc->step < sc->nsteps) {
+  PetscCall(KergsResultsSnapshotDue(st->results, sc->step, PETSC_FALSE, &due)); /* the last one is KergsStepperRun's */
+  if (due) {
     PetscLogDouble t3, t4;
     PetscCall(PetscTime(&t3));
     PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
