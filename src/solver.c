@@ -139,7 +139,9 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
   PetscCall(PetscTime(&t1));
   stats->sweep_seconds = t1 - t0;
   stats->criterion     = value;
-  PetscCall(KergsSweepNaturalResidual(s->sweep, ops->r, ops->vd, ops->v, &stats->residual));
+  /* the natural criterion has just computed the residual (and v) of the final r */
+  if (s->criterion == KERGS_CRITERION_NATURAL && stats->iterations > 0) stats->residual = value;
+  else PetscCall(KergsSweepNaturalResidual(s->sweep, ops->r, ops->vd, ops->v, &stats->residual));
   PetscFunctionReturn(0);
 }
 
