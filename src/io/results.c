@@ -306,8 +306,7 @@ PetscErrorCode KergsResultsSnapshotDue(KergsResults res, PetscInt step, PetscBoo
 
 /* A Vec of nlocal blocks of bs reals on this rank, named, viewed into the current group, destroyed.
    values holds the nlocal * bs local entries (NULL when nlocal is 0). */
-static PetscErrorCode KergsViewBlocks(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt nlocal, PetscInt bs,
-                                      const PetscReal *values)
+PetscErrorCode KergsViewBlocks(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt nlocal, PetscInt bs, const PetscReal *values)
 {
   Vec          vec;
   PetscScalar *a;
@@ -327,7 +326,7 @@ static PetscErrorCode KergsViewBlocks(PetscViewer viewer, MPI_Comm comm, const c
 }
 
 /* Integer fields are stored as reals (exact up to 2^53). */
-static PetscErrorCode KergsViewIntegers(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt nlocal, const PetscInt *values)
+PetscErrorCode KergsViewIntegers(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt nlocal, const PetscInt *values)
 {
   PetscReal *r;
 

@@ -13,48 +13,12 @@
 /* ---------------------------------------------------------------------------------------------
    Writing */
 
-/* View the replicated array all (n blocks of bs reals) as a Vec with PETSc's default ownership. */
-static PetscErrorCode KergsSampleViewField(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt n, PetscInt bs,
-                                           const PetscReal *all)
-{
-  Vec          vec;
-  PetscScalar *a;
-  PetscInt     lo, hi;
-
-  PetscFunctionBeginUser;
-  PetscCall(VecCreate(comm, &vec));
-  PetscCall(VecSetSizes(vec, PETSC_DECIDE, n * bs));
-  PetscCall(VecSetBlockSize(vec, bs));
-  PetscCall(VecSetType(vec, VECMPI));
-  PetscCall(VecGetOwnershipRange(vec, &lo, &hi));
-  PetscCall(VecGetArray(vec, &a));
-  for (PetscInt i = lo; i < hi; i++) a[i - lo] = all[i];
-  PetscCall(VecRestoreArray(vec, &a));
-  PetscCall(PetscObjectSetName((PetscObject)vec, name));
-  PetscCall(VecView(vec, viewer));
-  PetscCall(VecDestroy(&vec));
-  PetscFunctionReturn(0);
-}
-
-/* Integer fields are stored as reals (exact up to 2^53). */
-static PetscErrorCode KergsSampleViewIntegers(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt n, const PetscInt *all)
-{
-  PetscReal *r;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscMalloc1(n, &r));
-  for (PetscInt i = 0; i < n; i++) r[i] = (PetscReal)all[i];
-  PetscCall(KergsSampleViewField(viewer, comm, name, n, 1, r));
-  PetscCall(PetscFree(r));
-  PetscFunctionReturn(0);
-}
-
 PetscErrorCode KergsSampleWrite(KergsScene scene, const char path[])
 {
   char        tmp[PETSC_MAX_PATH_LEN];
   PetscViewer viewer;
   MPI_Comm    comm = scene->comm;
-  PetscInt    n    = scene->ndisks;
+  PetscInt    n    = scene->ndisks, s = scene->dstart, nl = scene->dend - scene->dstart;
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
@@ -70,13 +34,14 @@ PetscErrorCode KergsSampleWrite(KergsScene scene, const char path[])
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "ndisks", PETSC_INT, &n));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "time", PETSC_REAL, &scene->time));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "dim", PETSC_INT, &(PetscInt){KERGS_DIM}));
-  PetscCall(KergsSampleViewField(viewer, comm, "x", n, KERGS_DIM, scene->x));
-  PetscCall(KergsSampleViewField(viewer, comm, "v", n, KERGS_DIM, scene->v));
-  PetscCall(KergsSampleViewField(viewer, comm, "rot", n, KERGS_NROT, scene->rot));
-  PetscCall(KergsSampleViewField(viewer, comm, "omega", n, KERGS_NROT, scene->omega));
-  PetscCall(KergsSampleViewField(viewer, comm, "radius", n, 1, scene->radius));
-  PetscCall(KergsSampleViewIntegers(viewer, comm, "material", n, scene->material));
-  PetscCall(KergsSampleViewIntegers(viewer, comm, "id", n, scene->id));
+  /* each rank writes the disks of its own range [dstart, dend) of the replicated arrays */
+  PetscCall(KergsViewBlocks(viewer, comm, "x", nl, KERGS_DIM, scene->x + KERGS_DIM * s));
+  PetscCall(KergsViewBlocks(viewer, comm, "v", nl, KERGS_DIM, scene->v + KERGS_DIM * s));
+  PetscCall(KergsViewBlocks(viewer, comm, "rot", nl, KERGS_NROT, scene->rot + KERGS_NROT * s));
+  PetscCall(KergsViewBlocks(viewer, comm, "omega", nl, KERGS_NROT, scene->omega + KERGS_NROT * s));
+  PetscCall(KergsViewBlocks(viewer, comm, "radius", nl, 1, scene->radius + s));
+  PetscCall(KergsViewIntegers(viewer, comm, "material", nl, scene->material + s));
+  PetscCall(KergsViewIntegers(viewer, comm, "id", nl, scene->id + s));
   PetscCall(PetscViewerHDF5PopGroup(viewer));
   PetscCall(PetscViewerDestroy(&viewer));
   PetscCall(KergsFileCommit(comm, tmp, path));
