@@ -4,18 +4,8 @@
    by grain through the persistent ids, after every step. Runs on 1, 2 and 3 ranks. */
 static const char help[] = "kergs partition tests: same physics on 1 and n ranks, renumbering, warm start across swaps, robustness.\n";
 
-#include <kergs/kergs.h>
+#include "testing.h"
 #include <kergs/partition.h>
-
-static PetscInt nfail = 0;
-
-static PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, PetscReal want)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s %-78s got %.6g want %.6g\n", ok ? "ok  " : "FAIL", what, (double)got, (double)want));
-  if (!ok) nfail++;
-  PetscFunctionReturn(0);
-}
 
 /* Frictionless, with a tight natural-map criterion: the velocities are unique, so runs must agree closely. */
 #define TIGHT "-friction 0 -solver_criterion natural -solver_tol 1e-10 -solver_max_it 10000 "
@@ -26,16 +16,14 @@ static PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, Petsc
   "-box 0,0,0.4,1.2 -box_open_top " TIGHT
 #define FORCE_REPARTITION "-partition_check_every 1 -partition_imbalance_tol 1.0 "
 
-/* A fresh stepper on comm configured only by the given options (the options database is reset). */
-static PetscErrorCode MakeStepper(MPI_Comm comm, const char *opts, const char *extra, KergsStepper *st)
+/* MakeStepperOn (testing.h) with the options of opts followed by extra (may be NULL). */
+static PetscErrorCode StepperWithExtra(MPI_Comm comm, const char *opts, const char *extra, KergsStepper *st)
 {
+  char all[4096];
+
   PetscFunctionBeginUser;
-  PetscCall(PetscOptionsClear(NULL));
-  PetscCall(PetscOptionsInsertString(NULL, opts));
-  if (extra) PetscCall(PetscOptionsInsertString(NULL, extra));
-  PetscCall(PetscOptionsInsertString(NULL, "-output_none -quiet"));
-  PetscCall(KergsStepperCreate(comm, st));
-  PetscCall(KergsStepperSetFromOptions(*st));
+  PetscCall(PetscSNPrintf(all, sizeof(all), "%s %s", opts, extra ? extra : ""));
+  PetscCall(MakeStepperOn(comm, all, st));
   PetscFunctionReturn(0);
 }
 
@@ -282,8 +270,8 @@ static PetscErrorCode TestSamePhysics(const char *label, const char *opts, Petsc
   Lockstep     L;
 
   PetscFunctionBeginUser;
-  PetscCall(MakeStepper(PETSC_COMM_SELF, opts, NULL, &ref));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, opts, NULL, &tst));
+  PetscCall(StepperWithExtra(PETSC_COMM_SELF, opts, NULL, &ref));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, opts, NULL, &tst));
   PetscCall(RunLockstep(ref, tst, nsteps, &L));
   PetscCall(ReportLockstep(label, &L, min_compared));
   PetscCall(ReportPartition(label, tst));
@@ -302,8 +290,8 @@ static PetscErrorCode TestRenumberingKeepsPhysics(void)
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, DEPOSIT, "-partition_type contiguous", &ref));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, DEPOSIT, "-partition_type metis " FORCE_REPARTITION, &tst));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, DEPOSIT, "-partition_type contiguous", &ref));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, DEPOSIT, "-partition_type metis " FORCE_REPARTITION, &tst));
   PetscCall(RunLockstep(ref, tst, 50, &L));
   PetscCall(ReportLockstep("deposit, metis every step vs contiguous", &L, 50));
   PetscCall(ReportPartition("deposit, metis every step", tst));
@@ -384,8 +372,8 @@ static PetscErrorCode TestSwapKeepsImpulses(PetscBool frictional)
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
-  PetscCall(MakeStepper(PETSC_COMM_SELF, opts, NULL, &ref));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, opts, NULL, &tst));
+  PetscCall(StepperWithExtra(PETSC_COMM_SELF, opts, NULL, &ref));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, opts, NULL, &tst));
   for (PetscInt s = 0; s < 2; s++) {
     PetscCall(KergsStepperStep(ref));
     PetscCall(KergsStepperStep(tst));
@@ -479,8 +467,8 @@ static PetscErrorCode TestRobustness(void)
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &rank));
   /* two grains on every rank, repartitioned (geometric: fewer grains than ranks or no edges) at every step */
-  PetscCall(MakeStepper(PETSC_COMM_SELF, two, NULL, &ref));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, two, "-partition_type metis -partition_view " FORCE_REPARTITION, &tst));
+  PetscCall(StepperWithExtra(PETSC_COMM_SELF, two, NULL, &ref));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, two, "-partition_type metis -partition_view " FORCE_REPARTITION, &tst));
   PetscCall(RunLockstep(ref, tst, 5, &L));
   PetscCall(ReportLockstep("two grains, repartitioned every step", &L, 5));
   nowned = tst->scene->dend - tst->scene->dstart;
@@ -498,8 +486,8 @@ static PetscErrorCode TestRobustness(void)
     PetscInt *order, *counts, n;
     char      label[64];
 
-    PetscCall(MakeStepper(PETSC_COMM_SELF, DEPOSIT, NULL, &ref));
-    PetscCall(MakeStepper(PETSC_COMM_WORLD, DEPOSIT, "-partition_type contiguous", &tst));
+    PetscCall(StepperWithExtra(PETSC_COMM_SELF, DEPOSIT, NULL, &ref));
+    PetscCall(StepperWithExtra(PETSC_COMM_WORLD, DEPOSIT, "-partition_type contiguous", &tst));
     PetscCall(RunLockstep(ref, tst, 5, &L));
     n = tst->scene->ndisks;
     PetscCall(PetscMalloc2(n, &order, size, &counts));
@@ -542,7 +530,7 @@ static PetscErrorCode TestThresholds(void)
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
-  PetscCall(MakeStepper(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20", NULL, &st));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20", NULL, &st));
   p = st->partition;
   n = st->scene->ndisks;
   PetscCall(StepTo(st, 10));
@@ -608,7 +596,9 @@ int main(int argc, char **argv)
   PetscCall(TestRobustness());
   PetscCall(TestThresholds());
   PetscCall(PetscOptionsClear(NULL));
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failure(s)\n", nfail ? "FAILED" : "PASSED", nfail));
-  PetscCall(PetscFinalize());
-  return nfail ? 1 : 0;
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
 }
