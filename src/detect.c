@@ -3,11 +3,13 @@
    Broad phase: a cell list over the bounding box of the disk centres, with cells at least as wide as the
    largest reach 2 max(R) + alert, so that every potential pair lies in the same or an adjacent cell.
    Narrow phase: disk-disk and disk-wall gaps, local frames (n from b towards a, t = (-n_y, n_x)).
-   Ownership: the scene state is replicated; the rank that owns disk a (dstart <= a < dend) owns every
-   contact whose first body is a, and for disk-disk pairs a is the lower index.
-   Persistence: the contacts of the previous call are kept, and a new contact of the same (a, kind, b)
-   takes over its impulse r (warm start of Algorithm 1). Both lists are sorted by (a, kind, b), so one
-   merge pass does it. */
+   The search runs over this rank's owned disks and their ghosts (DESIGN.md section 6): O(local disks).
+   Ownership: a disk-disk contact belongs to the owner of its disk of smaller grain id (body a), a disk-wall
+   contact to the owner of the disk. The ghost layer is symmetric, so both ranks of a cut pair see it, and
+   exactly one keeps it.
+   Persistence: the key (a, kind, id of b) and impulse of every contact of the previous call are kept, and a new
+   contact with the same key takes over the impulse r (warm start of Algorithm 1). Both lists are sorted by key,
+   so one merge pass does it. */
 #include <kergs/detect.h>
 
 /* Relative widening of the cells beyond the largest reach: keeps a pair at exactly the reach distance
@@ -67,9 +69,12 @@ static PetscErrorCode CheckScene(KergsContacts ct, KergsScene scene)
   PetscFunctionBeginUser;
   PetscCheck(scene->ndisks >= 0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: negative number of disks %" PetscInt_FMT, scene->name,
              scene->ndisks);
-  PetscCheck(0 <= scene->dstart && scene->dstart <= scene->dend && scene->dend <= scene->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-             "Scene %s: owned disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not inside [0, %" PetscInt_FMT ")", scene->name,
-             scene->dstart, scene->dend, scene->ndisks);
+  PetscCheck(0 <= scene->dstart && scene->dstart <= scene->dend && scene->dend <= scene->ndisks &&
+                 scene->nowned == scene->dend - scene->dstart && scene->nlocal >= scene->nowned,
+             PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: owned disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") of %" PetscInt_FMT " disks does not match %" PetscInt_FMT
+             " owned and %" PetscInt_FMT " local disks",
+             scene->name, scene->dstart, scene->dend, scene->ndisks, scene->nowned, scene->nlocal);
   PetscCheck(scene->alert >= 0.0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance %g must be >= 0", scene->name,
              (double)scene->alert);
   PetscCheck(scene->nmaterials > 0 && scene->mu, ct->comm, PETSC_ERR_ARG_WRONGSTATE, "Scene %s: no materials (friction table missing)",
@@ -84,15 +89,15 @@ static PetscErrorCode ReportBadDisk(KergsContacts ct, KergsScene scene)
   const PetscReal *x = scene->x, *rad = scene->radius;
 
   PetscFunctionBeginUser;
-  for (PetscInt i = 0; i < scene->ndisks; i++) {
+  for (PetscInt i = 0; i < scene->nlocal; i++) {
     PetscCheck(!PetscIsInfOrNanReal(x[KERGS_DIM * i]) && !PetscIsInfOrNanReal(x[KERGS_DIM * i + 1]), ct->comm, PETSC_ERR_FP,
-               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has a non-finite centre", scene->name, scene->id[i], i);
+               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has a non-finite centre", scene->name, scene->id[i], scene->gidx[i]);
     PetscCheck(rad[i] > 0.0 && !PetscIsInfOrNanReal(rad[i]), ct->comm, PETSC_ERR_ARG_OUTOFRANGE,
                "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has radius %g, not positive and finite", scene->name,
-               scene->id[i], i, (double)rad[i]);
+               scene->id[i], scene->gidx[i], (double)rad[i]);
     PetscCheck(0 <= scene->material[i] && scene->material[i] < scene->nmaterials, ct->comm, PETSC_ERR_ARG_OUTOFRANGE,
                "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has material %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")",
-               scene->name, scene->id[i], i, scene->material[i], scene->nmaterials);
+               scene->name, scene->id[i], scene->gidx[i], scene->material[i], scene->nmaterials);
   }
   SETERRQ(ct->comm, PETSC_ERR_FP, "Scene %s: the bounding box of the disk centres is too large to represent", scene->name);
 }
@@ -112,7 +117,7 @@ static PetscErrorCode BoundingBox(KergsContacts ct, KergsScene scene, PetscReal 
     lo[d] = PETSC_MAX_REAL;
     hi[d] = -PETSC_MAX_REAL;
   }
-  for (PetscInt i = 0; i < scene->ndisks; i++) {
+  for (PetscInt i = 0; i < scene->nlocal; i++) {
     for (PetscInt d = 0; d < KERGS_DIM; d++) {
       const PetscReal xi = x[KERGS_DIM * i + d];
       lo[d]              = PetscMin(lo[d], xi);
@@ -123,23 +128,23 @@ static PetscErrorCode BoundingBox(KergsContacts ct, KergsScene scene, PetscReal 
     matmin = PetscMin(matmin, mat[i]);
     matmax = PetscMax(matmax, mat[i]);
   }
-  if (scene->ndisks == 0) {
+  if (scene->nlocal == 0) {
     for (PetscInt d = 0; d < KERGS_DIM; d++) lo[d] = hi[d] = 0.0;
   }
   /* NaN fails every comparison: a NaN centre or radius makes the box or the radius bounds fail below */
   for (PetscInt d = 0; d < KERGS_DIM; d++) finite = (PetscBool)(finite && !PetscIsInfOrNanReal(hi[d] - lo[d]));
-  if (scene->ndisks > 0 && (!finite || !(rmin > 0.0) || PetscIsInfOrNanReal(rbig) || matmin < 0 || matmax >= scene->nmaterials))
+  if (scene->nlocal > 0 && (!finite || !(rmin > 0.0) || PetscIsInfOrNanReal(rbig) || matmin < 0 || matmax >= scene->nmaterials))
     PetscCall(ReportBadDisk(ct, scene));
   *rmax = rbig;
   PetscFunctionReturn(0);
 }
 
-/* Rebuild the cell list over the bounding box of the centres. Cells are squares of side
+/* Rebuild the cell list over the bounding box of the local (owned and ghost) centres. Cells are squares of side
    h >= 2 max(R) + alert (the largest possible reach of a pair), widened if needed so that the grid has
-   at most 4 ndisks + 64 cells (one disk far away must not make a huge grid). */
+   at most 4 nlocal + 64 cells (one disk far away must not make a huge grid). */
 static PetscErrorCode BuildCellList(KergsContacts ct, KergsScene scene)
 {
-  const PetscInt   n        = scene->ndisks;
+  const PetscInt   n        = scene->nlocal;
   const PetscReal *x        = scene->x;
   const PetscReal  maxcells = 4.0 * (PetscReal)n + 64.0;
   PetscReal        lo[KERGS_DIM], hi[KERGS_DIM], rmax = 0.0, h, inv, extent[KERGS_DIM];
@@ -187,12 +192,13 @@ static PetscErrorCode BuildCellList(KergsContacts ct, KergsScene scene)
 
 /* Fill a contact with its geometry; a fresh contact has no impulse, no velocity, and is not persistent
    until the merge with the previous detection says otherwise. */
-static inline void SetContact(KergsContact *c, KergsContactKind kind, PetscInt a, PetscInt b, PetscReal nx, PetscReal ny, PetscReal ra,
-                              PetscReal rb, PetscReal gap, PetscReal mu)
+static inline void SetContact(KergsContact *c, KergsContactKind kind, PetscInt a, PetscInt b, PetscInt idb, PetscReal nx, PetscReal ny,
+                              PetscReal ra, PetscReal rb, PetscReal gap, PetscReal mu)
 {
   c->kind = kind;
   c->a    = a;
   c->b    = b;
+  c->idb  = idb;
   c->n[0] = nx;
   c->n[1] = ny;
   c->t[0] = -ny; /* t = (-n_y, n_x) */
@@ -205,14 +211,14 @@ static inline void SetContact(KergsContact *c, KergsContactKind kind, PetscInt a
   c->persistent = PETSC_FALSE;
 }
 
-/* Contacts of owned disk a with every disk b > a within the alert distance, appended to ct->c and sorted
-   by b. Gap g = |x_a - x_b| - R_a - R_b, normal n = (x_a - x_b) / |x_a - x_b|. */
+/* Contacts of owned disk a with every local disk b of larger grain id within the alert distance, appended to
+   ct->c and sorted by the id of b. Gap g = |x_a - x_b| - R_a - R_b, normal n = (x_a - x_b) / |x_a - x_b|. */
 static PetscErrorCode DetectDiskDisk(KergsContacts ct, KergsScene scene, PetscInt a)
 {
   const PetscReal *x = scene->x, *rad = scene->radius;
   const PetscInt  *next = ct->next, *head = ct->cellhead, nx = ct->ncellx, ny = ct->ncelly;
   const PetscReal  xa = x[KERGS_DIM * a], ya = x[KERGS_DIM * a + 1], ra = rad[a], alert = scene->alert, inv = 1.0 / ct->cellsize;
-  const PetscInt   first = ct->n, *mat = scene->material;
+  const PetscInt   first = ct->n, *mat = scene->material, *id = scene->id, ida = id[a];
   const PetscReal *murow = scene->mu + mat[a] * scene->nmaterials; /* row of a's material in the friction table */
   PetscInt         ix = (PetscInt)((xa - ct->origin[0]) * inv), iy = (PetscInt)((ya - ct->origin[1]) * inv);
 
@@ -221,8 +227,8 @@ static PetscErrorCode DetectDiskDisk(KergsContacts ct, KergsScene scene, PetscIn
   iy = PetscMin(PetscMax(iy, 0), ny - 1);
   for (PetscInt cy = PetscMax(iy - 1, 0); cy <= PetscMin(iy + 1, ny - 1); cy++) {
     for (PetscInt cx = PetscMax(ix - 1, 0); cx <= PetscMin(ix + 1, nx - 1); cx++) {
-      /* chains run in decreasing index order: stop at the first b <= a (also ends at -1) */
-      for (PetscInt b = head[cy * nx + cx]; b > a; b = next[b]) {
+      for (PetscInt b = head[cy * nx + cx]; b >= 0; b = next[b]) {
+        if (id[b] <= ida) continue; /* the pair belongs to the disk of smaller id (also skips b == a) */
         const PetscReal dx = xa - x[KERGS_DIM * b], dy = ya - x[KERGS_DIM * b + 1], reach = ra + rad[b] + alert, d2 = dx * dx + dy * dy;
         PetscReal       dist;
 
@@ -230,19 +236,19 @@ static PetscErrorCode DetectDiskDisk(KergsContacts ct, KergsScene scene, PetscIn
         PetscCheck(d2 > 0.0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
                    "Scene %s: grains %" PetscInt_FMT " and %" PetscInt_FMT " (disks %" PetscInt_FMT " and %" PetscInt_FMT
                    ") have coincident centres (%g, %g): contact normal undefined",
-                   scene->name, scene->id[a], scene->id[b], a, b, (double)xa, (double)ya);
+                   scene->name, ida, id[b], scene->gidx[a], scene->gidx[b], (double)xa, (double)ya);
         if (ct->n == ct->nalloc) PetscCall(ContactsReserve(ct, ct->n + 1));
         dist = PetscSqrtReal(d2);
-        SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_DISK, a, b, dx / dist, dy / dist, ra, rad[b], dist - ra - rad[b], murow[mat[b]]);
+        SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_DISK, a, b, id[b], dx / dist, dy / dist, ra, rad[b], dist - ra - rad[b], murow[mat[b]]);
       }
     }
   }
-  /* the few contacts of disk a come from up to 9 cells: insertion sort by b */
+  /* the few contacts of disk a come from up to 9 cells: insertion sort by the id of b */
   for (PetscInt i = first + 1; i < ct->n; i++) {
     KergsContact key = ct->c[i];
     PetscInt     j   = i - 1;
 
-    while (j >= first && ct->c[j].b > key.b) {
+    while (j >= first && ct->c[j].idb > key.idb) {
       ct->c[j + 1] = ct->c[j];
       j--;
     }
@@ -296,42 +302,60 @@ static PetscErrorCode DetectDiskWall(KergsContacts ct, KergsScene scene, const W
       if (s < 0.0 || s > f->length) continue;
     }
     if (ct->n == ct->nalloc) PetscCall(ContactsReserve(ct, ct->n + 1));
-    SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_WALL, a, w, f->n[0], f->n[1], ra, 0.0, d - ra,
+    SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_WALL, a, w, w, f->n[0], f->n[1], ra, 0.0, d - ra,
                scene->mu[scene->material[a] * scene->nmaterials + f->material]);
   }
   PetscFunctionReturn(0);
 }
 
-/* Order of contacts: (a, kind, b). */
-static inline int CompareContacts(const KergsContact *p, const KergsContact *q)
+/* Order of contacts and of their histories: (a, kind, idb). */
+#define KERGS_COMPARE_KEYS(p, q) \
+  ((p)->a != (q)->a ? ((p)->a < (q)->a ? -1 : 1) : \
+   (p)->kind != (q)->kind ? ((p)->kind < (q)->kind ? -1 : 1) : (p)->idb != (q)->idb ? ((p)->idb < (q)->idb ? -1 : 1) : 0)
+
+static int CompareHistoryQsort(const void *p, const void *q)
 {
-  if (p->a != q->a) return p->a < q->a ? -1 : 1;
-  if (p->kind != q->kind) return p->kind < q->kind ? -1 : 1;
-  if (p->b != q->b) return p->b < q->b ? -1 : 1;
-  return 0;
+  return KERGS_COMPARE_KEYS((const KergsContactHistory *)p, (const KergsContactHistory *)q);
 }
 
-static int CompareContactsQsort(const void *p, const void *q) { return CompareContacts((const KergsContact *)p, (const KergsContact *)q); }
+/* Keep the key and impulse of every current contact for the next call's warm start (sorted by key). */
+static PetscErrorCode SaveHistory(KergsContacts ct)
+{
+  PetscFunctionBeginUser;
+  if (ct->n > ct->nprevalloc) {
+    PetscCall(PetscFree(ct->prev));
+    ct->nprevalloc = PetscMax(ct->n, 2 * ct->nprevalloc);
+    PetscCall(PetscMalloc1(ct->nprevalloc, &ct->prev));
+  }
+  ct->nprev = ct->n;
+  for (PetscInt i = 0; i < ct->n; i++) {
+    KergsContactHistory *h = &ct->prev[i];
+    h->a                   = ct->c[i].a;
+    h->idb                 = ct->c[i].idb;
+    h->kind                = ct->c[i].kind;
+    for (PetscInt k = 0; k < KERGS_MAXCOMP; k++) h->r[k] = ct->c[i].r[k];
+  }
+  /* the list is sorted unless a caller reordered it (the migration of contacts sorts what it receives) */
+  for (PetscInt k = 1; k < ct->nprev; k++)
+    if (KERGS_COMPARE_KEYS(&ct->prev[k - 1], &ct->prev[k]) > 0) {
+      qsort(ct->prev, (size_t)ct->nprev, sizeof(KergsContactHistory), CompareHistoryQsort);
+      break;
+    }
+  PetscFunctionReturn(0);
+}
 
-/* Warm start: a contact of the same (a, kind, b) as one of the previous call takes over its impulse.
+/* Warm start: a contact of the same (a, kind, idb) as one of the previous call takes over its impulse.
    Both lists are sorted, so one merge pass finds every match (O(n + nprev)). */
 static PetscErrorCode CarryOverImpulses(KergsContacts ct)
 {
   PetscInt j = 0;
 
   PetscFunctionBeginUser;
-  /* the previous list left this object sorted; if a caller reordered it in between, sort it again */
-  for (PetscInt k = 1; k < ct->nprev; k++) {
-    if (CompareContacts(&ct->prev[k - 1], &ct->prev[k]) > 0) {
-      qsort(ct->prev, (size_t)ct->nprev, sizeof(KergsContact), CompareContactsQsort);
-      break;
-    }
-  }
   for (PetscInt i = 0; i < ct->n && j < ct->nprev; i++) {
     KergsContact *c = &ct->c[i];
 
-    while (j < ct->nprev && CompareContacts(&ct->prev[j], c) < 0) j++;
-    if (j < ct->nprev && CompareContacts(&ct->prev[j], c) == 0) {
+    while (j < ct->nprev && KERGS_COMPARE_KEYS(&ct->prev[j], c) < 0) j++;
+    if (j < ct->nprev && KERGS_COMPARE_KEYS(&ct->prev[j], c) == 0) {
       for (PetscInt k = 0; k < KERGS_MAXCOMP; k++) c->r[k] = ct->prev[j].r[k];
       c->persistent = PETSC_TRUE;
     }
@@ -355,26 +379,20 @@ static PetscErrorCode SetGlobalNumbering(KergsContacts ct)
 
 static PetscErrorCode DetectContacts(KergsContacts ct, KergsScene scene)
 {
-  WallFrame    *frames = NULL;
-  KergsContact *swap;
-  PetscInt      nswap, npersistent = 0;
+  WallFrame *frames = NULL;
+  PetscInt   npersistent = 0;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsSceneUpdateGhosts(scene, PETSC_FALSE)); /* a ghost layer exists and is fresh enough for this search */
   PetscCall(CheckScene(ct, scene));
-  /* the current contacts become the previous ones; their storage is reused for the new list */
-  swap           = ct->prev;
-  ct->prev       = ct->c;
-  ct->c          = swap;
-  nswap          = ct->nprevalloc;
-  ct->nprevalloc = ct->nalloc;
-  ct->nalloc     = nswap;
-  ct->nprev      = ct->n;
-  ct->n          = 0;
+  /* the current contacts leave their keys and impulses; their storage is reused for the new list */
+  PetscCall(SaveHistory(ct));
+  ct->n = 0;
 
   PetscCall(BuildCellList(ct, scene));
   PetscCall(PetscMalloc1(scene->nwalls, &frames));
   PetscCall(SetUpWallFrames(scene, frames));
-  for (PetscInt a = scene->dstart; a < scene->dend; a++) {
+  for (PetscInt a = 0; a < scene->nowned; a++) {
     PetscCall(DetectDiskDisk(ct, scene, a));
     PetscCall(DetectDiskWall(ct, scene, frames, a));
   }

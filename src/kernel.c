@@ -165,8 +165,9 @@ static PetscInt BodyOfDof(KergsOperators ops, KergsScene scene, PetscInt dof)
   return dof < ndisk_dofs ? dof / ops->ndof_disk : scene->ndisks + (dof - ndisk_dofs) / KERGS_DIM;
 }
 
-/* Both bodies of every contact of every rank, in global contact order (2 per contact). The scene is
-   replicated; the contact graph is small next to it (2 integers per contact). */
+/* Both bodies (global indices) of every contact of every rank, in global contact order (2 per contact). Peeling
+   runs on this replicated graph (2 integers per contact on every rank): at hundreds of ranks it would have to
+   become a distributed peeling. */
 static PetscErrorCode GatherContactBodies(KergsKernel k, KergsScene scene, KergsContacts contacts, KergsOperators ops, PetscInt **ends)
 {
   PetscMPIInt size, nmine = (PetscMPIInt)(2 * contacts->n), *counts, *displs;
@@ -182,8 +183,8 @@ static PetscErrorCode GatherContactBodies(KergsKernel k, KergsScene scene, Kergs
       mine[2 * c] = mine[2 * c + 1] = -1;
       continue;
     }
-    mine[2 * c]     = ct->a;
-    mine[2 * c + 1] = ct->kind == KERGS_CONTACT_DISK_DISK ? ct->b : BodyOfWall(ops, scene, ct->b);
+    mine[2 * c]     = scene->gidx[ct->a];
+    mine[2 * c + 1] = ct->kind == KERGS_CONTACT_DISK_DISK ? scene->gidx[ct->b] : BodyOfWall(ops, scene, ct->b);
   }
   PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
   PetscCallMPI(MPI_Allgather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, k->comm));
@@ -311,7 +312,8 @@ static PetscErrorCode BuildReducedOperator(KergsKernel k, KergsScene scene, Kerg
   PetscCall(VecGetArray(k->ar, &s));
   for (PetscInt i = 0; i < n; i++) {
     PetscInt b = BodyOfDof(ops, scene, dofs[i]);
-    s[i]       = (b < scene->ndisks && dofs[i] - KergsOperatorsDiskDof(ops, b) >= KERGS_DIM) ? 1.0 / scene->radius[b] : 1.0;
+    /* a local DOF belongs to an owned disk (local index b - dstart) or to a free wall */
+    s[i] = (b < scene->ndisks && dofs[i] - KergsOperatorsDiskDof(ops, b) >= KERGS_DIM) ? 1.0 / scene->radius[b - scene->dstart] : 1.0;
   }
   PetscCall(VecRestoreArray(k->ar, &s));
   PetscCall(ISRestoreIndices(k->keep_rows, &dofs));

@@ -36,8 +36,6 @@ PetscErrorCode KergsOperatorsDestroy(KergsOperators *ops)
   PetscCall(VecDestroy(&(*ops)->Rd));
   PetscCall(VecDestroy(&(*ops)->R));
   PetscCall(VecDestroy(&(*ops)->Vg));
-  PetscCall(VecScatterDestroy(&(*ops)->vf_all));
-  PetscCall(VecDestroy(&(*ops)->vf_seq));
   PetscCall(PetscFree((*ops)->wall_dof));
   PetscCall(PetscFree(*ops));
   PetscFunctionReturn(0);
@@ -81,14 +79,11 @@ static PetscErrorCode SetUpDofLayout(KergsOperators ops, KergsScene scene)
   PetscCall(VecDestroy(&ops->Rd));
   PetscCall(VecDestroy(&ops->R));
   PetscCall(VecDestroy(&ops->Vg));
-  PetscCall(VecScatterDestroy(&ops->vf_all));
-  PetscCall(VecDestroy(&ops->vf_seq));
   PetscCall(VecCreateMPI(ops->comm, nfree_local, ops->nfree, &ops->Vf));
   PetscCall(VecDuplicate(ops->Vf, &ops->Minv));
   PetscCall(VecDuplicate(ops->Vf, &ops->Rd));
   PetscCall(VecDuplicate(ops->Vf, &ops->R));
   if (ng) PetscCall(VecCreateMPI(ops->comm, ngiven_local, ops->ngiven, &ops->Vg));
-  PetscCall(VecScatterCreateToAll(ops->Vf, &ops->vf_all, &ops->vf_seq));
   PetscFunctionReturn(0);
 }
 
@@ -105,8 +100,8 @@ static PetscErrorCode SetDofVectors(KergsOperators ops, KergsScene scene)
   PetscCall(VecGetArray(ops->Minv, &minv));
   PetscCall(VecGetArray(ops->Vf, &vf));
   PetscCall(VecGetArray(ops->Rd, &rd));
-  for (PetscInt i = scene->dstart; i < scene->dend; i++) {
-    PetscInt k = i * nd - lo;
+  for (PetscInt i = 0; i < scene->nowned; i++) { /* owned disk i has global index dstart + i: its DOFs come first */
+    PetscInt k = i * nd;
     for (PetscInt d = 0; d < KERGS_DIM; d++) {
       minv[k + d] = 1.0 / scene->mass[i];
       vf[k + d]   = scene->v[KERGS_DIM * i + d];
@@ -178,8 +173,8 @@ static void ContactRows(KergsOperators ops, KergsScene scene, const KergsContact
   PetscBool        tang    = (PetscBool)(c > 0);
 
   free->ncol = given->ncol = 0;
-  AddBody(free, KergsOperatorsDiskDof(ops, ct->a), rotates, e, 1.0, ct->ra, tang);
-  if (ct->kind == KERGS_CONTACT_DISK_DISK) AddBody(free, KergsOperatorsDiskDof(ops, ct->b), rotates, e, -1.0, ct->rb, tang);
+  AddBody(free, KergsOperatorsDiskDof(ops, scene->gidx[ct->a]), rotates, e, 1.0, ct->ra, tang);
+  if (ct->kind == KERGS_CONTACT_DISK_DISK) AddBody(free, KergsOperatorsDiskDof(ops, scene->gidx[ct->b]), rotates, e, -1.0, ct->rb, tang);
   else if (scene->walls[ct->b].kind == KERGS_WALL_FREE) AddBody(free, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
   else AddBody(given, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
 }
@@ -318,7 +313,8 @@ PetscErrorCode KergsOperatorsSetImpulses(KergsOperators ops, KergsContacts conta
 PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene scene)
 {
   const PetscScalar *vf;
-  PetscInt           nd = ops->ndof_disk;
+  PetscInt           nd = ops->ndof_disk, lo;
+  PetscMPIInt        size;
 
   PetscFunctionBeginUser;
   /* V_f^+ = V_f^- + M^-1 (H_f r + R^d) */
@@ -326,19 +322,23 @@ PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene sce
   PetscCall(VecAXPY(ops->R, 1.0, ops->Rd));
   PetscCall(VecPointwiseMult(ops->R, ops->R, ops->Minv));
   PetscCall(VecAXPY(ops->Vf, 1.0, ops->R));
-  /* the scene state is replicated: every rank receives all of V_f */
-  PetscCall(PetscLogEventBegin(KERGS_Exchange, 0, 0, 0, 0));
-  PetscCall(VecScatterBegin(ops->vf_all, ops->Vf, ops->vf_seq, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(ops->vf_all, ops->Vf, ops->vf_seq, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
-  PetscCall(VecGetArrayRead(ops->vf_seq, &vf));
-  for (PetscInt i = 0; i < scene->ndisks; i++) {
+  /* each rank's V_f holds its own disks' DOFs: copy them into the owned disks (ghosts follow in
+     KergsSceneRefreshGhosts) */
+  PetscCall(VecGetOwnershipRange(ops->Vf, &lo, NULL));
+  PetscCall(VecGetArrayRead(ops->Vf, &vf));
+  for (PetscInt i = 0; i < scene->nowned; i++) {
     for (PetscInt d = 0; d < KERGS_DIM; d++) scene->v[KERGS_DIM * i + d] = vf[i * nd + d];
     for (PetscInt d = KERGS_DIM; d < nd; d++) scene->omega[KERGS_NROT * i + d - KERGS_DIM] = vf[i * nd + d];
   }
-  for (PetscInt w = 0; w < scene->nwalls; w++)
-    if (scene->walls[w].kind == KERGS_WALL_FREE)
-      for (PetscInt d = 0; d < KERGS_DIM; d++) scene->walls[w].v[d] = vf[ops->wall_dof[w] + d];
-  PetscCall(VecRestoreArrayRead(ops->vf_seq, &vf));
+  /* free walls live on the last rank: every rank gets their velocities (KERGS_DIM values per wall) */
+  PetscCallMPI(MPI_Comm_size(ops->comm, &size));
+  for (PetscInt w = 0; w < scene->nwalls; w++) {
+    PetscInt k = ops->wall_dof[w] - lo;
+    if (scene->walls[w].kind != KERGS_WALL_FREE) continue;
+    if (k >= 0 && k < ops->nfree_local)
+      for (PetscInt d = 0; d < KERGS_DIM; d++) scene->walls[w].v[d] = vf[k + d];
+    PetscCallMPI(MPI_Bcast(scene->walls[w].v, KERGS_DIM, MPIU_REAL, size - 1, ops->comm));
+  }
+  PetscCall(VecRestoreArrayRead(ops->Vf, &vf));
   PetscFunctionReturn(0);
 }

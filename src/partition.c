@@ -1,10 +1,12 @@
 /* kergs partition: ownership of the grains by the ranks (DESIGN.md section 6, issue 4).
 
-   The disk state is replicated and rank p owns the index range [dstart, dend), so a partition is realised by
-   renumbering the disks part after part ("migration" moves nothing but indices). A partition is computed on
-   rank 0 from the grain graph gathered there (vertices: grains with work 1 + contacts; edges: disk-disk
-   contacts), broadcast as the new order of the disks, and applied identically everywhere; the contacts follow
-   their grains with their impulses, so that the next detection warm-starts them (Algorithm 1). */
+   Rank p owns the disks of global indices [dstart, dend), so a partition is a new numbering of the disks, part
+   after part. It is computed on rank 0 from the grain graph gathered there (vertices: grains with work
+   1 + contacts and their centres and ids; edges: disk-disk contacts), broadcast as the new order of the disks;
+   the disks then migrate to their new owners with their whole state (KergsSceneMigrate), and the contacts follow
+   their disk a with their impulses, so that the next detection warm-starts them (Algorithm 1). METIS and the
+   Hilbert sort run serially on rank 0 (O(ndisks) memory there at each partition, the only such place); at
+   hundreds of ranks ParMETIS and a parallel sort would replace them. */
 #include <kergs/partition.h>
 #include <metis.h>
 #include <stdint.h>
@@ -151,55 +153,46 @@ static inline PetscMPIInt OwnerOf(const PetscInt ranges[], PetscMPIInt size, Pet
 /* ---------------------------------------------------------------------------------------------------------- */
 /* Measures                                                                                                   */
 
-/* Work (1 + contacts per grain, summed over a rank's grains), edge cut and ghosts from each rank's own contacts.
-   Contacts sorted by (a, kind, b) and ownership by contiguous ranges make this cheap: a cut contact is owned by
-   the lower rank (a < b); the owner's ghosts are the distinct b of its cut contacts (grains of higher ranks), and
-   rank q's ghosts from lower ranks are, for each such rank, its distinct grains a with a contact to q. */
+/* Work (1 + contacts per grain, summed over a rank's grains) and edge cut from each rank's own contacts; ghosts
+   are those of the current ghost layer. A contact with a ghost b adds to the work of b's owner. */
 PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsContacts ct, KergsPartitionMeasures *m)
 {
   PetscMPIInt rank, size;
-  PetscInt   *ranges, *buf, *offb, noffb = 0, distinct_b = 0, lasta = -1;
-  PetscMPIInt lastq = -1;
+  PetscInt   *buf;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
   PetscCallMPI(MPI_Comm_size(p->comm, &size));
-  PetscCall(GetRanges(sc, &ranges));
-  /* buf: work per rank [0, size), ghosts from lower ranks per rank [size, 2 size), edges, cut, distinct b */
-  PetscCall(PetscCalloc1(2 * size + 3, &buf));
-  PetscCall(PetscMalloc1(ct->n + 1, &offb));
-  buf[rank] += sc->dend - sc->dstart;
+  /* buf: work per rank [0, size), edges, cut, ghosts */
+  PetscCall(PetscCalloc1(size + 3, &buf));
+  buf[rank] += sc->nowned;
   for (PetscInt k = 0; k < ct->n; k++) {
     const KergsContact *c = &ct->c[k];
-    PetscMPIInt         q;
 
     buf[rank]++;
     if (c->kind != KERGS_CONTACT_DISK_DISK) continue;
-    q = OwnerOf(ranges, size, c->b);
-    buf[q]++;
-    buf[2 * size]++;
-    if (q == rank) continue;
-    buf[2 * size + 1]++;
-    offb[noffb++] = c->b;
-    if (c->a != lasta || q != lastq) buf[size + q]++; /* b's sorted for a given a: owners come in runs */
-    lasta = c->a;
-    lastq = q;
+    PetscCheck(c->b >= 0 && c->b < sc->nlocal, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONGSTATE,
+               "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT " (contacts older than the ghost layer)",
+               sc->name, k, c->b, sc->nlocal);
+    buf[size]++;
+    if (c->b < sc->nowned) buf[rank]++;
+    else {
+      buf[sc->ghost_owner[c->b - sc->nowned]]++;
+      buf[size + 1]++;
+    }
   }
-  PetscCall(PetscSortInt(noffb, offb));
-  for (PetscInt k = 0; k < noffb; k++) distinct_b += (k == 0 || offb[k] != offb[k - 1]);
-  buf[2 * size + 2] = distinct_b;
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, buf, 2 * size + 3, MPIU_INT, MPI_SUM, p->comm));
-  m->edges       = buf[2 * size];
-  m->edgecut     = buf[2 * size + 1];
-  m->ghosts      = buf[2 * size + 2];
-  m->my_grains   = sc->dend - sc->dstart;
+  buf[size + 2] = sc->nlocal - sc->nowned;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, buf, size + 3, MPIU_INT, MPI_SUM, p->comm));
+  m->edges       = buf[size];
+  m->edgecut     = buf[size + 1];
+  m->ghosts      = buf[size + 2];
+  m->my_grains   = sc->nowned;
   m->my_contacts = ct->n;
-  m->my_ghosts   = distinct_b + buf[size + rank];
+  m->my_ghosts   = sc->nlocal - sc->nowned;
   m->my_work     = (PetscReal)buf[rank];
   m->work_max    = 0;
   m->work_mean   = 0;
   for (PetscMPIInt q = 0; q < size; q++) {
-    m->ghosts += buf[size + q];
     m->work_max = PetscMax(m->work_max, (PetscReal)buf[q]);
     m->work_mean += (PetscReal)buf[q];
   }
@@ -207,9 +200,7 @@ PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsConta
   m->imbalance = m->work_mean > 0 ? m->work_max / m->work_mean : 1.0;
   /* no partition beats max(1, size / ndisks): a rank holds at least one grain's work once ranks outnumber grains */
   m->imbalance_bound = sc->ndisks > 0 ? PetscMax(1.0, (PetscReal)size / (PetscReal)sc->ndisks) : 1.0;
-  PetscCall(PetscFree(offb));
   PetscCall(PetscFree(buf));
-  PetscCall(PetscFree(ranges));
   PetscFunctionReturn(0);
 }
 
@@ -242,124 +233,82 @@ PetscErrorCode KergsPartitionRecord(KergsPartition p, KergsScene sc, KergsContac
 /* ---------------------------------------------------------------------------------------------------------- */
 /* Renumbering (migration)                                                                                    */
 
-static PetscErrorCode PermuteReals(PetscInt n, PetscInt bs, const PetscInt order[], PetscReal *a, PetscReal *tmp)
-{
-  PetscFunctionBeginUser;
-  if (!a) PetscFunctionReturn(0);
-  for (PetscInt k = 0; k < n; k++)
-    for (PetscInt d = 0; d < bs; d++) tmp[bs * k + d] = a[bs * order[k] + d];
-  PetscCall(PetscArraycpy(a, tmp, bs * n));
-  PetscFunctionReturn(0);
-}
+/* A contact on its way to its new owner: the key of its history (a as a new global index, kind, idb) and its
+   impulse. Its frame needs no change: body a is the disk of smaller grain id whatever the numbering. */
+typedef struct {
+  PetscInt         a, idb;
+  KergsContactKind kind;
+  PetscReal        r[KERGS_MAXCOMP];
+} MovingContact;
 
-static PetscErrorCode PermuteInts(PetscInt n, const PetscInt order[], PetscInt *a, PetscInt *tmp)
-{
-  PetscFunctionBeginUser;
-  if (!a) PetscFunctionReturn(0);
-  for (PetscInt k = 0; k < n; k++) tmp[k] = a[order[k]];
-  PetscCall(PetscArraycpy(a, tmp, n));
-  PetscFunctionReturn(0);
-}
-
-/* Every per-disk array of the scene (see scene.h): new disk k is old disk order[k]. */
-static PetscErrorCode PermuteScene(KergsScene sc, const PetscInt order[])
-{
-  const PetscInt n = sc->ndisks;
-  PetscReal     *rtmp;
-  PetscInt      *itmp;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscMalloc2(KERGS_DIM * n, &rtmp, n, &itmp));
-  PetscCall(PermuteReals(n, KERGS_DIM, order, sc->x, rtmp));
-  PetscCall(PermuteReals(n, KERGS_NROT, order, sc->rot, rtmp));
-  PetscCall(PermuteReals(n, KERGS_DIM, order, sc->v, rtmp));
-  PetscCall(PermuteReals(n, KERGS_NROT, order, sc->omega, rtmp));
-  PetscCall(PermuteReals(n, 1, order, sc->radius, rtmp));
-  PetscCall(PermuteReals(n, 1, order, sc->mass, rtmp));
-  PetscCall(PermuteReals(n, 1, order, sc->inertia, rtmp));
-  PetscCall(PermuteInts(n, order, sc->material, itmp));
-  PetscCall(PermuteInts(n, order, sc->id, itmp));
-  PetscCall(PetscFree2(rtmp, itmp));
-  PetscFunctionReturn(0);
-}
-
-/* The same (a, kind, b) order as detection's. */
 static int CompareContactKeys(const void *x, const void *y)
 {
   const KergsContact *p = (const KergsContact *)x, *q = (const KergsContact *)y;
 
   if (p->a != q->a) return p->a < q->a ? -1 : 1;
   if (p->kind != q->kind) return p->kind < q->kind ? -1 : 1;
-  if (p->b != q->b) return p->b < q->b ? -1 : 1;
+  if (p->idb != q->idb) return p->idb < q->idb ? -1 : 1;
   return 0;
 }
 
-/* A contact in the new numbering. A disk-disk pair whose new a exceeds its new b is swapped: body a becomes
-   old b, so n -> -n and t = (-n_y, n_x) -> -t, and ra <-> rb. The impulse keeps its components: the force on the
-   new a (old b) was -(r_n n + r_t t) = r_n (-n) + r_t (-t), and its torque -R_b r_t = -R_a' r_t; the relative
-   velocity components v_n = n.(u_a - u_b), v_t = t.(u_a - u_b) - ra w_a - rb w_b are unchanged likewise. */
-static void RenumberContact(KergsContact *c, const PetscInt old2new[])
-{
-  c->a = old2new[c->a];
-  if (c->kind != KERGS_CONTACT_DISK_DISK) return;
-  c->b = old2new[c->b];
-  if (c->a > c->b) {
-    PetscInt  i = c->a;
-    PetscReal r = c->ra;
-
-    c->a  = c->b;
-    c->b  = i;
-    c->ra = c->rb;
-    c->rb = r;
-    for (PetscInt d = 0; d < KERGS_DIM; d++) {
-      c->n[d] = -c->n[d];
-      c->t[d] = -c->t[d];
-    }
-  }
-}
-
-/* Send every renumbered contact to the rank owning its (new) body a; the received list replaces ct->c, sorted,
-   as the current list (detection makes it the previous one and carries the impulses over). */
-static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt old2new[], const PetscInt newranges[], PetscMPIInt rank,
+/* Send every contact to the new owner of its disk a. The received ones replace ct->c, sorted by key and holding
+   only their key and impulse (b = -1: the ghost layer is gone), so that the next detection carries the impulses
+   over; nothing else may read them before that detection. */
+static PetscErrorCode MigrateContacts(KergsScene sc, KergsContacts ct, const PetscInt old2new[], const PetscInt newranges[], PetscMPIInt rank,
                                       PetscMPIInt size)
 {
-  PetscMPIInt  *scount, *sdispl, *rcount, *rdispl, *dest;
-  KergsContact *sendbuf, *recvbuf;
-  MPI_Datatype  ctype;
-  PetscInt      nrecv = 0, *fill;
+  PetscMPIInt   *scount, *sdispl, *rcount, *rdispl, *dest;
+  MovingContact *sendbuf, *recvbuf;
+  MPI_Datatype   ctype;
+  PetscInt       nrecv = 0, *fill;
 
   PetscFunctionBeginUser;
   PetscCall(PetscCalloc4(size, &scount, size, &sdispl, size, &rcount, size, &rdispl));
   PetscCall(PetscMalloc3(ct->n + 1, &dest, ct->n + 1, &sendbuf, size, &fill));
   for (PetscInt k = 0; k < ct->n; k++) {
-    KergsContact c = ct->c[k];
-    RenumberContact(&c, old2new);
-    dest[k] = OwnerOf(newranges, size, c.a);
+    dest[k] = OwnerOf(newranges, size, old2new[sc->gidx[ct->c[k].a]]);
     scount[dest[k]]++;
-    ct->c[k] = c;
   }
   for (PetscMPIInt q = 1; q < size; q++) sdispl[q] = sdispl[q - 1] + scount[q - 1];
   for (PetscMPIInt q = 0; q < size; q++) fill[q] = sdispl[q];
-  for (PetscInt k = 0; k < ct->n; k++) sendbuf[fill[dest[k]]++] = ct->c[k];
+  for (PetscInt k = 0; k < ct->n; k++) {
+    MovingContact *m = &sendbuf[fill[dest[k]]++];
+    m->a             = old2new[sc->gidx[ct->c[k].a]];
+    m->idb           = ct->c[k].idb;
+    m->kind          = ct->c[k].kind;
+    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) m->r[j] = ct->c[k].r[j];
+  }
   PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, ct->comm));
   for (PetscMPIInt q = 0; q < size; q++) {
     rdispl[q] = (PetscMPIInt)nrecv;
     nrecv += rcount[q];
   }
   PetscCall(PetscMalloc1(nrecv + 1, &recvbuf));
-  PetscCallMPI(MPI_Type_contiguous((PetscMPIInt)sizeof(KergsContact), MPI_BYTE, &ctype));
+  PetscCallMPI(MPI_Type_contiguous((PetscMPIInt)sizeof(MovingContact), MPI_BYTE, &ctype));
   PetscCallMPI(MPI_Type_commit(&ctype));
   PetscCallMPI(MPI_Alltoallv(sendbuf, scount, sdispl, ctype, recvbuf, rcount, rdispl, ctype, ct->comm));
   PetscCallMPI(MPI_Type_free(&ctype));
-  qsort(recvbuf, (size_t)nrecv, sizeof(KergsContact), CompareContactKeys);
-  PetscCall(PetscFree(ct->c));
-  ct->c      = recvbuf;
-  ct->n      = nrecv;
-  ct->nalloc = nrecv + 1;
-  ct->nprev  = 0; /* the previous list is in the old numbering: it is superseded by this one */
-  ct->start  = 0;
+  if (nrecv > ct->nalloc) {
+    PetscCall(PetscFree(ct->c));
+    PetscCall(PetscMalloc1(nrecv, &ct->c));
+    ct->nalloc = nrecv;
+  }
+  for (PetscInt k = 0; k < nrecv; k++) {
+    KergsContact *c = &ct->c[k];
+    PetscCall(PetscMemzero(c, sizeof(*c)));
+    c->a    = recvbuf[k].a - newranges[rank];
+    c->b    = -1;
+    c->idb  = recvbuf[k].idb;
+    c->kind = recvbuf[k].kind;
+    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) c->r[j] = recvbuf[k].r[j];
+  }
+  qsort(ct->c, (size_t)nrecv, sizeof(KergsContact), CompareContactKeys);
+  ct->n     = nrecv;
+  ct->nprev = 0; /* the history is in the old numbering: superseded by this list */
+  ct->start = 0;
   PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));
   if (rank == 0) ct->start = 0; /* MPI_Exscan leaves rank 0's result undefined */
+  PetscCall(PetscFree(recvbuf));
   PetscCall(PetscFree4(scount, sdispl, rcount, rdispl));
   PetscCall(PetscFree3(dest, sendbuf, fill));
   PetscFunctionReturn(0);
@@ -392,24 +341,23 @@ static PetscErrorCode CheckRenumbering(KergsScene sc, const PetscInt order[], co
 PetscErrorCode KergsPartitionRenumber(KergsScene sc, KergsContacts ct, const PetscInt order[], const PetscInt counts[], PetscInt *nmoved)
 {
   PetscMPIInt rank, size;
-  PetscInt   *old2new, *oldranges, *newranges, moved = 0;
+  PetscInt   *old2new, *oldranges, *newranges, *newidx, moved = 0;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
   PetscCallMPI(MPI_Comm_size(sc->comm, &size));
-  PetscCall(PetscMalloc2(sc->ndisks + 1, &old2new, size + 1, &newranges));
+  PetscCall(PetscMalloc3(sc->ndisks + 1, &old2new, size + 1, &newranges, sc->nowned + 1, &newidx));
   PetscCall(CheckRenumbering(sc, order, counts, size, old2new));
   PetscCall(GetRanges(sc, &oldranges));
   newranges[0] = 0;
   for (PetscMPIInt q = 0; q < size; q++) newranges[q + 1] = newranges[q] + counts[q];
   for (PetscInt k = 0; k < sc->ndisks; k++) moved += OwnerOf(oldranges, size, order[k]) != OwnerOf(newranges, size, k);
-  PetscCall(PermuteScene(sc, order));
-  sc->dstart = newranges[rank];
-  sc->dend   = newranges[rank + 1];
-  if (ct) PetscCall(MigrateContacts(ct, old2new, newranges, rank, size));
+  if (ct) PetscCall(MigrateContacts(sc, ct, old2new, newranges, rank, size)); /* reads the old numbering of the disks */
+  for (PetscInt i = 0; i < sc->nowned; i++) newidx[i] = old2new[sc->dstart + i];
+  PetscCall(KergsSceneMigrate(sc, newidx, counts));
   if (nmoved) *nmoved = moved;
   PetscCall(PetscFree(oldranges));
-  PetscCall(PetscFree2(old2new, newranges));
+  PetscCall(PetscFree3(old2new, newranges, newidx));
   PetscFunctionReturn(0);
 }
 
@@ -418,19 +366,50 @@ PetscErrorCode KergsPartitionRenumber(KergsScene sc, KergsContacts ct, const Pet
 
 /* The grain graph on rank 0: CSR adjacency of the disk-disk contacts and the work of each grain. */
 typedef struct {
-  PetscInt  n, nedges;
-  PetscInt *xadj, *adj; /* n + 1, 2 nedges */
-  PetscInt *work;       /* 1 + contacts (disk-disk and disk-wall) per grain */
+  PetscInt   n, nedges;
+  PetscInt  *xadj, *adj; /* n + 1, 2 nedges */
+  PetscInt  *work;       /* 1 + contacts (disk-disk and disk-wall) per grain */
+  PetscReal *x;          /* centres (KERGS_DIM per grain) */
+  PetscInt  *id;         /* grain ids */
 } GrainGraph;
 
 static PetscErrorCode GrainGraphDestroy(GrainGraph *g)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscFree3(g->xadj, g->adj, g->work));
+  PetscCall(PetscFree2(g->x, g->id));
   PetscFunctionReturn(0);
 }
 
-/* Gather every rank's contacts as pairs (a, b) (b = -1 for a wall) to rank 0 and build the graph there. */
+/* Centres and ids of every disk, in global-index order, on rank 0. */
+static PetscErrorCode GatherGrains(KergsScene sc, GrainGraph *g)
+{
+  PetscMPIInt rank, size, *counts = NULL, *displs = NULL, mine = (PetscMPIInt)sc->nowned;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
+  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  if (rank == 0) PetscCall(PetscMalloc2(size, &counts, size, &displs));
+  PetscCall(PetscMalloc2(rank == 0 ? KERGS_DIM * sc->ndisks + 1 : 1, &g->x, rank == 0 ? sc->ndisks + 1 : 1, &g->id));
+  PetscCallMPI(MPI_Gather(&mine, 1, MPI_INT, counts, 1, MPI_INT, 0, sc->comm));
+  if (rank == 0) {
+    displs[0] = 0;
+    for (PetscMPIInt q = 1; q < size; q++) displs[q] = displs[q - 1] + counts[q - 1];
+  }
+  PetscCallMPI(MPI_Gatherv(sc->id, mine, MPIU_INT, g->id, counts, displs, MPIU_INT, 0, sc->comm));
+  if (rank == 0)
+    for (PetscMPIInt q = 0; q < size; q++) {
+      counts[q] *= KERGS_DIM;
+      displs[q] *= KERGS_DIM;
+    }
+  mine *= KERGS_DIM;
+  PetscCallMPI(MPI_Gatherv(sc->x, mine, MPIU_REAL, g->x, counts, displs, MPIU_REAL, 0, sc->comm));
+  if (rank == 0) PetscCall(PetscFree2(counts, displs));
+  PetscFunctionReturn(0);
+}
+
+/* Gather every rank's contacts as pairs of global indices (a, b) (b = -1 for a wall), the centres and the ids
+   to rank 0 and build the graph there. */
 static PetscErrorCode GatherGrainGraph(KergsScene sc, KergsContacts ct, GrainGraph *g)
 {
   PetscMPIInt rank, size, nmine = (PetscMPIInt)(2 * ct->n), *counts = NULL, *displs = NULL;
@@ -442,9 +421,13 @@ static PetscErrorCode GatherGrainGraph(KergsScene sc, KergsContacts ct, GrainGra
   PetscCall(PetscMemzero(g, sizeof(*g)));
   PetscCall(PetscMalloc1(nmine + 1, &mine));
   for (PetscInt k = 0; k < ct->n; k++) {
-    mine[2 * k]     = ct->c[k].a;
-    mine[2 * k + 1] = ct->c[k].kind == KERGS_CONTACT_DISK_DISK ? ct->c[k].b : -1;
+    PetscCheck(ct->c[k].kind != KERGS_CONTACT_DISK_DISK || (ct->c[k].b >= 0 && ct->c[k].b < sc->nlocal), PETSC_COMM_SELF,
+               PETSC_ERR_ARG_WRONGSTATE, "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT, sc->name, k,
+               ct->c[k].b, sc->nlocal);
+    mine[2 * k]     = sc->gidx[ct->c[k].a];
+    mine[2 * k + 1] = ct->c[k].kind == KERGS_CONTACT_DISK_DISK ? sc->gidx[ct->c[k].b] : -1;
   }
+  PetscCall(GatherGrains(sc, g));
   if (rank == 0) PetscCall(PetscMalloc2(size, &counts, size, &displs));
   PetscCallMPI(MPI_Gather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, 0, sc->comm));
   if (rank == 0) {
@@ -533,9 +516,10 @@ static int CompareCurveEntries(const void *x, const void *y)
 
 /* seq[k]: the k-th disk along the Hilbert curve of a square grid over the bounding box of the centres (one cell size
    for both axes, so that the curve keeps the packing's aspect); ties by index. */
-static PetscErrorCode HilbertOrder(KergsScene sc, PetscInt seq[])
+static PetscErrorCode HilbertOrder(const GrainGraph *g, PetscInt seq[])
 {
-  const PetscInt n = sc->ndisks;
+  const PetscInt   n = g->n;
+  const PetscReal *x = g->x;
   PetscReal      lo[KERGS_DIM], hi[KERGS_DIM], extent = 0, scale;
   CurveEntry    *e;
 
@@ -546,8 +530,8 @@ static PetscErrorCode HilbertOrder(KergsScene sc, PetscInt seq[])
   }
   for (PetscInt i = 0; i < n; i++)
     for (PetscInt d = 0; d < KERGS_DIM; d++) {
-      lo[d] = PetscMin(lo[d], sc->x[KERGS_DIM * i + d]);
-      hi[d] = PetscMax(hi[d], sc->x[KERGS_DIM * i + d]);
+      lo[d] = PetscMin(lo[d], x[KERGS_DIM * i + d]);
+      hi[d] = PetscMax(hi[d], x[KERGS_DIM * i + d]);
     }
   for (PetscInt d = 0; d < KERGS_DIM; d++) extent = PetscMax(extent, hi[d] - lo[d]);
   scale = extent > 0 ? ((PetscReal)((1u << KERGS_HILBERT_ORDER) - 1)) / extent : 0.0;
@@ -555,7 +539,7 @@ static PetscErrorCode HilbertOrder(KergsScene sc, PetscInt seq[])
   for (PetscInt i = 0; i < n; i++) {
     uint32_t cell[KERGS_DIM];
     for (PetscInt d = 0; d < KERGS_DIM; d++) {
-      PetscReal s = (sc->x[KERGS_DIM * i + d] - lo[d]) * scale;
+      PetscReal s = (x[KERGS_DIM * i + d] - lo[d]) * scale;
       cell[d]     = (uint32_t)PetscMin(PetscMax(s, 0.0), (PetscReal)((1u << KERGS_HILBERT_ORDER) - 1));
     }
     e[i].key  = HilbertIndex(cell[0], cell[1]);
@@ -569,13 +553,13 @@ static PetscErrorCode HilbertOrder(KergsScene sc, PetscInt seq[])
 
 /* Geometric partition: the disks along the Hilbert curve (seq, also the order within the parts) cut into nparts
    chunks of equal work; part[i] is the part of disk i. */
-static PetscErrorCode GeometricPartition(KergsScene sc, const PetscInt work[], PetscInt nparts, PetscInt part[], PetscInt seq[])
+static PetscErrorCode GeometricPartition(const GrainGraph *g, const PetscInt work[], PetscInt nparts, PetscInt part[], PetscInt seq[])
 {
-  const PetscInt n     = sc->ndisks;
+  const PetscInt n     = g->n;
   PetscReal      total = 0, before = 0;
 
   PetscFunctionBeginUser;
-  PetscCall(HilbertOrder(sc, seq));
+  PetscCall(HilbertOrder(g, seq));
   for (PetscInt i = 0; i < n; i++) total += (PetscReal)work[i];
   /* the k-th disk goes to the part containing the middle of its work interval [before, before + w) */
   for (PetscInt k = 0; k < n; k++) {
@@ -643,17 +627,17 @@ static PetscErrorCode MetisPartition(const GrainGraph *g, const PetscInt canon[]
 }
 
 /* canon[v]: the disk of the v-th smallest grain id (ties, which valid scenes do not have, by index). */
-static PetscErrorCode IdOrder(KergsScene sc, PetscInt canon[])
+static PetscErrorCode IdOrder(const GrainGraph *g, PetscInt canon[])
 {
   PetscInt *ids;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscMalloc1(sc->ndisks + 1, &ids));
-  for (PetscInt i = 0; i < sc->ndisks; i++) {
-    ids[i]   = sc->id[i];
+  PetscCall(PetscMalloc1(g->n + 1, &ids));
+  for (PetscInt i = 0; i < g->n; i++) {
+    ids[i]   = g->id[i];
     canon[i] = i;
   }
-  PetscCall(PetscSortIntWithArray(sc->ndisks, ids, canon));
+  PetscCall(PetscSortIntWithArray(g->n, ids, canon));
   PetscCall(PetscFree(ids));
   PetscFunctionReturn(0);
 }
@@ -779,14 +763,14 @@ static PetscErrorCode ComputeParts(KergsPartition p, KergsScene sc, const GrainG
     int       st = METIS_ERROR;
     PetscInt *canon;
     PetscCall(PetscMalloc1(n + 1, &canon));
-    PetscCall(IdOrder(sc, canon));
-    if (p->metis_curve) PetscCall(HilbertOrder(sc, seq)); /* the order within the parts stays the index order */
+    PetscCall(IdOrder(g, canon));
+    if (p->metis_curve) PetscCall(HilbertOrder(g, seq)); /* the order within the parts stays the index order */
     PetscCall(MetisPartition(g, canon, p->metis_curve ? seq : NULL, size, p->metis_seed, part, &st));
     PetscCall(PetscFree(canon));
     for (PetscInt i = 0; i < n; i++) seq[i] = i;
     *status = st;
   } else if (method == KERGS_PARTITION_GEOMETRIC) {
-    PetscCall(GeometricPartition(sc, g->work, size, part, seq));
+    PetscCall(GeometricPartition(g, g->work, size, part, seq));
   } else {
     for (PetscMPIInt q = 0; q < size; q++) /* the even split of KergsSceneSetDisks: the first n % size ranks get one more */
       for (PetscInt i = q * (n / size) + PetscMin(q, n % size); i < (q + 1) * (n / size) + PetscMin(q + 1, n % size); i++) part[i] = q;

@@ -125,6 +125,7 @@ PetscErrorCode KergsSceneCreate(MPI_Comm comm, KergsScene *scene)
   s->nsteps     = 100;
   s->gaprule    = KERGS_GAP_PAPER;
   s->alert      = -1.0; /* automatic: 0.1 * mean radius once the disks are known */
+  s->ghost_skin = -1.0; /* automatic: the alert distance */
   s->nmaterials = 1;
   PetscCall(PetscMalloc1(1, &s->density));
   PetscCall(PetscCalloc1(1, &s->mu));
@@ -145,7 +146,11 @@ static PetscErrorCode SceneFreeDisks(KergsScene scene)
   PetscCall(PetscFree(scene->mass));
   PetscCall(PetscFree(scene->inertia));
   PetscCall(PetscFree(scene->material));
-  scene->ndisks = 0;
+  PetscCall(PetscFree(scene->gidx));
+  PetscCall(PetscFree(scene->xref));
+  PetscCall(PetscFree(scene->ghost_owner));
+  PetscCall(PetscSFDestroy(&scene->ghost_sf));
+  scene->ndisks = scene->nowned = scene->nlocal = scene->nalloc = 0;
   PetscFunctionReturn(0);
 }
 
@@ -166,7 +171,7 @@ PetscErrorCode KergsSceneDestroy(KergsScene *scene)
 static PetscErrorCode SceneComputeMasses(KergsScene scene)
 {
   PetscFunctionBeginUser;
-  for (PetscInt i = 0; i < scene->ndisks; i++) {
+  for (PetscInt i = 0; i < scene->nlocal; i++) {
     const PetscInt  m = scene->material[i];
     const PetscReal r = scene->radius[i];
 
@@ -176,16 +181,37 @@ static PetscErrorCode SceneComputeMasses(KergsScene scene)
   PetscFunctionReturn(0);
 }
 
-/* Contiguous split of the disks over the ranks: [dstart, dend). */
-static PetscErrorCode SceneSplitOwnership(KergsScene scene)
+/* Contiguous split of n disks over the ranks: [dstart, dend). */
+static PetscErrorCode SceneSplitOwnership(KergsScene scene, PetscInt n)
 {
-  PetscInt nlocal = PETSC_DECIDE, n = scene->ndisks, end;
+  PetscInt nlocal = PETSC_DECIDE, end;
 
   PetscFunctionBeginUser;
   PetscCall(PetscSplitOwnership(scene->comm, &nlocal, &n));
   PetscCallMPI(MPI_Scan(&nlocal, &end, 1, MPIU_INT, MPI_SUM, scene->comm));
   scene->dstart = end - nlocal;
   scene->dend   = end;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneReserve(KergsScene scene, PetscInt n)
+{
+  PetscInt cap;
+
+  PetscFunctionBeginUser;
+  if (n <= scene->nalloc) PetscFunctionReturn(0);
+  cap = PetscMax(n, scene->nalloc + scene->nalloc / 2);
+  PetscCall(PetscRealloc(sizeof(PetscInt) * (size_t)cap, &scene->gidx));
+  PetscCall(PetscRealloc(sizeof(PetscInt) * (size_t)cap, &scene->id));
+  PetscCall(PetscRealloc(sizeof(PetscInt) * (size_t)cap, &scene->material));
+  PetscCall(PetscRealloc(sizeof(PetscReal) * (size_t)cap * KERGS_DIM, &scene->x));
+  PetscCall(PetscRealloc(sizeof(PetscReal) * (size_t)cap * KERGS_NROT, &scene->rot));
+  PetscCall(PetscRealloc(sizeof(PetscReal) * (size_t)cap * KERGS_DIM, &scene->v));
+  PetscCall(PetscRealloc(sizeof(PetscReal) * (size_t)cap * KERGS_NROT, &scene->omega));
+  PetscCall(PetscRealloc(sizeof(PetscReal) * (size_t)cap, &scene->radius));
+  PetscCall(PetscRealloc(sizeof(PetscReal) * (size_t)cap, &scene->mass));
+  PetscCall(PetscRealloc(sizeof(PetscReal) * (size_t)cap, &scene->inertia));
+  scene->nalloc = cap;
   PetscFunctionReturn(0);
 }
 
@@ -199,8 +225,9 @@ static PetscErrorCode SceneUpdateFrictional(KergsScene scene)
   PetscFunctionBeginUser;
   scene->frictional = PETSC_FALSE;
   PetscCall(PetscCalloc2(nm, &ndisk, nm, &nwall));
-  for (PetscInt i = 0; i < scene->ndisks; i++)
+  for (PetscInt i = 0; i < scene->nowned; i++)
     if (scene->material[i] >= 0 && scene->material[i] < nm) ndisk[scene->material[i]]++;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, ndisk, nm, MPIU_INT, MPI_SUM, scene->comm));
   for (PetscInt w = 0; w < scene->nwalls; w++)
     if (scene->walls[w].material >= 0 && scene->walls[w].material < nm) nwall[scene->walls[w].material]++;
   for (PetscInt p = 0; p < nm; p++) {
@@ -220,7 +247,8 @@ static PetscErrorCode SceneMeanRadius(KergsScene scene, PetscReal *mean)
   PetscReal sum = 0.0;
 
   PetscFunctionBeginUser;
-  for (PetscInt i = 0; i < scene->ndisks; i++) sum += scene->radius[i];
+  for (PetscInt i = 0; i < scene->nowned; i++) sum += scene->radius[i];
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sum, 1, MPIU_REAL, MPIU_SUM, scene->comm));
   *mean = scene->ndisks ? sum / scene->ndisks : 0.0;
   PetscFunctionReturn(0);
 }
@@ -239,25 +267,23 @@ PetscErrorCode KergsSceneSetDisks(KergsScene scene, PetscInt n, const PetscReal 
                "Grain %" PetscInt_FMT " has material %" PetscInt_FMT ", out of range [0, %" PetscInt_FMT ") (see -materials)", i,
                material[i], scene->nmaterials);
   PetscCall(SceneFreeDisks(scene));
+  PetscCall(SceneSplitOwnership(scene, n));
   scene->ndisks = n;
-  PetscCall(PetscMalloc1(n, &scene->id));
-  PetscCall(PetscMalloc1(KERGS_DIM * n, &scene->x));
-  PetscCall(PetscCalloc1(KERGS_NROT * n, &scene->rot));
-  PetscCall(PetscCalloc1(KERGS_DIM * n, &scene->v));
-  PetscCall(PetscCalloc1(KERGS_NROT * n, &scene->omega));
-  PetscCall(PetscMalloc1(n, &scene->radius));
-  PetscCall(PetscMalloc1(n, &scene->mass));
-  PetscCall(PetscMalloc1(n, &scene->inertia));
-  PetscCall(PetscCalloc1(n, &scene->material));
-  for (PetscInt i = 0; i < n; i++) scene->id[i] = i;
-  if (n) {
-    PetscCall(PetscArraycpy(scene->x, x, KERGS_DIM * n));
-    PetscCall(PetscArraycpy(scene->radius, r, n));
-    if (material) PetscCall(PetscArraycpy(scene->material, material, n));
-    if (v) PetscCall(PetscArraycpy(scene->v, v, KERGS_DIM * n));
+  scene->nowned = scene->nlocal = scene->dend - scene->dstart;
+  PetscCall(KergsSceneReserve(scene, PetscMax(scene->nowned, 1)));
+  for (PetscInt i = 0; i < scene->nowned; i++) {
+    const PetscInt g = scene->dstart + i;
+
+    scene->gidx[i] = scene->id[i] = g;
+    scene->radius[i]              = r[g];
+    scene->material[i]            = material ? material[g] : 0;
+    for (PetscInt d = 0; d < KERGS_NROT; d++) scene->rot[KERGS_NROT * i + d] = scene->omega[KERGS_NROT * i + d] = 0.0;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      scene->x[KERGS_DIM * i + d] = x[KERGS_DIM * g + d];
+      scene->v[KERGS_DIM * i + d] = v ? v[KERGS_DIM * g + d] : 0.0;
+    }
   }
   PetscCall(SceneComputeMasses(scene));
-  PetscCall(SceneSplitOwnership(scene));
   if (scene->alert < 0.0 && n > 0) {
     PetscReal mean;
 
@@ -299,7 +325,7 @@ PetscErrorCode KergsSceneKineticEnergy(KergsScene scene, PetscReal *ek, PetscRea
   PetscReal e = 0.0, vm = 0.0;
 
   PetscFunctionBeginUser;
-  for (PetscInt i = 0; i < scene->ndisks; i++) {
+  for (PetscInt i = 0; i < scene->nowned; i++) {
     PetscReal v2 = 0.0, w2 = 0.0;
 
     for (PetscInt d = 0; d < KERGS_DIM; d++) v2 += scene->v[KERGS_DIM * i + d] * scene->v[KERGS_DIM * i + d];
@@ -307,6 +333,8 @@ PetscErrorCode KergsSceneKineticEnergy(KergsScene scene, PetscReal *ek, PetscRea
     e += 0.5 * scene->mass[i] * v2 + 0.5 * scene->inertia[i] * w2;
     vm = PetscMax(vm, PetscSqrtReal(v2));
   }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &e, 1, MPIU_REAL, MPIU_SUM, scene->comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &vm, 1, MPIU_REAL, MPIU_MAX, scene->comm));
   if (ek) *ek = e;
   if (vmax) *vmax = vm;
   PetscFunctionReturn(0);
@@ -331,6 +359,9 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
   PetscCall(PetscOptionsReal(
       "-alert", "Alert distance >= 0: potential contacts have gap < alert (default 0.1 * mean radius, once the disks are known)", NULL,
       scene->alert, &scene->alert, alert_set));
+  PetscCall(PetscOptionsReal("-ghost_skin",
+                             "Skin of the ghost layer: ghosts are rebuilt once a disk moved half of it (default: the alert distance)",
+                             "KergsSceneUpdateGhosts", scene->ghost_skin, &scene->ghost_skin, NULL));
   PetscFunctionReturn(0);
 }
 
@@ -621,32 +652,74 @@ static PetscErrorCode SceneCheckMaterials(KergsScene scene)
   PetscFunctionReturn(0);
 }
 
+/* One disk's state, as the checks read it. */
+typedef struct {
+  PetscInt  id, material;
+  PetscReal x[KERGS_DIM], v[KERGS_DIM], rot[KERGS_NROT], omega[KERGS_NROT], radius;
+} DiskCheckRecord;
+
+static void GetDiskCheckRecord(KergsScene scene, PetscInt i, DiskCheckRecord *d)
+{
+  d->id       = scene->id ? scene->id[i] : i;
+  d->material = scene->material[i];
+  d->radius   = scene->radius[i];
+  for (PetscInt k = 0; k < KERGS_DIM; k++) {
+    d->x[k] = scene->x[KERGS_DIM * i + k];
+    d->v[k] = scene->v[KERGS_DIM * i + k];
+  }
+  for (PetscInt k = 0; k < KERGS_NROT; k++) {
+    d->rot[k]   = scene->rot[KERGS_NROT * i + k];
+    d->omega[k] = scene->omega[KERGS_NROT * i + k];
+  }
+}
+
+/* Every fault of one disk, named by grain id; comm is the communicator that errors. */
+static PetscErrorCode CheckDisk(MPI_Comm comm, PetscInt nmaterials, const DiskCheckRecord *d)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(Finite(d->radius) && d->radius > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Grain %" PetscInt_FMT ": radius %g must be positive and finite",
+             d->id, (double)d->radius);
+  for (PetscInt k = 0; k < KERGS_DIM; k++) {
+    PetscCheck(Finite(d->x[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": position component %" PetscInt_FMT " is %g", d->id, k,
+               (double)d->x[k]);
+    PetscCheck(Finite(d->v[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": velocity component %" PetscInt_FMT " is %g", d->id, k,
+               (double)d->v[k]);
+  }
+  for (PetscInt k = 0; k < KERGS_NROT; k++) {
+    PetscCheck(Finite(d->rot[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": orientation is %g", d->id, (double)d->rot[k]);
+    PetscCheck(Finite(d->omega[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": angular velocity is %g", d->id, (double)d->omega[k]);
+  }
+  PetscCheck(d->material >= 0 && d->material < nmaterials, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Grain %" PetscInt_FMT ": material %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ") (see -materials)", d->id, d->material,
+             nmaterials);
+  PetscFunctionReturn(0);
+}
+
+/* Collective: the owned disks are checked where they live; the faulty disk of lowest global index is then
+   broadcast from its owner so that every rank raises the same error (no rank is left waiting). */
 static PetscErrorCode SceneCheckDisks(KergsScene scene)
 {
-  MPI_Comm comm = scene->comm;
+  DiskCheckRecord d;
+  PetscInt        bad = PETSC_MAX_INT, gbad;
+  PetscMPIInt     rank, owner = -1;
 
   PetscFunctionBeginUser;
-  for (PetscInt i = 0; i < scene->ndisks; i++) {
-    const PetscInt id = scene->id ? scene->id[i] : i;
-
-    PetscCheck(Finite(scene->radius[i]) && scene->radius[i] > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "Grain %" PetscInt_FMT ": radius %g must be positive and finite", id, (double)scene->radius[i]);
-    for (PetscInt d = 0; d < KERGS_DIM; d++) {
-      PetscCheck(Finite(scene->x[KERGS_DIM * i + d]), comm, PETSC_ERR_FP,
-                 "Grain %" PetscInt_FMT ": position component %" PetscInt_FMT " is %g", id, d, (double)scene->x[KERGS_DIM * i + d]);
-      PetscCheck(Finite(scene->v[KERGS_DIM * i + d]), comm, PETSC_ERR_FP,
-                 "Grain %" PetscInt_FMT ": velocity component %" PetscInt_FMT " is %g", id, d, (double)scene->v[KERGS_DIM * i + d]);
-    }
-    for (PetscInt d = 0; d < KERGS_NROT; d++) {
-      PetscCheck(Finite(scene->rot[KERGS_NROT * i + d]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": orientation is %g", id,
-                 (double)scene->rot[KERGS_NROT * i + d]);
-      PetscCheck(Finite(scene->omega[KERGS_NROT * i + d]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": angular velocity is %g", id,
-                 (double)scene->omega[KERGS_NROT * i + d]);
-    }
-    PetscCheck(scene->material[i] >= 0 && scene->material[i] < scene->nmaterials, comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "Grain %" PetscInt_FMT ": material %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ") (see -materials)", id,
-               scene->material[i], scene->nmaterials);
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL)); /* quiet: the message comes below, on every rank */
+  for (PetscInt i = 0; i < scene->nowned && bad == PETSC_MAX_INT; i++) {
+    GetDiskCheckRecord(scene, i, &d);
+    if (CheckDisk(PETSC_COMM_SELF, scene->nmaterials, &d) != 0) bad = scene->dstart + i;
   }
+  PetscCall(PetscPopErrorHandler());
+  PetscCall(MPIU_Allreduce(&bad, &gbad, 1, MPIU_INT, MPI_MIN, scene->comm));
+  if (gbad == PETSC_MAX_INT) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_rank(scene->comm, &rank));
+  if (gbad >= scene->dstart && gbad < scene->dend) {
+    owner = rank;
+    GetDiskCheckRecord(scene, gbad - scene->dstart, &d);
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &owner, 1, MPI_INT, MPI_MAX, scene->comm));
+  PetscCallMPI(MPI_Bcast(&d, (PetscMPIInt)sizeof(d), MPI_BYTE, owner, scene->comm));
+  PetscCall(CheckDisk(scene->comm, scene->nmaterials, &d));
   PetscFunctionReturn(0);
 }
 
@@ -745,10 +818,12 @@ PetscErrorCode KergsSceneView(KergsScene scene, PetscViewer viewer)
   if (!viewer) viewer = PETSC_VIEWER_STDOUT_(scene->comm);
   PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &iascii));
   if (!iascii) PetscFunctionReturn(0);
-  for (PetscInt i = 0; i < scene->ndisks; i++) {
+  for (PetscInt i = 0; i < scene->nowned; i++) {
     rmin = PetscMin(rmin, scene->radius[i]);
     rmax = PetscMax(rmax, scene->radius[i]);
   }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rmin, 1, MPIU_REAL, MPIU_MIN, scene->comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rmax, 1, MPIU_REAL, MPIU_MAX, scene->comm));
   if (!scene->ndisks) rmin = 0.0;
   PetscCall(PetscViewerASCIIPrintf(
       viewer, "Scene %s: %" PetscInt_FMT " disks (radius %g to %g), %" PetscInt_FMT " walls, %" PetscInt_FMT " materials\n", scene->name,

@@ -85,14 +85,15 @@ static PetscErrorCode CheckInitialOverlaps(KergsStepper st)
   PetscFunctionReturn(0);
 }
 
-/* x+ = x- + dt (theta V+ + (1 - theta) V-) for disks and walls; V- is given as the velocities before the update. */
+/* x+ = x- + dt (theta V+ + (1 - theta) V-) for the owned disks and the walls; V- is given as the velocities before
+   the update. */
 static PetscErrorCode UpdatePositions(KergsScene sc, const PetscReal *vold, const PetscReal *wold, const PetscReal *wvold)
 {
   PetscReal th = sc->theta, dt = sc->dt;
 
   PetscFunctionBeginUser;
-  for (PetscInt i = 0; i < KERGS_DIM * sc->ndisks; i++) sc->x[i] += dt * (th * sc->v[i] + (1 - th) * vold[i]);
-  for (PetscInt i = 0; i < KERGS_NROT * sc->ndisks; i++) sc->rot[i] += dt * (th * sc->omega[i] + (1 - th) * wold[i]);
+  for (PetscInt i = 0; i < KERGS_DIM * sc->nowned; i++) sc->x[i] += dt * (th * sc->v[i] + (1 - th) * vold[i]);
+  for (PetscInt i = 0; i < KERGS_NROT * sc->nowned; i++) sc->rot[i] += dt * (th * sc->omega[i] + (1 - th) * wold[i]);
   for (PetscInt w = 0; w < sc->nwalls; w++) {
     KergsWall *wall = &sc->walls[w];
     for (PetscInt d = 0; d < KERGS_DIM; d++) {
@@ -146,9 +147,9 @@ static PetscErrorCode MeasureViolation(KergsStepper st, PetscReal *mean, PetscRe
 static PetscErrorCode SaveVelocities(KergsScene sc, PetscReal **vold, PetscReal **wold, PetscReal **wvold)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscMalloc3(KERGS_DIM * sc->ndisks, vold, KERGS_NROT * sc->ndisks, wold, KERGS_DIM * sc->nwalls, wvold));
-  PetscCall(PetscArraycpy(*vold, sc->v, KERGS_DIM * sc->ndisks));
-  PetscCall(PetscArraycpy(*wold, sc->omega, KERGS_NROT * sc->ndisks));
+  PetscCall(PetscMalloc3(KERGS_DIM * sc->nowned, vold, KERGS_NROT * sc->nowned, wold, KERGS_DIM * sc->nwalls, wvold));
+  PetscCall(PetscArraycpy(*vold, sc->v, KERGS_DIM * sc->nowned));
+  PetscCall(PetscArraycpy(*wold, sc->omega, KERGS_NROT * sc->nowned));
   for (PetscInt w = 0; w < sc->nwalls; w++)
     for (PetscInt d = 0; d < KERGS_DIM; d++) (*wvold)[KERGS_DIM * w + d] = sc->walls[w].v[d];
   PetscFunctionReturn(0);
@@ -202,7 +203,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
 
   PetscFunctionBeginUser;
   /* initial partition before the first detection, then checks every -partition_check_every steps, with the
-     contacts of the previous step (after its solve): renumbers the disks and their contacts when due */
+     contacts of the previous step (after its solve): migrates the disks and their contacts when due */
   PetscCall(KergsPartitionUpdate(st->partition, sc, st->contacts, NULL));
   PetscCall(PetscTime(&t0));
   PetscCall(KergsContactsDetect(st->contacts, sc));
@@ -219,6 +220,9 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(KergsOperatorsUpdateVelocities(st->ops, sc));
   PetscCall(UpdatePositions(sc, vold, wold, wvold));
   PetscCall(PetscFree3(vold, wold, wvold));
+  /* the ghosts' new state, for the measures and the next detection (which rebuilds the layer after a migration or
+     once a disk moved half the skin) */
+  PetscCall(KergsSceneRefreshGhosts(sc));
   sc->time += sc->dt;
   sc->step++;
   PetscCall(PetscLogEventEnd(KERGS_Update, 0, 0, 0, 0));

@@ -1,5 +1,5 @@
 # Scene: options, generators, walls, errors (tests/test_scene.c); the same checks on 1 and 2 ranks,
-# where the replicated scene must be identical on every rank.
+# where the distributed scene, gathered in global-index order, must be identical on every rank.
 kergs_test(NAME scene_1 SOURCE test_scene.c NPROCS 1 FAIL_REGEX "FAILED")
 kergs_test(NAME scene_2 SOURCE test_scene.c NPROCS 2 FAIL_REGEX "FAILED")
 # Every scene option is listed by -help, wall options under their wall_<name>_ prefix.

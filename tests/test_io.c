@@ -1,7 +1,8 @@
 /* io tests (1 and 2 ranks): results file (stats and snapshots round-trip exactly, atomic rename, 1-D stats,
    NaN fill, -output_none), sample write/read round-trip and its errors (truncated, missing, not HDF5, wrong
    layout), FCLib export of a hand-built W (read back with libfclib's own reader) and PETSc's HDF5 still
-   working after it. The scene, contacts and operators are built by hand from the headers.
+   working after it. The scene's disks are set with KergsSceneSetDisks (distributed: owned slice plus ghosts);
+   contacts and operators are built by hand from the headers.
    Option: -dir <directory> for the files written (default test_io_out). */
 #define _GNU_SOURCE /* RTLD_DEEPBIND */
 #include <kergs/results.h>
@@ -49,48 +50,38 @@ static PetscErrorCode FileExists(MPI_Comm comm, const char path[], PetscBool *ex
 
 /* ------------------------------------------------------------------------------------------------ */
 /* A hand-built scene: NDISKS disks on a slightly irregular row, two walls, values with inexact binary
-   fractions so that any rounding on the way shows. Contacts: (i, i+1) for every i, and disk 0 on wall 0. */
+   fractions so that any rounding on the way shows. Contacts: (i, i+1) for every i, and disk 0 on wall 0.
+   The disk state is distributed: KergsSceneSetDisks keeps each rank's slice of the full arrays, the fields
+   it does not take (rot, omega, id) are set on the owned disks from the Disk* functions of the global index,
+   and a ghost layer gives each rank the neighbours its contacts (i, i+1) need as body b. */
 
 static PetscReal DiskX(PetscInt i, PetscInt d, PetscInt step)
 {
   return d == 0 ? 2.0 * i + 1.0 / 3.0 + 0.01 * step : 0.1 * PetscSinReal((PetscReal)i) + 1.0 / 7.0;
 }
+static PetscReal DiskV(PetscInt i, PetscInt d) { return (d ? -0.3 : 0.7) / (i + 3); }
+static PetscReal DiskRot(PetscInt i) { return 0.1 * i - 1.0 / 3.0; }
+static PetscReal DiskOmega(PetscInt i) { return 1.0 / (i + 11); }
+static PetscReal DiskRadius(PetscInt i) { return 1.0 - 0.05 * i; }
+static PetscInt  DiskMaterial(PetscInt i) { return i % 2; }
+static PetscInt  DiskId(PetscInt i) { return 1000 + 3 * i; }
 
 static PetscErrorCode SceneBuild(MPI_Comm comm, KergsScene *scene)
 {
-  KergsScene  s;
-  PetscMPIInt rank, size;
+  KergsScene s;
+  PetscReal  x[KERGS_DIM * NDISKS], v[KERGS_DIM * NDISKS], radius[NDISKS];
+  PetscInt   material[NDISKS];
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  PetscCallMPI(MPI_Comm_size(comm, &size));
-  PetscCall(PetscCalloc1(1, &s));
-  s->comm = comm;
+  PetscCall(KergsSceneCreate(comm, &s));
   PetscCall(PetscStrncpy(s->name, "iotest", sizeof(s->name)));
-  s->ndisks = NDISKS;
-  PetscCall(PetscCalloc1(NDISKS, &s->id));
-  PetscCall(PetscCalloc1(KERGS_DIM * NDISKS, &s->x));
-  PetscCall(PetscCalloc1(KERGS_NROT * NDISKS, &s->rot));
-  PetscCall(PetscCalloc1(KERGS_DIM * NDISKS, &s->v));
-  PetscCall(PetscCalloc1(KERGS_NROT * NDISKS, &s->omega));
-  PetscCall(PetscCalloc1(NDISKS, &s->radius));
-  PetscCall(PetscCalloc1(NDISKS, &s->mass));
-  PetscCall(PetscCalloc1(NDISKS, &s->inertia));
-  PetscCall(PetscCalloc1(NDISKS, &s->material));
-  for (PetscInt i = 0; i < NDISKS; i++) {
-    for (PetscInt d = 0; d < KERGS_DIM; d++) {
-      s->x[KERGS_DIM * i + d] = DiskX(i, d, 0);
-      s->v[KERGS_DIM * i + d] = (d ? -0.3 : 0.7) / (i + 3);
-    }
-    s->rot[i]      = 0.1 * i - 1.0 / 3.0;
-    s->omega[i]    = 1.0 / (i + 11);
-    s->radius[i]   = 1.0 - 0.05 * i;
-    s->material[i] = i % 2;
-    s->id[i]       = 1000 + 3 * i;
-  }
-  s->dstart = (rank * NDISKS) / size; /* contiguous ranges */
-  s->dend   = ((rank + 1) * NDISKS) / size;
-  s->nwalls = NWALLS;
+  PetscCall(PetscFree(s->density));
+  PetscCall(PetscFree(s->mu));
+  s->nmaterials = 2;
+  PetscCall(PetscCalloc1(2, &s->density));
+  PetscCall(PetscCalloc1(4, &s->mu));
+  s->density[0] = s->density[1] = 1.0;
+  s->nwalls                     = NWALLS;
   PetscCall(PetscCalloc1(NWALLS, &s->walls));
   for (PetscInt w = 0; w < NWALLS; w++) {
     s->walls[w].a[0]     = -1.0 + w * 16.0;
@@ -99,38 +90,40 @@ static PetscErrorCode SceneBuild(MPI_Comm comm, KergsScene *scene)
     s->walls[w].b[1]     = w ? -2.0 : 2.0;
     s->walls[w].infinite = (PetscBool)(w == 1);
   }
-  s->nmaterials = 2;
-  PetscCall(PetscCalloc1(2, &s->density));
-  PetscCall(PetscCalloc1(4, &s->mu));
-  s->density[0] = s->density[1] = 1.0;
-  s->frictional                 = PETSC_TRUE;
-  s->step                       = 0;
-  s->time                       = 1.0 / 3.0;
-  *scene                        = s;
+  for (PetscInt i = 0; i < NDISKS; i++) {
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      x[KERGS_DIM * i + d] = DiskX(i, d, 0);
+      v[KERGS_DIM * i + d] = DiskV(i, d);
+    }
+    radius[i]   = DiskRadius(i);
+    material[i] = DiskMaterial(i);
+  }
+  PetscCall(KergsSceneSetDisks(s, NDISKS, x, radius, material, v));
+  for (PetscInt i = 0; i < s->nowned; i++) {
+    const PetscInt g = s->dstart + i;
+    s->rot[i]        = DiskRot(g);
+    s->omega[i]      = DiskOmega(g);
+    s->id[i]         = DiskId(g);
+  }
+  PetscCall(KergsSceneUpdateGhosts(s, PETSC_TRUE)); /* after the ids: ghosts carry them */
+  s->frictional = PETSC_TRUE;                       /* tangential impulses are written */
+  s->step       = 0;
+  s->time       = 1.0 / 3.0;
+  *scene        = s;
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode SceneFree(KergsScene *s)
+/* Local index (owned or ghost) of the disk of global index g, or -1. */
+static PetscInt LocalIndexOf(KergsScene s, PetscInt g)
 {
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree((*s)->id));
-  PetscCall(PetscFree((*s)->x));
-  PetscCall(PetscFree((*s)->rot));
-  PetscCall(PetscFree((*s)->v));
-  PetscCall(PetscFree((*s)->omega));
-  PetscCall(PetscFree((*s)->radius));
-  PetscCall(PetscFree((*s)->mass));
-  PetscCall(PetscFree((*s)->inertia));
-  PetscCall(PetscFree((*s)->material));
-  PetscCall(PetscFree((*s)->walls));
-  PetscCall(PetscFree((*s)->density));
-  PetscCall(PetscFree((*s)->mu));
-  PetscCall(PetscFree(*s));
-  PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < s->nlocal; i++)
+    if (s->gidx[i] == g) return i;
+  return -1;
 }
 
-/* Global contact g: g < NDISKS - 1 is disk-disk (g, g+1); g = NDISKS - 1 is disk 0 on wall 0. Contacts are
-   owned by the owner of disk a; sorted by (a, kind, b) as in detect. */
+/* Global contact g: g < NDISKS - 1 is disk-disk (g, g+1); g = NDISKS - 1 is disk 0 on wall 0, with a and b as
+   global disk indices. Ids increase with the index, so the owner of disk a (the smaller id) owns the contact;
+   sorted by (a, kind, idb) as in detect. */
 static void ContactOfGlobal(PetscInt g, PetscInt step, KergsContact *c)
 {
   memset(c, 0, sizeof(*c));
@@ -138,11 +131,13 @@ static void ContactOfGlobal(PetscInt g, PetscInt step, KergsContact *c)
     c->kind = KERGS_CONTACT_DISK_DISK;
     c->a    = g;
     c->b    = g + 1;
+    c->idb  = DiskId(g + 1);
     c->n[0] = -1.0;
   } else {
     c->kind = KERGS_CONTACT_DISK_WALL;
     c->a    = 0;
     c->b    = 0;
+    c->idb  = 0;
     c->n[0] = 1.0;
   }
   c->t[0] = -c->n[1];
@@ -181,6 +176,16 @@ static PetscErrorCode ContactsBuild(KergsScene scene, PetscInt step, KergsContac
     ContactOfGlobal(ContactGlobalAt(pos), step, &c);
     if (c.a >= scene->dstart && c.a < scene->dend) {
       if (ct->start < 0) ct->start = pos;
+      /* local indices: a owned, b owned or a ghost */
+      if (c.kind == KERGS_CONTACT_DISK_DISK) {
+        const PetscInt gb = c.b;
+        c.b               = LocalIndexOf(scene, gb);
+        PetscCheck(c.b >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "disk %" PetscInt_FMT " of contact (%" PetscInt_FMT ", %" PetscInt_FMT
+                   ") is neither owned nor a ghost here", gb, c.a, gb);
+        PetscCheck(scene->id[c.b] == c.idb, PETSC_COMM_SELF, PETSC_ERR_PLIB, "disk %" PetscInt_FMT " has grain id %" PetscInt_FMT
+                   ", expected %" PetscInt_FMT, gb, scene->id[c.b], c.idb);
+      }
+      c.a        = c.a - scene->dstart;
       ct->c[n++] = c;
     }
   }
@@ -276,7 +281,7 @@ static PetscErrorCode WriteResults(KergsScene scene, const char path[])
   for (PetscInt k = 0; k <= NSTEPS; k++) {
     scene->step = k;
     scene->time = k * 0.1 + 1.0 / 3.0;
-    for (PetscInt i = 0; i < NDISKS; i++) scene->x[KERGS_DIM * i] = DiskX(i, 0, k);
+    for (PetscInt i = 0; i < scene->nowned; i++) scene->x[KERGS_DIM * i] = DiskX(scene->dstart + i, 0, k);
     PetscCall(ContactsBuild(scene, k, &ct));
     PetscCall(KergsResultsSnapshotDue(res, k, (PetscBool)(k == NSTEPS), &due));
     if (due) {
@@ -364,11 +369,17 @@ static PetscErrorCode CheckSnapshot(PetscViewer viewer, KergsScene scene)
   for (PetscInt i = 0; i < NDISKS; i++)
     for (PetscInt d = 0; d < KERGS_DIM; d++) xexp[KERGS_DIM * i + d] = DiskX(i, d, NSTEPS);
   PetscCall(Expect(comm, SameArray(x, xexp, KERGS_DIM * NDISKS), "snapshot: positions of step 5 round-trip exactly"));
-  PetscCall(Expect(comm, SameArray(radius, scene->radius, NDISKS), "snapshot: radii round-trip exactly"));
+  {
+    PetscReal radall[NDISKS];
+    PetscCall(KergsSceneAllGatherReal(scene, scene->radius, 1, radall));
+    PetscCall(Expect(comm, SameArray(radius, radall, NDISKS), "snapshot: radii round-trip exactly"));
+  }
   {
     PetscBool okid = PETSC_TRUE;
+    PetscInt  idall[NDISKS];
+    PetscCall(KergsSceneAllGatherInt(scene, scene->id, 1, idall));
     for (PetscInt i = 0; i < NDISKS; i++)
-      if (id[i] != (PetscReal)scene->id[i]) okid = PETSC_FALSE;
+      if (id[i] != (PetscReal)idall[i] || idall[i] != DiskId(i)) okid = PETSC_FALSE;
     PetscCall(Expect(comm, okid, "snapshot: grain ids (stored as reals) round-trip"));
   }
   PetscCall(Expect(comm, (PetscBool)(walls[0] == -1.0 && walls[3] == 2.0 && walls[4] == 15.0 && walls[7] == -2.0),
@@ -380,7 +391,7 @@ static PetscErrorCode CheckSnapshot(PetscViewer viewer, KergsScene scene)
     if (a[pos] != c.a || b[pos] != c.b || kind[pos] != (c.kind == KERGS_CONTACT_DISK_WALL ? 1.0 : 0.0)) okab = PETSC_FALSE;
   }
   PetscCall(Expect(comm, okr, "snapshot: contact impulses (normal, tangential) round-trip exactly, in global contact order"));
-  PetscCall(Expect(comm, okab, "snapshot: contact bodies a, b and kinds round-trip"));
+  PetscCall(Expect(comm, okab, "snapshot: contact bodies a, b (global disk indices) and kinds round-trip"));
   PetscCall(DatasetShape(viewer, "/snapshots/000003/x", &ndims, dims));
   PetscCall(Expect(comm, (PetscBool)(ndims == 2 && dims[0] == NDISKS && dims[1] == KERGS_DIM), "snapshot: x is stored as (ndisks, 2)"));
   PetscCall(DatasetShape(viewer, "/snapshots/000003/r", &ndims, dims));
@@ -491,6 +502,26 @@ static PetscErrorCode ExpectReadError(KergsScene target, const char path[], cons
   PetscFunctionReturn(0);
 }
 
+/* Every disk of a scene, gathered in global-index order on every rank. */
+typedef struct {
+  PetscReal x[KERGS_DIM * NDISKS], v[KERGS_DIM * NDISKS], rot[KERGS_NROT * NDISKS], omega[KERGS_NROT * NDISKS], radius[NDISKS];
+  PetscInt  id[NDISKS], material[NDISKS];
+} DiskArrays;
+
+static PetscErrorCode GatherDisks(KergsScene s, DiskArrays *all)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(s->ndisks == NDISKS, s->comm, PETSC_ERR_PLIB, "scene %s has %" PetscInt_FMT " disks, not %d", s->name, s->ndisks, NDISKS);
+  PetscCall(KergsSceneAllGatherReal(s, s->x, KERGS_DIM, all->x));
+  PetscCall(KergsSceneAllGatherReal(s, s->v, KERGS_DIM, all->v));
+  PetscCall(KergsSceneAllGatherReal(s, s->rot, KERGS_NROT, all->rot));
+  PetscCall(KergsSceneAllGatherReal(s, s->omega, KERGS_NROT, all->omega));
+  PetscCall(KergsSceneAllGatherReal(s, s->radius, 1, all->radius));
+  PetscCall(KergsSceneAllGatherInt(s, s->id, 1, all->id));
+  PetscCall(KergsSceneAllGatherInt(s, s->material, 1, all->material));
+  PetscFunctionReturn(0);
+}
+
 /* Rank 0 writes the first half of src's bytes to dst. */
 static PetscErrorCode TruncatedCopy(MPI_Comm comm, const char src[], const char dst[])
 {
@@ -552,12 +583,21 @@ static PetscErrorCode TestSample(KergsScene scene, const char dir[])
   PetscCall(TargetSceneCreate(comm, &target));
   PetscCall(KergsSampleRead(target, path));
   ok = (PetscBool)(target->ndisks == NDISKS && target->time == scene->time);
-  if (ok) {
-    ok = (PetscBool)(SameArray(target->x, scene->x, KERGS_DIM * NDISKS) && SameArray(target->v, scene->v, KERGS_DIM * NDISKS) &&
-                     SameArray(target->rot, scene->rot, KERGS_NROT * NDISKS) &&
-                     SameArray(target->omega, scene->omega, KERGS_NROT * NDISKS) && SameArray(target->radius, scene->radius, NDISKS));
+  if (ok) { /* both scenes gathered in global-index order */
+    DiskArrays want, got;
+    PetscCall(GatherDisks(scene, &want));
+    PetscCall(GatherDisks(target, &got));
+    ok = (PetscBool)(SameArray(got.x, want.x, KERGS_DIM * NDISKS) && SameArray(got.v, want.v, KERGS_DIM * NDISKS) &&
+                     SameArray(got.rot, want.rot, KERGS_NROT * NDISKS) && SameArray(got.omega, want.omega, KERGS_NROT * NDISKS) &&
+                     SameArray(got.radius, want.radius, NDISKS));
     for (PetscInt i = 0; i < NDISKS; i++)
-      if (target->id[i] != scene->id[i] || target->material[i] != scene->material[i]) ok = PETSC_FALSE;
+      if (got.id[i] != want.id[i] || got.material[i] != want.material[i]) ok = PETSC_FALSE;
+    /* and the scene written was the one built: state of step 5, rot, omega, ids of the Disk* functions */
+    for (PetscInt i = 0; i < NDISKS; i++) {
+      if (want.x[KERGS_DIM * i] != DiskX(i, 0, NSTEPS) || want.rot[i] != DiskRot(i) || want.omega[i] != DiskOmega(i) ||
+          want.id[i] != DiskId(i) || want.material[i] != DiskMaterial(i))
+        ok = PETSC_FALSE;
+    }
   }
   PetscCall(Expect(comm, ok, "sample: write/read round-trips x, v, rot, omega, radius, material, id, time exactly"));
 
@@ -803,7 +843,7 @@ int main(int argc, char **argv)
   PetscCall(TestFCLib(scene, dir));
   PetscCall(TestResults(scene, dir));
   PetscCall(TestSample(scene, dir));
-  PetscCall(SceneFree(&scene));
+  PetscCall(KergsSceneDestroy(&scene));
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "io tests passed\n"));
   PetscCall(PetscFinalize());
   return 0;

@@ -41,8 +41,14 @@ static PetscErrorCode DenseRank(KergsStepper st, PetscInt *rank, PetscReal *zero
   PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &r));
   PetscCall(PetscCalloc3(n * n + 1, &G, n + 1, &w, n + 1, &scale));
   for (PetscInt g = 0; g < n; g++) scale[g] = 1.0;
-  for (PetscInt i = 0; i < st->scene->ndisks; i++)
-    for (PetscInt d = KERGS_DIM; d < ops->ndof_disk; d++) scale[KergsOperatorsDiskDof(ops, i) + d] = 1.0 / st->scene->radius[i];
+  {
+    PetscReal *radius; /* by global index */
+    PetscCall(PetscMalloc1(st->scene->ndisks + 1, &radius));
+    PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->radius, 1, radius));
+    for (PetscInt i = 0; i < st->scene->ndisks; i++)
+      for (PetscInt d = KERGS_DIM; d < ops->ndof_disk; d++) scale[KergsOperatorsDiskDof(ops, i) + d] = 1.0 / radius[i];
+    PetscCall(PetscFree(radius));
+  }
   PetscCall(MatGetOwnershipRange(ops->HfT, &lo, &hi));
   for (PetscInt row = lo; row < hi; row++) {
     const PetscInt    *cols;
@@ -245,18 +251,20 @@ static PetscErrorCode DepositWindow(const char *extra, PetscReal xmax, PetscReal
 {
   char       opts[1024];
   KergsScene sc;
-  PetscReal *x, *r;
+  PetscReal *x, *r, *xall, *rall;
   PetscInt   n = 0;
 
   PetscFunctionBeginUser;
   PetscCall(PetscSNPrintf(opts, sizeof(opts), "-options_file cases/confine500.opts -wall_box_right_velocity 0,0 %s", extra));
   PetscCall(MakeStepper(opts, st));
   sc = (*st)->scene;
-  PetscCall(PetscMalloc2(KERGS_DIM * (sc->ndisks + 2), &x, sc->ndisks + 2, &r));
+  PetscCall(PetscMalloc4(KERGS_DIM * (sc->ndisks + 2), &x, sc->ndisks + 2, &r, KERGS_DIM * sc->ndisks + 1, &xall, sc->ndisks + 1, &rall));
+  PetscCall(KergsSceneAllGatherReal(sc, sc->x, KERGS_DIM, xall)); /* the whole deposit, on every rank */
+  PetscCall(KergsSceneAllGatherReal(sc, sc->radius, 1, rall));
   for (PetscInt i = 0; i < sc->ndisks; i++)
-    if (sc->x[KERGS_DIM * i] <= xmax && sc->x[KERGS_DIM * i + 1] <= ymax) {
-      for (PetscInt d = 0; d < KERGS_DIM; d++) x[KERGS_DIM * n + d] = sc->x[KERGS_DIM * i + d];
-      r[n++] = sc->radius[i];
+    if (xall[KERGS_DIM * i] <= xmax && xall[KERGS_DIM * i + 1] <= ymax) {
+      for (PetscInt d = 0; d < KERGS_DIM; d++) x[KERGS_DIM * n + d] = xall[KERGS_DIM * i + d];
+      r[n++] = rall[i];
     }
   /* two rattlers far above the window: grains without contact */
   for (PetscInt j = 0; j < 2; j++) {
@@ -265,7 +273,7 @@ static PetscErrorCode DepositWindow(const char *extra, PetscReal xmax, PetscReal
     r[n++]               = 0.015;
   }
   PetscCall(KergsSceneSetDisks(sc, n, x, r, NULL, NULL));
-  PetscCall(PetscFree2(x, r));
+  PetscCall(PetscFree4(x, r, xall, rall));
   PetscCall(Assemble(*st));
   PetscFunctionReturn(0);
 }

@@ -17,19 +17,21 @@ static PetscErrorCode TestColumn(void)
                         "-lattice_radius 0.1 -lattice_origin 0,0.1 -walls floor -wall_floor_a -1,0 -wall_floor_b 1,0 -wall_floor_infinite "
                         "-alert 0.01 -solver_tol 1e-13 -solver_max_it 20000",
                         &st));
-  m = st->scene->mass[0];
+  m = PETSC_PI * 0.1 * 0.1; /* density 1 */
   for (PetscInt s = 0; s < 12; s++) {
+    PetscReal xall[2 * N];
     PetscCall(KergsStepperStep(st));
     /* lattice gaps of +1e-17 leave contacts inactive (g~ > 0) until each disk has fallen for one step:
        the column is settled once every contact has been active for a step */
     if (s < N + 2) continue;
+    PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->x, KERGS_DIM, xall));
     for (PetscInt k = 0; k < st->contacts->n; k++) {
       const KergsContact *c = &st->contacts->c[k];
       PetscInt            above = 0; /* disks at or above the upper disk of the pair (all of them for the floor) */
       PetscReal           ytop  = c->kind == KERGS_CONTACT_DISK_WALL ? -1.0 : PetscMax(st->scene->x[2 * c->a + 1], st->scene->x[2 * c->b + 1]);
       PetscReal           want;
       for (PetscInt i = 0; i < N; i++)
-        if (st->scene->x[2 * i + 1] >= ytop - 1e-6) above++;
+        if (xall[2 * i + 1] >= ytop - 1e-6) above++;
       want = above * m * g * dt;
       worst                     = PetscMax(worst, PetscAbsReal(c->r[0] - want) / (N * m * g * dt));
       worst_t                   = PetscMax(worst_t, PetscAbsReal(c->r[1]) / (N * m * g * dt));
@@ -61,9 +63,14 @@ static PetscErrorCode RunSlope(PetscReal alpha, PetscReal mu, PetscBool lock, Pe
                           (double)mu, nsteps, (double)(-s * d), (double)(c * d), (double)r, lock ? "-disks_lock_rotation" : "", (double)(-10 * c), (double)(-10 * s), (double)(10 * c), (double)(10 * s)));
   PetscCall(MakeStepper(opts, &st));
   for (PetscInt k = 0; k < nsteps; k++) PetscCall(KergsStepperStep(st));
-  *vdown   = -(st->scene->v[0] * c + st->scene->v[1] * s);
-  *vnormal = -st->scene->v[0] * s + st->scene->v[1] * c;
-  *omega   = st->scene->omega[0];
+  {
+    PetscReal v[KERGS_DIM], w[KERGS_NROT]; /* the one disk, from whichever rank owns it */
+    PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->v, KERGS_DIM, v));
+    PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->omega, KERGS_NROT, w));
+    *vdown   = -(v[0] * c + v[1] * s);
+    *vnormal = -v[0] * s + v[1] * c;
+    *omega   = w[0];
+  }
   *R       = r;
   PetscCall(KergsStepperDestroy(&st));
   PetscFunctionReturn(0);
@@ -101,7 +108,8 @@ static PetscErrorCode TestSlopes(void)
   PetscFunctionReturn(0);
 }
 
-/* Sum over this rank's contacts of the impulses they put on each disk (force and torque), DESIGN.md section 2. */
+/* Sum over every rank's contacts of the impulses they put on each disk (force and torque), DESIGN.md section 2,
+   by global disk index. */
 static PetscErrorCode DiskImpulses(KergsStepper st, PetscReal *P /* 3 per disk, global, summed over ranks */)
 {
   KergsScene sc = st->scene;
@@ -110,11 +118,13 @@ static PetscErrorCode DiskImpulses(KergsStepper st, PetscReal *P /* 3 per disk, 
   PetscCall(PetscArrayzero(P, 3 * sc->ndisks));
   for (PetscInt k = 0; k < st->contacts->n; k++) {
     const KergsContact *c = &st->contacts->c[k];
-    for (PetscInt d = 0; d < 2; d++) P[3 * c->a + d] += c->r[0] * c->n[d] + c->r[1] * c->t[d];
-    P[3 * c->a + 2] += -c->ra * c->r[1];
+    const PetscInt      a = sc->gidx[c->a];
+    for (PetscInt d = 0; d < 2; d++) P[3 * a + d] += c->r[0] * c->n[d] + c->r[1] * c->t[d];
+    P[3 * a + 2] += -c->ra * c->r[1];
     if (c->kind == KERGS_CONTACT_DISK_DISK) {
-      for (PetscInt d = 0; d < 2; d++) P[3 * c->b + d] -= c->r[0] * c->n[d] + c->r[1] * c->t[d];
-      P[3 * c->b + 2] += -c->rb * c->r[1];
+      const PetscInt b = sc->gidx[c->b];
+      for (PetscInt d = 0; d < 2; d++) P[3 * b + d] -= c->r[0] * c->n[d] + c->r[1] * c->t[d];
+      P[3 * b + 2] += -c->rb * c->r[1];
     }
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, P, 3 * sc->ndisks, MPIU_REAL, MPI_SUM, PETSC_COMM_WORLD));
@@ -125,7 +135,7 @@ static PetscErrorCode DiskImpulses(KergsStepper st, PetscReal *P /* 3 per disk, 
 static PetscErrorCode TestWedgedPair(void)
 {
   KergsStepper st;
-  PetscReal    P[6], vmax, ek, worst = 0, w;
+  PetscReal    P[6], vmax, ek, worst = 0, w, mass[2], radius[2];
 
   PetscFunctionBeginUser;
   PetscCall(PetscOptionsClear(NULL));
@@ -133,11 +143,13 @@ static PetscErrorCode TestWedgedPair(void)
   for (PetscInt k = 0; k < 300; k++) PetscCall(KergsStepperStep(st));
   PetscCall(KergsSceneKineticEnergy(st->scene, &ek, &vmax));
   PetscCall(DiskImpulses(st, P));
+  PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->mass, 1, mass));
+  PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->radius, 1, radius));
   for (PetscInt i = 0; i < 2; i++) {
-    w = st->scene->mass[i] * 9.81 * st->scene->dt;
+    w = mass[i] * 9.81 * st->scene->dt;
     worst = PetscMax(worst, PetscAbsReal(P[3 * i + 0]) / w);
     worst = PetscMax(worst, PetscAbsReal(P[3 * i + 1] - w) / w);
-    worst = PetscMax(worst, PetscAbsReal(P[3 * i + 2]) / (w * st->scene->radius[i]));
+    worst = PetscMax(worst, PetscAbsReal(P[3 * i + 2]) / (w * radius[i]));
   }
   PetscCall(Check((PetscBool)(vmax < 1e-6), "wedged pair: comes to rest (fastest grain)", vmax, 0));
   PetscCall(Check((PetscBool)(worst < 1e-6), "wedged pair: contact impulses balance the weight", worst, 0));
@@ -159,16 +171,21 @@ static PetscErrorCode TestMomentumBalance(void)
                         &st));
   PetscCall(PetscMalloc2(2 * st->scene->ndisks, &vold, 3 * st->scene->ndisks, &P));
   for (PetscInt s = 0; s < 40; s++) {
-    PetscReal dP[2] = {0, 0}, ext[2] = {0, 0}, scale = 0;
-    PetscCall(PetscArraycpy(vold, st->scene->v, 2 * st->scene->ndisks));
+    PetscReal sums[5] = {0, 0, 0, 0, 0}, *dP = sums, *ext = sums + 2; /* dP, ext, scale: over the owned disks, then all */
+    KergsScene sc     = st->scene;
+    /* the velocities before the step, by grain id: a repartition may move disks between ranks during the step */
+    PetscCall(GatherById(sc, sc->v, KERGS_DIM, vold));
     PetscCall(KergsStepperStep(st));
     PetscCall(DiskImpulses(st, P));
-    for (PetscInt i = 0; i < st->scene->ndisks; i++)
+    for (PetscInt i = 0; i < sc->nowned; i++)
       for (PetscInt d = 0; d < 2; d++) {
-        dP[d] += st->scene->mass[i] * (st->scene->v[2 * i + d] - vold[2 * i + d]);
-        ext[d] += P[3 * i + d] + st->scene->mass[i] * st->scene->gravity[d] * st->scene->dt;
-        scale += st->scene->mass[i] * 9.81 * st->scene->dt;
+        const PetscInt g = sc->dstart + i;
+        dP[d] += sc->mass[i] * (sc->v[2 * i + d] - vold[2 * sc->id[i] + d]);
+        ext[d] += P[3 * g + d] + sc->mass[i] * sc->gravity[d] * sc->dt;
+        sums[4] += sc->mass[i] * 9.81 * sc->dt;
       }
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 5, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
+    const PetscReal scale = sums[4];
     worst = PetscMax(worst, (PetscAbsReal(dP[0] - ext[0]) + PetscAbsReal(dP[1] - ext[1])) / scale);
   }
   PetscCall(Check((PetscBool)(worst < 1e-12), "momentum balance per step (relative)", worst, 0));
@@ -229,17 +246,18 @@ static PetscErrorCode TestAdjoint(void)
   PetscCall(PetscCalloc1(3 * st->scene->ndisks, &P));
   for (PetscInt k = 0; k < st->contacts->n; k++) {
     const KergsContact *c  = &st->contacts->c[k];
-    const PetscScalar  *ua = &va[c->a * nd], *ub = c->kind == KERGS_CONTACT_DISK_DISK ? &va[c->b * nd] : NULL;
+    const PetscInt      a = st->scene->gidx[c->a], b = c->kind == KERGS_CONTACT_DISK_DISK ? st->scene->gidx[c->b] : -1;
+    const PetscScalar  *ua = &va[a * nd], *ub = b >= 0 ? &va[b * nd] : NULL;
     PetscReal           du[2], wb = ub ? ub[2] : 0, vn, vt;
     for (PetscInt d = 0; d < 2; d++) du[d] = ua[d] - (ub ? ub[d] : 0); /* walls are at rest here: driven, V_g not in V_f */
     vn = c->n[0] * du[0] + c->n[1] * du[1];
     vt = c->t[0] * du[0] + c->t[1] * du[1] - c->ra * ua[2] - c->rb * wb;
     errv = PetscMax(errv, PetscAbsReal(vn - htv[2 * k]) + PetscAbsReal(vt - htv[2 * k + 1]));
-    for (PetscInt d = 0; d < 2; d++) P[3 * c->a + d] += ra[2 * k] * c->n[d] + ra[2 * k + 1] * c->t[d];
-    P[3 * c->a + 2] -= c->ra * ra[2 * k + 1];
+    for (PetscInt d = 0; d < 2; d++) P[3 * a + d] += ra[2 * k] * c->n[d] + ra[2 * k + 1] * c->t[d];
+    P[3 * a + 2] -= c->ra * ra[2 * k + 1];
     if (ub) {
-      for (PetscInt d = 0; d < 2; d++) P[3 * c->b + d] -= ra[2 * k] * c->n[d] + ra[2 * k + 1] * c->t[d];
-      P[3 * c->b + 2] -= c->rb * ra[2 * k + 1];
+      for (PetscInt d = 0; d < 2; d++) P[3 * b + d] -= ra[2 * k] * c->n[d] + ra[2 * k + 1] * c->t[d];
+      P[3 * b + 2] -= c->rb * ra[2 * k + 1];
     }
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, P, 3 * st->scene->ndisks, MPIU_REAL, MPI_SUM, PETSC_COMM_WORLD));

@@ -193,14 +193,18 @@ static PetscErrorCode Complementarity(KergsStepper st, const PetscBool *active, 
 static PetscErrorCode ColumnError(KergsStepper st, Vec r, PetscInt N, PetscReal *err)
 {
   const PetscScalar *ra;
-  const PetscReal    w = st->scene->mass[0] * 10.0 * st->scene->dt;
+  PetscReal          w, *mass;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(st->scene->ndisks, &mass));
+  PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->mass, 1, mass));
+  w = mass[0] * 10.0 * st->scene->dt;
+  PetscCall(PetscFree(mass));
   *err = 0;
   PetscCall(VecGetArrayRead(r, &ra));
   for (PetscInt k = 0; k < st->contacts->n; k++) {
     const KergsContact *c    = &st->contacts->c[k];
-    PetscReal           want = (c->kind == KERGS_CONTACT_DISK_WALL ? N : N - 1 - c->a) * w;
+    PetscReal           want = (c->kind == KERGS_CONTACT_DISK_WALL ? N : N - 1 - st->scene->gidx[c->a]) * w;
     *err                     = PetscMax(*err, PetscAbsReal(PetscRealPart(ra[k * st->ops->ncomp]) - want) / (N * w));
   }
   PetscCall(VecRestoreArrayRead(r, &ra));
@@ -316,7 +320,7 @@ static PetscErrorCode TestSingleDisk(PetscReal theta, PetscReal v0)
                     (double)G, (double)dt, (double)theta, (double)(R - delta), (double)R, (double)v0));
   PetscCall(MakeStepperOn(PETSC_COMM_WORLD, opts, &st));
   PetscCall(Prepare(st, 0, &active));
-  m = st->scene->mass[0];
+  PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->mass, 1, &m)); /* the one disk, from its owner */
   g = st->contacts->nglobal == 1 && st->contacts->n == 1 ? st->contacts->c[0].gap : 0;
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &g, 1, MPIU_REAL, MPIU_MIN, PETSC_COMM_WORLD));
   PetscCall(PetscSNPrintf(what, sizeof(what), "disk theta=%g v0=%g: one contact with gap -delta", (double)theta, (double)v0));
@@ -495,7 +499,8 @@ static PetscErrorCode CompareWithReference(Vec a, Vec b, PetscReal *rel)
   PetscFunctionReturn(0);
 }
 
-/* Identity of each contact, (a, b, kind) as one real, in the global order of ops->r's normal components. */
+/* Identity of each contact, (a, b, kind) with global disk indices as one real, in the global order of ops->r's
+   normal components. */
 static PetscErrorCode ContactKeys(KergsStepper st, Vec *keys)
 {
   PetscScalar *k;
@@ -505,7 +510,8 @@ static PetscErrorCode ContactKeys(KergsStepper st, Vec *keys)
   PetscCall(VecGetArray(*keys, &k));
   for (PetscInt i = 0; i < st->contacts->n; i++) {
     const KergsContact *c = &st->contacts->c[i];
-    k[i]                  = 1e6 * c->a + 1e2 * c->b + (c->kind == KERGS_CONTACT_DISK_WALL ? 1 : 0);
+    const PetscInt      b = c->kind == KERGS_CONTACT_DISK_WALL ? c->b : st->scene->gidx[c->b];
+    k[i]                  = 1e6 * st->scene->gidx[c->a] + 1e2 * b + (c->kind == KERGS_CONTACT_DISK_WALL ? 1 : 0);
   }
   PetscCall(VecRestoreArray(*keys, &k));
   PetscFunctionReturn(0);

@@ -1,6 +1,7 @@
 /* Tests of the scene: options, generators (list, lattice, random), walls and their programs, ownership,
-   kinetic energy, and the errors of bad input. Run on 1 and 2 ranks: the scene is replicated, so every
-   rank must build exactly the same one.
+   kinetic energy, and the errors of bad input. Run on 1 and 2 ranks: the disk state is distributed (each rank
+   owns a contiguous slice), so the checks gather the disks in global-index order (KergsSceneAllGather*), and
+   the gathered scene must be exactly the same on every rank and on any number of ranks.
    With -from_command_line the program instead builds a scene from the command line and views it (for -help). */
 #include <kergs/scene.h>
 #include <petscviewer.h>
@@ -63,17 +64,53 @@ static PetscErrorCode SceneGood(MPI_Comm comm, const char opts[], KergsScene *sc
   PetscFunctionReturn(0);
 }
 
+/* Every disk of a scene in global-index order, gathered on every rank. */
+typedef struct {
+  PetscInt   n;
+  PetscReal *x, *v, *rot, *omega, *radius, *mass, *inertia;
+  PetscInt  *id, *material;
+} Disks;
+
+static PetscErrorCode DisksGather(KergsScene s, Disks *all)
+{
+  const PetscInt n = s->ndisks;
+
+  PetscFunctionBeginUser;
+  all->n = n;
+  PetscCall(PetscMalloc7(KERGS_DIM * n + 1, &all->x, KERGS_DIM * n + 1, &all->v, KERGS_NROT * n + 1, &all->rot, KERGS_NROT * n + 1, &all->omega,
+                         n + 1, &all->radius, n + 1, &all->mass, n + 1, &all->inertia));
+  PetscCall(PetscMalloc2(n + 1, &all->id, n + 1, &all->material));
+  PetscCall(KergsSceneAllGatherReal(s, s->x, KERGS_DIM, all->x));
+  PetscCall(KergsSceneAllGatherReal(s, s->v, KERGS_DIM, all->v));
+  PetscCall(KergsSceneAllGatherReal(s, s->rot, KERGS_NROT, all->rot));
+  PetscCall(KergsSceneAllGatherReal(s, s->omega, KERGS_NROT, all->omega));
+  PetscCall(KergsSceneAllGatherReal(s, s->radius, 1, all->radius));
+  PetscCall(KergsSceneAllGatherReal(s, s->mass, 1, all->mass));
+  PetscCall(KergsSceneAllGatherReal(s, s->inertia, 1, all->inertia));
+  PetscCall(KergsSceneAllGatherInt(s, s->id, 1, all->id));
+  PetscCall(KergsSceneAllGatherInt(s, s->material, 1, all->material));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode DisksFree(Disks *all)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree7(all->x, all->v, all->rot, all->omega, all->radius, all->mass, all->inertia));
+  PetscCall(PetscFree2(all->id, all->material));
+  PetscFunctionReturn(0);
+}
+
 /* Smallest centre distance over all pairs, the number of pairs at distance d (relative tolerance tol), and
    whether any pair overlaps (distance < (r_i + r_j)(1 - tol): touching lattice disks differ from 2r by
-   rounding). Brute force. */
-static PetscErrorCode PairStats(KergsScene s, PetscReal d, PetscReal tol, PetscReal *dmin, PetscInt *nat, PetscBool *overlap)
+   rounding). Brute force over the gathered disks. */
+static PetscErrorCode PairStats(const Disks *s, PetscReal d, PetscReal tol, PetscReal *dmin, PetscInt *nat, PetscBool *overlap)
 {
   PetscFunctionBeginUser;
   *dmin    = PETSC_MAX_REAL;
   *nat     = 0;
   *overlap = PETSC_FALSE;
-  for (PetscInt i = 0; i < s->ndisks; i++) {
-    for (PetscInt j = i + 1; j < s->ndisks; j++) {
+  for (PetscInt i = 0; i < s->n; i++) {
+    for (PetscInt j = i + 1; j < s->n; j++) {
       const PetscReal dx = s->x[2 * j] - s->x[2 * i], dy = s->x[2 * j + 1] - s->x[2 * i + 1], dist = PetscSqrtReal(dx * dx + dy * dy);
 
       *dmin = PetscMin(*dmin, dist);
@@ -84,12 +121,13 @@ static PetscErrorCode PairStats(KergsScene s, PetscReal d, PetscReal tol, PetscR
   PetscFunctionReturn(0);
 }
 
-/* The ownership ranges of all ranks are contiguous, cover [0, ndisks) and differ in size by at most one. */
+/* The ownership ranges of all ranks are contiguous, cover [0, ndisks) and differ in size by at most one; each
+   rank's local arrays start with its owned disks, global indices dstart, dstart + 1, ... */
 static PetscErrorCode CheckOwnership(KergsScene s)
 {
   PetscMPIInt size;
   PetscInt    range[2] = {s->dstart, s->dend}, *all, nmin = PETSC_MAX_INT, nmax = 0;
-  PetscBool   ok;
+  PetscBool   ok, layout = (PetscBool)(s->nowned == s->dend - s->dstart && s->nlocal >= s->nowned);
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
@@ -102,7 +140,10 @@ static PetscErrorCode CheckOwnership(KergsScene s)
     nmax = PetscMax(nmax, all[2 * p + 1] - all[2 * p]);
   }
   if (nmax - nmin > 1) ok = PETSC_FALSE;
+  for (PetscInt i = 0; layout && i < s->nowned; i++)
+    if (s->gidx[i] != s->dstart + i) layout = PETSC_FALSE;
   PetscCall(Expect(s->comm, ok, "ownership ranges are contiguous, cover every disk and are balanced"));
+  PetscCall(Expect(s->comm, layout, "owned disks first in the local arrays, in global-index order (gidx = dstart + i)"));
   PetscCall(PetscFree(all));
   PetscFunctionReturn(0);
 }
@@ -110,6 +151,7 @@ static PetscErrorCode CheckOwnership(KergsScene s)
 static PetscErrorCode TestList(MPI_Comm comm)
 {
   KergsScene      s;
+  Disks           all;
   const PetscReal m0 = 2.0 * PETSC_PI * 0.25, m1 = 3.0 * PETSC_PI * 0.04; /* density * pi r^2 */
   PetscReal       mu01, mu10, mu00;
 
@@ -120,14 +162,18 @@ static PetscErrorCode TestList(MPI_Comm comm)
       "-disks_material 0,1,0 -disks_velocity 1,2,0,0,0,-1 -dt 0.01 -steps 10 -theta 0.5 -gap_rule lmgc90 -gravity 0,-1",
       &s));
   PetscCall(Expect(comm, (PetscBool)(s->ndisks == 3 && s->nwalls == 0), "list: 3 disks, no walls"));
-  PetscCall(Expect(
-      comm,
-      (PetscBool)(s->x[2] == 1.0 && s->x[5] == 0.8 && s->radius[1] == 0.2 && s->material[1] == 1 && s->v[1] == 2.0 && s->v[5] == -1.0),
-      "list: positions, radii, materials and velocities as given"));
-  PetscCall(Expect(
-      comm, (PetscBool)(Close(s->mass[0], m0, 1e-14) && Close(s->mass[1], m1, 1e-14) && Close(s->inertia[1], 0.5 * m1 * 0.04, 1e-14)),
-      "list: mass = density pi r^2, inertia = m r^2 / 2"));
-  PetscCall(Expect(comm, (PetscBool)(s->id[2] == 2 && s->rot[2] == 0.0 && s->omega[2] == 0.0), "list: id = index, rot = omega = 0"));
+  PetscCall(DisksGather(s, &all));
+  PetscCall(Expect(comm,
+                   (PetscBool)(all.x[2] == 1.0 && all.x[5] == 0.8 && all.radius[1] == 0.2 && all.material[1] == 1 && all.v[1] == 2.0 &&
+                               all.v[5] == -1.0),
+                   "list: positions, radii, materials and velocities as given"));
+  PetscCall(Expect(comm,
+                   (PetscBool)(Close(all.mass[0], m0, 1e-14) && Close(all.mass[1], m1, 1e-14) &&
+                               Close(all.inertia[1], 0.5 * m1 * 0.04, 1e-14)),
+                   "list: mass = density pi r^2, inertia = m r^2 / 2"));
+  PetscCall(Expect(comm, (PetscBool)(all.id[0] == 0 && all.id[1] == 1 && all.id[2] == 2 && all.rot[2] == 0.0 && all.omega[2] == 0.0),
+                   "list: id = index, rot = omega = 0"));
+  PetscCall(DisksFree(&all));
   PetscCall(KergsSceneFriction(s, 0, 1, &mu01));
   PetscCall(KergsSceneFriction(s, 1, 0, &mu10));
   PetscCall(KergsSceneFriction(s, 0, 0, &mu00));
@@ -160,6 +206,7 @@ static PetscErrorCode TestList(MPI_Comm comm)
 static PetscErrorCode TestLattice(MPI_Comm comm)
 {
   KergsScene s;
+  Disks      all;
   PetscReal  dmin;
   PetscInt   nat;
   PetscBool  overlap;
@@ -168,9 +215,11 @@ static PetscErrorCode TestLattice(MPI_Comm comm)
   PetscFunctionBeginUser;
   /* square 4 x 3: touching pairs 3 * 3 in rows + 4 * 2 in columns = 17 */
   PetscCall(SceneGood(comm, "-disks_source lattice -lattice_n 4,3 -lattice_radius 0.1 -lattice_origin 1,2", &s));
-  PetscCall(PairStats(s, 0.2, 1e-12, &dmin, &nat, &overlap));
-  PetscCall(
-      Expect(comm, (PetscBool)(s->ndisks == 12 && s->x[0] == 1.0 && s->x[1] == 2.0), "square lattice: 12 disks, the first at the origin"));
+  PetscCall(DisksGather(s, &all));
+  PetscCall(PairStats(&all, 0.2, 1e-12, &dmin, &nat, &overlap));
+  PetscCall(Expect(comm, (PetscBool)(s->ndisks == 12 && all.x[0] == 1.0 && all.x[1] == 2.0),
+                   "square lattice: 12 disks, the first at the origin"));
+  PetscCall(DisksFree(&all));
   PetscCall(PetscSNPrintf(what, sizeof(what),
                           "square lattice: nearest-neighbour distance 2r = 0.2 (%.17g), 17 touching pairs (%" PetscInt_FMT ")",
                           (double)dmin, nat));
@@ -179,7 +228,9 @@ static PetscErrorCode TestLattice(MPI_Comm comm)
   PetscCall(KergsSceneDestroy(&s));
   /* hex 4 x 3: 3 * 3 in rows + 2 row gaps * (2 * 4 - 1) = 23 touching pairs */
   PetscCall(SceneGood(comm, "-disks_source lattice -lattice_type hex -lattice_n 4,3 -lattice_radius 0.1", &s));
-  PetscCall(PairStats(s, 0.2, 1e-12, &dmin, &nat, &overlap));
+  PetscCall(DisksGather(s, &all));
+  PetscCall(PairStats(&all, 0.2, 1e-12, &dmin, &nat, &overlap));
+  PetscCall(DisksFree(&all));
   PetscCall(PetscSNPrintf(what, sizeof(what),
                           "hex lattice: nearest-neighbour distance 2r = 0.2 (%.17g), 23 touching pairs (%" PetscInt_FMT ")", (double)dmin,
                           nat));
@@ -188,19 +239,21 @@ static PetscErrorCode TestLattice(MPI_Comm comm)
   /* a larger spacing: no contact */
   PetscCall(SceneGood(
       comm, "-disks_source lattice -lattice_type hex -lattice_n 3,3 -lattice_radius 0.1 -lattice_spacing 0.25 -disks_material 0", &s));
-  PetscCall(PairStats(s, 0.25, 1e-12, &dmin, &nat, &overlap));
+  PetscCall(DisksGather(s, &all));
+  PetscCall(PairStats(&all, 0.25, 1e-12, &dmin, &nat, &overlap));
+  PetscCall(DisksFree(&all));
   PetscCall(
       Expect(comm, (PetscBool)(Close(dmin, 0.25, 1e-12) && nat == 16), "hex lattice with -lattice_spacing: neighbours at the spacing"));
   PetscCall(KergsSceneDestroy(&s));
   PetscFunctionReturn(0);
 }
 
-/* A checksum of the disks that depends on their order, positions and radii. */
-static PetscReal Checksum(KergsScene s)
+/* A checksum of the (gathered) disks that depends on their order, positions and radii. */
+static PetscReal Checksum(const Disks *s)
 {
   PetscReal sum = 0.0;
 
-  for (PetscInt i = 0; i < s->ndisks; i++) sum += (i + 1) * (s->x[2 * i] + 3.0 * s->x[2 * i + 1] + 7.0 * s->radius[i]);
+  for (PetscInt i = 0; i < s->n; i++) sum += (i + 1) * (s->x[2 * i] + 3.0 * s->x[2 * i + 1] + 7.0 * s->radius[i]);
   return sum;
 }
 
@@ -209,6 +262,7 @@ static PetscErrorCode TestRandom(MPI_Comm comm)
   const char *opts = "-disks_source random -random_n 300 -random_box 0,0,1,1 -random_radius 0.01,0.02 -random_seed %d";
   char        buf[256];
   KergsScene  s, same, other;
+  Disks       all, allsame, allother;
   PetscReal   dmin, rmin = PETSC_MAX_REAL, rmax = 0.0, sum, sums[2];
   PetscInt    nat;
   PetscBool   overlap, inside = PETSC_TRUE, identical;
@@ -219,25 +273,33 @@ static PetscErrorCode TestRandom(MPI_Comm comm)
   PetscCall(SceneGood(comm, buf, &same));
   PetscCall(PetscSNPrintf(buf, sizeof(buf), opts, 8));
   PetscCall(SceneGood(comm, buf, &other));
-  PetscCall(PairStats(s, 1.0, 0.0, &dmin, &nat, &overlap));
-  for (PetscInt i = 0; i < s->ndisks; i++) {
-    rmin = PetscMin(rmin, s->radius[i]);
-    rmax = PetscMax(rmax, s->radius[i]);
+  PetscCall(DisksGather(s, &all));
+  PetscCall(DisksGather(same, &allsame));
+  PetscCall(DisksGather(other, &allother));
+  PetscCall(PairStats(&all, 1.0, 0.0, &dmin, &nat, &overlap));
+  for (PetscInt i = 0; i < all.n; i++) {
+    rmin = PetscMin(rmin, all.radius[i]);
+    rmax = PetscMax(rmax, all.radius[i]);
     for (PetscInt d = 0; d < 2; d++)
-      if (s->x[2 * i + d] - s->radius[i] < 0.0 || s->x[2 * i + d] + s->radius[i] > 1.0) inside = PETSC_FALSE;
+      if (all.x[2 * i + d] - all.radius[i] < 0.0 || all.x[2 * i + d] + all.radius[i] > 1.0) inside = PETSC_FALSE;
   }
   PetscCall(Expect(comm, (PetscBool)(s->ndisks == 300 && !overlap), "random: 300 disks, no two overlap (brute force)"));
   PetscCall(Expect(comm, (PetscBool)(rmin >= 0.01 && rmax <= 0.02 && rmax - rmin > 0.005), "random: radii spread within [rmin, rmax]"));
   PetscCall(Expect(comm, inside, "random: every disk inside -random_box"));
-  sum = Checksum(s);
+  sum = Checksum(&all);
   PetscCallMPI(MPI_Allreduce(&sum, &sums[0], 1, MPIU_REAL, MPIU_MIN, comm));
   PetscCallMPI(MPI_Allreduce(&sum, &sums[1], 1, MPIU_REAL, MPIU_MAX, comm));
   PetscCall(Expect(comm, (PetscBool)(sums[0] == sums[1]), "random: the same sample on every rank (checksum min == max)"));
   identical = (same->ndisks == s->ndisks) ? PETSC_TRUE : PETSC_FALSE;
-  for (PetscInt i = 0; identical && i < s->ndisks; i++)
-    if (same->x[2 * i] != s->x[2 * i] || same->x[2 * i + 1] != s->x[2 * i + 1] || same->radius[i] != s->radius[i]) identical = PETSC_FALSE;
+  for (PetscInt i = 0; identical && i < all.n; i++)
+    if (allsame.x[2 * i] != all.x[2 * i] || allsame.x[2 * i + 1] != all.x[2 * i + 1] || allsame.radius[i] != all.radius[i])
+      identical = PETSC_FALSE;
   PetscCall(Expect(comm, identical, "random: same seed, same sample (bitwise)"));
-  PetscCall(Expect(comm, (PetscBool)(other->ndisks == 300 && Checksum(other) != sum), "random: a different seed gives a different sample"));
+  PetscCall(
+      Expect(comm, (PetscBool)(other->ndisks == 300 && Checksum(&allother) != sum), "random: a different seed gives a different sample"));
+  PetscCall(DisksFree(&all));
+  PetscCall(DisksFree(&allsame));
+  PetscCall(DisksFree(&allother));
   PetscCall(CheckOwnership(s));
   PetscCall(KergsSceneDestroy(&s));
   PetscCall(KergsSceneDestroy(&same));
@@ -310,6 +372,7 @@ static PetscErrorCode TestSetDisksEnergy(MPI_Comm comm)
   const PetscReal x[] = {0, 0, 2, 0, 4, 0}, r[] = {0.5, 0.5, 1.0}, v[] = {3, 4, 0, 1, 0, 0};
   const PetscInt  mat[] = {0, 0, 0};
   KergsScene      s;
+  Disks           all;
   PetscReal       ek, vmax, m, inertia;
 
   PetscFunctionBeginUser;
@@ -318,12 +381,20 @@ static PetscErrorCode TestSetDisksEnergy(MPI_Comm comm)
   PetscCall(KergsSceneSetDisks(s, 3, x, r, mat, v));
   m           = 2.0 * PETSC_PI * 0.25;
   inertia     = 0.5 * m * 0.25;
-  s->omega[0] = 2.0;
+  if (s->dstart == 0 && s->nowned > 0) s->omega[0] = 2.0; /* disk 0, on its owner */
   PetscCall(KergsSceneKineticEnergy(s, &ek, &vmax));
   PetscCall(Expect(comm, (PetscBool)(Close(ek, 0.5 * m * 26.0 + 0.5 * inertia * 4.0, 1e-14) && vmax == 5.0),
                    "kinetic energy 1/2 m v^2 + 1/2 I w^2 and largest speed"));
-  PetscCall(Expect(comm, (PetscBool)(Close(s->mass[2], 2.0 * PETSC_PI, 1e-14) && Close(s->alert, 0.1 * 2.0 / 3.0, 1e-14)),
+  PetscCall(DisksGather(s, &all));
+  PetscCall(Expect(comm,
+                   (PetscBool)(Close(all.mass[0], m, 1e-14) && Close(all.mass[2], 2.0 * PETSC_PI, 1e-14) &&
+                               Close(all.inertia[0], inertia, 1e-14) && Close(s->alert, 0.1 * 2.0 / 3.0, 1e-14)),
                    "SetDisks: masses from density, alert from mean radius"));
+  PetscCall(Expect(comm,
+                   (PetscBool)(all.x[2] == 2.0 && all.radius[2] == 1.0 && all.v[0] == 3.0 && all.v[3] == 1.0 && all.id[1] == 1 &&
+                               all.omega[0] == 2.0 && all.omega[1] == 0.0),
+                   "SetDisks: each rank keeps its slice of the full arrays, gathered back in global-index order"));
+  PetscCall(DisksFree(&all));
   PetscCall(CheckOwnership(s));
   PetscCall(KergsSceneCheck(s));
   PetscCall(KergsSceneDestroy(&s));

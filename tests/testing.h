@@ -48,6 +48,26 @@ static inline PetscErrorCode StatAt(KergsResults res, const char *name, PetscInt
   PetscFunctionReturn(0);
 }
 
+/* A per-disk field of the owned disks (bs values per disk) gathered over the ranks into grain-id order on every
+   rank (out: bs * ndisks values; the grain ids must be 0 .. ndisks-1). Independent of the partition, so that runs
+   on different numbers of ranks compare grain by grain. */
+static inline PetscErrorCode GatherById(KergsScene sc, const PetscReal *owned, PetscInt bs, PetscReal *out)
+{
+  PetscReal *all;
+  PetscInt  *ids;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc2(bs * sc->ndisks + 1, &all, sc->ndisks + 1, &ids));
+  PetscCall(KergsSceneAllGatherReal(sc, owned, bs, all));
+  PetscCall(KergsSceneAllGatherInt(sc, sc->id, 1, ids));
+  for (PetscInt g = 0; g < sc->ndisks; g++) {
+    PetscCheck(ids[g] >= 0 && ids[g] < sc->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "GatherById: grain id %" PetscInt_FMT " outside [0, %" PetscInt_FMT ")", ids[g], sc->ndisks);
+    for (PetscInt d = 0; d < bs; d++) out[bs * ids[g] + d] = all[bs * g + d];
+  }
+  PetscCall(PetscFree2(all, ids));
+  PetscFunctionReturn(0);
+}
+
 /* The closing line and the exit code of a test program. */
 static inline int Finish(void)
 {

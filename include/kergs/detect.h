@@ -12,12 +12,16 @@ typedef enum {
   KERGS_CONTACT_DISK_WALL
 } KergsContactKind;
 
-/* One contact. Body a is always a disk; body b is a disk (b > a) or a wall. The normal n points from
-   b towards a, the tangent is t = (-n_y, n_x). Contact point c: c - x_a = -ra n, c - x_b = +rb n
-   (rb = 0 for a wall). */
+/* One contact. Body a is always a disk owned by this rank (a local disk index); body b is a disk (a local index,
+   owned or ghost) of larger grain id, or a wall (its index). The normal n points from b towards a, the tangent is
+   t = (-n_y, n_x). Contact point c: c - x_a = -ra n, c - x_b = +rb n (rb = 0 for a wall).
+   Ownership: a disk-disk contact belongs to the rank that owns its disk of smaller grain id, a disk-wall contact
+   to the rank that owns the disk; grain ids never change, so neither does a contact's owner-side orientation when
+   disks migrate. */
 typedef struct {
   KergsContactKind kind;
   PetscInt         a, b;
+  PetscInt         idb;                 /* persistent identity of b: its grain id, or the wall index */
   PetscReal        n[KERGS_DIM], t[KERGS_DIM];
   PetscReal        ra, rb;
   PetscReal        gap;                 /* g^- : gap at the start of the step (negative = interpenetration) */
@@ -27,15 +31,22 @@ typedef struct {
   PetscBool        persistent;          /* the pair touched at the previous detection too */
 } KergsContact;
 
+/* What a contact leaves to the next detection (warm start): its key (a, kind, idb) and its impulse. */
+typedef struct {
+  PetscInt         a, idb;
+  KergsContactKind kind;
+  PetscReal        r[KERGS_MAXCOMP];
+} KergsContactHistory;
+
 typedef struct _p_KergsContacts *KergsContacts;
 struct _p_KergsContacts {
   MPI_Comm      comm;
-  PetscInt      n, nalloc; /* contacts owned by this rank: those whose disk a is owned here */
-  KergsContact *c;         /* sorted by (a, kind, b) */
+  PetscInt      n, nalloc; /* contacts owned by this rank */
+  KergsContact *c;         /* sorted by (a, kind, idb) */
   PetscInt      nglobal, start; /* global count and global index of c[0] */
-  /* previous detection, for persistence */
-  PetscInt      nprev, nprevalloc;
-  KergsContact *prev;
+  /* previous detection, for persistence, sorted by (a, kind, idb) */
+  PetscInt             nprev, nprevalloc;
+  KergsContactHistory *prev;
   /* broad-phase workspace: cell list over the bounding box of the disk centres, rebuilt by every call.
      cellhead[cell] is the highest disk index in the cell (-1: empty), next[i] the next lower index in
      disk i's cell (-1: end), so a walk visits a cell's disks in decreasing index order. */
@@ -45,8 +56,9 @@ struct _p_KergsContacts {
 };
 
 PETSC_EXTERN PetscErrorCode KergsContactsCreate(MPI_Comm, KergsContacts *);
-/* Find every potential contact (gap < scene->alert) owned by this rank, carry impulses over from the
-   previous call for persistent pairs (zero for new ones), and set nglobal and start (collective). */
+/* Find every potential contact (gap < scene->alert) owned by this rank, among its owned disks and their ghosts
+   (it first calls KergsSceneUpdateGhosts, which rebuilds the ghost layer when needed), carry impulses over from the previous call for persistent pairs (zero for new
+   ones), and set nglobal and start (collective). O(local disks). */
 PETSC_EXTERN PetscErrorCode KergsContactsDetect(KergsContacts, KergsScene);
 PETSC_EXTERN PetscErrorCode KergsContactsDestroy(KergsContacts *);
 

@@ -34,8 +34,6 @@ struct _p_KergsOperators {
   Vec R;              /* H_f r */
   PetscInt   nfree, nfree_local, ngiven; /* free DOFs (global, local), given DOFs */
   PetscInt   dstart;                      /* first disk of this rank when the DOF vectors were built */
-  VecScatter vf_all;  /* V_f to every rank (the scene state is replicated) */
-  Vec        vf_seq;
 };
 
 PETSC_EXTERN PetscErrorCode KergsOperatorsCreate(MPI_Comm, KergsOperators *);
@@ -45,10 +43,10 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsGetHf(KergsOperators, Mat *);
 /* r <- impulses stored in the contacts; contacts <- r and v (after a solve) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetImpulses(KergsOperators, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsSetImpulses(KergsOperators, KergsContacts);
-/* V_f^+ = V_f^- + M^-1 (H_f r + R^d), then scatter the new velocities into the replicated scene
-   (disk velocities, angular velocities when the scene is frictional, free walls) */
+/* V_f^+ = V_f^- + M^-1 (H_f r + R^d), then copy the new velocities into the owned disks (velocities, angular
+   velocities when the scene rotates) and the free walls (broadcast from their owner, the last rank) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators, KergsScene);
-/* Global free DOF index of disk i's first DOF */
+/* Global free DOF index of the first DOF of the disk of global index i (scene->gidx[local index]) */
 #define KergsOperatorsDiskDof(ops, i) ((i) * (ops)->ndof_disk)
 PETSC_EXTERN PetscErrorCode KergsOperatorsDestroy(KergsOperators *);
 

@@ -1,8 +1,9 @@
 /* kergs partition: which rank owns which grain (DESIGN.md section 6, issue 4).
 
-   The scene state is replicated and rank p owns the contiguous index range [dstart, dend) of the disks, so a
-   partition is realised by RENUMBERING the disks: the grains of part 0 first, then those of part 1, and so on.
-   Grain ids (scene->id) are persistent and travel with the grains; so do the contact impulses (warm start).
+   Rank p owns the disks of the contiguous global index range [dstart, dend), so a partition is a new numbering of
+   the disks: the grains of part 0 first, then those of part 1, and so on; the disks then MIGRATE to their new
+   owners with their whole state (KergsSceneMigrate). Grain ids (scene->id) are persistent and travel with the
+   grains; so do the contact impulses (warm start).
 
    Types (-partition_type):
      contiguous  the even split of KergsSceneSetDisks, never changed
@@ -21,9 +22,8 @@
 
    Measures: the work of a grain is 1 + its number of contacts (disk-disk and disk-wall); the work of a rank is
    the sum over the grains it owns; imbalance = max over ranks of the work / mean work. The edge cut is the
-   number of disk-disk contacts whose grains are owned by different ranks. The ghosts of a rank are the grains
-   owned elsewhere within the alert distance of one of its grains (the other end of a cut contact): the grains
-   that a code with distributed state would copy. */
+   number of disk-disk contacts whose grains are owned by different ranks. The ghosts of a rank are those of its
+   current ghost layer (src/scene_ghosts.c). */
 #ifndef KERGS_PARTITION_H
 #define KERGS_PARTITION_H
 
@@ -101,13 +101,13 @@ PETSC_EXTERN PetscErrorCode KergsPartitionRecord(KergsPartition, KergsScene, Ker
 PETSC_EXTERN PetscErrorCode KergsPartitionView(KergsPartition, PetscViewer);
 PETSC_EXTERN PetscErrorCode KergsPartitionDestroy(KergsPartition *);
 
-/* Collective, the migration itself: renumber the disks so that new index k holds old disk order[k]; rank p then
-   owns counts[p] disks, after those of ranks 0 .. p-1. order (a permutation of 0 .. ndisks-1) and counts (one per
-   rank, summing to ndisks) must be the same on every rank. Every per-disk array of the scene is permuted, dstart
-   and dend are set, and the contacts (owned and sorted by (a, kind, b) in the new numbering, disk-disk pairs with
-   a > b swapped with their frame flipped: n, t -> -n, -t, ra <-> rb, impulse and velocity components unchanged)
-   are moved to their new owners and left as the current list, so that the next detection carries their
-   impulses over. Returns the number of grains that changed rank (global) in nmoved (may be NULL). */
+/* Collective, the migration itself: renumber the disks so that new global index k holds old disk order[k]; rank p
+   then owns counts[p] disks, after those of ranks 0 .. p-1. order (a permutation of 0 .. ndisks-1) and counts (one
+   per rank, summing to ndisks) must be the same on every rank. The disks move to their new owners with their
+   state (KergsSceneMigrate, which drops the ghost layer: rebuild it with KergsSceneUpdateGhosts), and the contacts
+   are moved to the new owners of their disk a, left as the current list holding only their keys (a, kind, idb)
+   and impulses, so that the next detection carries their impulses over. Returns the number of grains that changed
+   rank (global) in nmoved (may be NULL). */
 PETSC_EXTERN PetscErrorCode KergsPartitionRenumber(KergsScene, KergsContacts, const PetscInt order[], const PetscInt counts[],
                                                    PetscInt *nmoved);
 

@@ -1,12 +1,15 @@
 /* kergs scene: the bodies (disks, walls), materials, loading programs and numerical settings of a run.
    A scene is read from the options database (an options file under cases/); its disks come from a
    built-in generator (lattice, random) or from a sample file written by an earlier run.
-   The disk state is replicated on every rank; each rank owns a contiguous range of disks
-   [dstart, dend) for the distributed operators (see DESIGN.md section 6). */
+   The disk state is distributed (DESIGN.md section 6): rank p owns the disks of the global index range
+   [dstart, dend), stored first in its local arrays, followed by ghost copies of other ranks' disks that can
+   touch its own (src/scene_ghosts.c). A disk's global index is its place in the current partition's numbering
+   (it changes when disks migrate); its grain id is persistent. */
 #ifndef KERGS_SCENE_H
 #define KERGS_SCENE_H
 
 #include <kergs/base.h>
+#include <petscsf.h>
 
 typedef enum {
   KERGS_WALL_DRIVEN, /* velocity given by a program: its DOFs are in V_g */
@@ -44,8 +47,11 @@ typedef struct _p_KergsScene *KergsScene;
 struct _p_KergsScene {
   MPI_Comm comm;
   char     name[PETSC_MAX_PATH_LEN];
-  /* disks (replicated, structure of arrays, global index i) */
-  PetscInt   ndisks;
+  /* disks: local structure of arrays, owned disks [0, nowned) then ghosts [nowned, nlocal) */
+  PetscInt   ndisks;           /* global number of disks */
+  PetscInt   nowned, nlocal;   /* disks owned here; owned + ghosts */
+  PetscInt   nalloc;           /* capacity of the local arrays */
+  PetscInt  *gidx;     /* global index (owned disk i: dstart + i) */
   PetscInt  *id;       /* persistent grain id */
   PetscReal *x;        /* KERGS_DIM * ndisks positions */
   PetscReal *rot;      /* KERGS_NROT * ndisks orientations */
@@ -53,7 +59,13 @@ struct _p_KergsScene {
   PetscReal *omega;    /* KERGS_NROT * ndisks angular velocities */
   PetscReal *radius, *mass, *inertia;
   PetscInt  *material;
-  PetscInt   dstart, dend; /* disks owned by this rank */
+  PetscInt   dstart, dend; /* global indices of the disks owned by this rank */
+  /* ghost layer (src/scene_ghosts.c) */
+  PetscSF    ghost_sf;       /* roots: owned disks, leaves: ghosts (NULL: no valid ghost layer) */
+  PetscInt  *ghost_owner;    /* per ghost: the rank that owns it */
+  PetscReal  ghost_skin;     /* -ghost_skin: the layer is rebuilt once some disk moved more than half of it */
+  PetscReal *xref;           /* owned positions when the layer was built */
+  PetscInt   ghost_rebuilds; /* layers built so far */
   /* walls (replicated) */
   PetscInt   nwalls;
   KergsWall *walls;
@@ -79,9 +91,10 @@ struct _p_KergsScene {
 PETSC_EXTERN PetscErrorCode KergsSceneCreate(MPI_Comm, KergsScene *);
 /* Reads every scene option (run with -help for the list), generates the disks, then calls KergsSceneCheck. */
 PETSC_EXTERN PetscErrorCode KergsSceneSetFromOptions(KergsScene);
-/* Collective. Replaces the disks: x (KERGS_DIM * n), r (n); material and v may be NULL (material 0, at rest).
-   Sets id = index, rot = omega = 0, mass and inertia from the densities, dstart/dend, recomputes frictional,
-   and sets alert = 0.1 * mean radius if alert is still automatic (negative). */
+/* Collective. Replaces the disks by the n disks given, the same arrays on every rank: x (KERGS_DIM * n), r (n);
+   material and v may be NULL (material 0, at rest). Each rank keeps its slice of the even contiguous split as its
+   owned disks (no ghosts yet). Sets id = global index, rot = omega = 0, mass and inertia from the densities,
+   recomputes frictional, and sets alert = 0.1 * mean radius if alert is still automatic (negative). */
 PETSC_EXTERN PetscErrorCode KergsSceneSetDisks(KergsScene, PetscInt n, const PetscReal *x, const PetscReal *r, const PetscInt *material, const PetscReal *v);
 /* Errors naming the grain, wall, material pair or option at fault; overlaps are not checked here. */
 PETSC_EXTERN PetscErrorCode KergsSceneCheck(KergsScene);
@@ -91,7 +104,29 @@ PETSC_EXTERN PetscErrorCode KergsSceneFriction(KergsScene, PetscInt mat_a, Petsc
 /* Driven wall: its program's velocity at time t (zero before the first piece or without program).
    Free wall: its current velocity wall->v. */
 PETSC_EXTERN PetscErrorCode KergsWallVelocityAt(const KergsWall *, PetscReal t, PetscReal v[]);
-/* Over all disks (replicated, no communication): ek = sum 1/2 m |v|^2 + 1/2 I omega^2, vmax = largest speed. */
+/* Collective, over all disks: ek = sum 1/2 m |v|^2 + 1/2 I omega^2, vmax = largest speed. */
 PETSC_EXTERN PetscErrorCode KergsSceneKineticEnergy(KergsScene, PetscReal *ek, PetscReal *vmax);
+/* Make room for n local disks (owned + ghosts), keeping the first nlocal. */
+PETSC_EXTERN PetscErrorCode KergsSceneReserve(KergsScene, PetscInt n);
+
+/* Distributed state (src/scene_ghosts.c). */
+/* Collective. Rebuild the ghost layer when asked, when there is none, or when some disk moved more than
+   ghost_skin / 2 since the last build; otherwise leave it (its state is current after KergsSceneRefreshGhosts).
+   After a build, every disk of another rank whose centre is within 2 max(R) + alert + ghost_skin of this rank's
+   bounding box of owned centres is a ghost here, so every pair of disks within the alert distance has both disks
+   on the owner rank of each. A rebuild renumbers the ghosts: local indices of ghosts (contacts' b) are valid
+   until the next rebuild only. */
+PETSC_EXTERN PetscErrorCode KergsSceneUpdateGhosts(KergsScene, PetscBool rebuild);
+/* Collective. Copy the positions, orientations and velocities of every ghost from its owner (one neighbour
+   exchange through ghost_sf); no-op without a layer. */
+PETSC_EXTERN PetscErrorCode KergsSceneRefreshGhosts(KergsScene);
+/* Collective. Move the owned disks to their new owners: owned disk i gets the global index newidx[i]; rank p then
+   owns counts[p] disks, global indices from counts[0] + ... + counts[p-1] (counts the same on every rank). Drops
+   the ghost layer. */
+PETSC_EXTERN PetscErrorCode KergsSceneMigrate(KergsScene, const PetscInt newidx[], const PetscInt counts[]);
+/* Collective. Gather a per-disk array of the owned disks (bs values per disk) in global-index order on every rank
+   (all: bs * ndisks values). For tests, tools and small scenes: O(ndisks) memory on every rank. */
+PETSC_EXTERN PetscErrorCode KergsSceneAllGatherReal(KergsScene, const PetscReal owned[], PetscInt bs, PetscReal all[]);
+PETSC_EXTERN PetscErrorCode KergsSceneAllGatherInt(KergsScene, const PetscInt owned[], PetscInt bs, PetscInt all[]);
 
 #endif

@@ -338,26 +338,27 @@ PetscErrorCode KergsViewIntegers(PetscViewer viewer, MPI_Comm comm, const char n
   PetscFunctionReturn(0);
 }
 
-/* The disks of this rank's range [dstart, dend) of the replicated scene. */
+/* The owned disks of each rank (global indices [dstart, dend)), in rank order: the datasets are in global-index
+   order. */
 static PetscErrorCode KergsSnapshotDisks(PetscViewer viewer, KergsScene scene)
 {
-  const PetscInt s = scene->dstart, n = scene->dend - scene->dstart;
+  const PetscInt s = scene->dstart, n = scene->nowned;
   PetscInt       nsum;
 
   PetscFunctionBeginUser;
-  PetscCheck(0 <= s && s <= scene->dend && scene->dend <= scene->ndisks, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
+  PetscCheck(0 <= s && s <= scene->dend && scene->dend <= scene->ndisks && n == scene->dend - s, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Scene disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not within the %" PetscInt_FMT " disks", s, scene->dend,
              scene->ndisks);
   PetscCall(MPIU_Allreduce(&n, &nsum, 1, MPIU_INT, MPI_SUM, scene->comm));
   PetscCheck(nsum == scene->ndisks, scene->comm, PETSC_ERR_ARG_WRONG,
              "Scene disk ranges cover %" PetscInt_FMT " disks, not the %" PetscInt_FMT " of the scene", nsum, scene->ndisks);
-  PetscCall(KergsViewIntegers(viewer, scene->comm, "id", n, scene->id ? scene->id + s : NULL));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "x", n, KERGS_DIM, scene->x ? scene->x + KERGS_DIM * s : NULL));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "v", n, KERGS_DIM, scene->v ? scene->v + KERGS_DIM * s : NULL));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "rot", n, KERGS_NROT, scene->rot ? scene->rot + KERGS_NROT * s : NULL));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "omega", n, KERGS_NROT, scene->omega ? scene->omega + KERGS_NROT * s : NULL));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "radius", n, 1, scene->radius ? scene->radius + s : NULL));
-  PetscCall(KergsViewIntegers(viewer, scene->comm, "material", n, scene->material ? scene->material + s : NULL));
+  PetscCall(KergsViewIntegers(viewer, scene->comm, "id", n, scene->id));
+  PetscCall(KergsViewBlocks(viewer, scene->comm, "x", n, KERGS_DIM, scene->x));
+  PetscCall(KergsViewBlocks(viewer, scene->comm, "v", n, KERGS_DIM, scene->v));
+  PetscCall(KergsViewBlocks(viewer, scene->comm, "rot", n, KERGS_NROT, scene->rot));
+  PetscCall(KergsViewBlocks(viewer, scene->comm, "omega", n, KERGS_NROT, scene->omega));
+  PetscCall(KergsViewBlocks(viewer, scene->comm, "radius", n, 1, scene->radius));
+  PetscCall(KergsViewIntegers(viewer, scene->comm, "material", n, scene->material));
   PetscFunctionReturn(0);
 }
 
@@ -385,7 +386,8 @@ static PetscErrorCode KergsSnapshotWalls(PetscViewer viewer, KergsScene scene)
   PetscFunctionReturn(0);
 }
 
-/* This rank's contacts: a, b, kind, n, gap, r. The tangential impulse is 0 in frictionless scenes. */
+/* This rank's contacts: a, b (global disk indices, as in the snapshot's disk datasets; b a wall index when kind is
+   1), kind, n, gap, r. The tangential impulse is 0 in frictionless scenes. */
 static PetscErrorCode KergsSnapshotContacts(PetscViewer viewer, KergsScene scene, KergsContacts contacts)
 {
   const PetscInt m    = contacts ? contacts->n : 0;
@@ -397,8 +399,8 @@ static PetscErrorCode KergsSnapshotContacts(PetscViewer viewer, KergsScene scene
   PetscCall(PetscMalloc6(m, &a, m, &b, m, &kind, m * KERGS_DIM, &nrm, m, &gap, m * KERGS_MAXCOMP, &r));
   for (PetscInt k = 0; k < m; k++) {
     const KergsContact *c = &contacts->c[k];
-    a[k]                  = c->a;
-    b[k]                  = c->b;
+    a[k]                  = scene->gidx[c->a];
+    b[k]                  = c->kind == KERGS_CONTACT_DISK_DISK ? scene->gidx[c->b] : c->b;
     kind[k]               = c->kind == KERGS_CONTACT_DISK_WALL ? 1 : 0;
     gap[k]                = c->gap;
     for (PetscInt d = 0; d < KERGS_DIM; d++) nrm[k * KERGS_DIM + d] = c->n[d];

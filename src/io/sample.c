@@ -18,7 +18,7 @@ PetscErrorCode KergsSampleWrite(KergsScene scene, const char path[])
   char        tmp[PETSC_MAX_PATH_LEN];
   PetscViewer viewer;
   MPI_Comm    comm = scene->comm;
-  PetscInt    n    = scene->ndisks, s = scene->dstart, nl = scene->dend - scene->dstart;
+  PetscInt    n    = scene->ndisks, nl = scene->nowned;
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
@@ -34,14 +34,14 @@ PetscErrorCode KergsSampleWrite(KergsScene scene, const char path[])
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "ndisks", PETSC_INT, &n));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "time", PETSC_REAL, &scene->time));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "dim", PETSC_INT, &(PetscInt){KERGS_DIM}));
-  /* each rank writes the disks of its own range [dstart, dend) of the replicated arrays */
-  PetscCall(KergsViewBlocks(viewer, comm, "x", nl, KERGS_DIM, scene->x + KERGS_DIM * s));
-  PetscCall(KergsViewBlocks(viewer, comm, "v", nl, KERGS_DIM, scene->v + KERGS_DIM * s));
-  PetscCall(KergsViewBlocks(viewer, comm, "rot", nl, KERGS_NROT, scene->rot + KERGS_NROT * s));
-  PetscCall(KergsViewBlocks(viewer, comm, "omega", nl, KERGS_NROT, scene->omega + KERGS_NROT * s));
-  PetscCall(KergsViewBlocks(viewer, comm, "radius", nl, 1, scene->radius + s));
-  PetscCall(KergsViewIntegers(viewer, comm, "material", nl, scene->material + s));
-  PetscCall(KergsViewIntegers(viewer, comm, "id", nl, scene->id + s));
+  /* each rank writes its owned disks, global indices [dstart, dend), in rank order */
+  PetscCall(KergsViewBlocks(viewer, comm, "x", nl, KERGS_DIM, scene->x));
+  PetscCall(KergsViewBlocks(viewer, comm, "v", nl, KERGS_DIM, scene->v));
+  PetscCall(KergsViewBlocks(viewer, comm, "rot", nl, KERGS_NROT, scene->rot));
+  PetscCall(KergsViewBlocks(viewer, comm, "omega", nl, KERGS_NROT, scene->omega));
+  PetscCall(KergsViewBlocks(viewer, comm, "radius", nl, 1, scene->radius));
+  PetscCall(KergsViewIntegers(viewer, comm, "material", nl, scene->material));
+  PetscCall(KergsViewIntegers(viewer, comm, "id", nl, scene->id));
   PetscCall(PetscViewerHDF5PopGroup(viewer));
   PetscCall(PetscViewerDestroy(&viewer));
   PetscCall(KergsFileCommit(comm, tmp, path));
@@ -233,11 +233,15 @@ static PetscErrorCode KergsSampleApply(KergsScene scene, const KergsSampleData *
   PetscCall(PetscFree(material));
   PetscCheck(scene->ndisks == s->n, scene->comm, PETSC_ERR_PLIB, "KergsSceneSetDisks() left %" PetscInt_FMT " disks, not %" PetscInt_FMT,
              scene->ndisks, s->n);
-  for (PetscInt i = 0; i < s->n * KERGS_NROT; i++) {
-    scene->rot[i]   = s->rot[i];
-    scene->omega[i] = s->omega[i];
+  /* every rank read the whole file; it keeps the state of its owned slice */
+  for (PetscInt i = 0; i < scene->nowned; i++) {
+    const PetscInt g = scene->dstart + i;
+    for (PetscInt d = 0; d < KERGS_NROT; d++) {
+      scene->rot[KERGS_NROT * i + d]   = s->rot[KERGS_NROT * g + d];
+      scene->omega[KERGS_NROT * i + d] = s->omega[KERGS_NROT * g + d];
+    }
+    scene->id[i] = (PetscInt)s->id[g];
   }
-  for (PetscInt i = 0; i < s->n; i++) scene->id[i] = (PetscInt)s->id[i];
   scene->time = s->time;
   PetscFunctionReturn(0);
 }
