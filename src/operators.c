@@ -219,16 +219,27 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
   PetscFunctionReturn(0);
 }
 
-/* W = H_f^T M^-1 H_f as (H_f^T M^-1) (H_f^T)^T. */
+/* W = H_f^T (M^-1 H_f): H_f is the explicit transpose of H_f^T, its rows scaled in place by the diagonal M^-1,
+   then an A B product with the "scalable" algorithm (its symbolic phase keeps one dense row marker, not a
+   transpose of the second factor as A B^T does). The product's intermediate data and its references to
+   the factors are dropped at once (MatProductClear), and M^-1 H_f is freed before returning: W is the only
+   object of this function that outlives it, and H_f is rebuilt unscaled by KergsOperatorsGetHf on demand. */
 static PetscErrorCode ComputeDelassus(KergsOperators ops)
 {
-  Mat HtMinv;
+  Mat MinvHf;
 
   PetscFunctionBeginUser;
-  PetscCall(MatDuplicate(ops->HfT, MAT_COPY_VALUES, &HtMinv));
-  PetscCall(MatDiagonalScale(HtMinv, NULL, ops->Minv));
-  PetscCall(MatMatTransposeMult(HtMinv, ops->HfT, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &ops->W));
-  PetscCall(MatDestroy(&HtMinv));
+  PetscCall(MatTranspose(ops->HfT, MAT_INITIAL_MATRIX, &MinvHf));
+  PetscCall(MatDiagonalScale(MinvHf, ops->Minv, NULL));
+  PetscCall(MatProductCreate(ops->HfT, MinvHf, NULL, &ops->W));
+  PetscCall(MatProductSetType(ops->W, MATPRODUCT_AB));
+  PetscCall(MatProductSetAlgorithm(ops->W, "scalable"));
+  PetscCall(MatProductSetFill(ops->W, PETSC_DEFAULT));
+  PetscCall(MatProductSetFromOptions(ops->W));
+  PetscCall(MatProductSymbolic(ops->W));
+  PetscCall(MatProductNumeric(ops->W));
+  PetscCall(MatProductClear(ops->W));
+  PetscCall(MatDestroy(&MinvHf));
   PetscFunctionReturn(0);
 }
 
