@@ -219,12 +219,12 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
   PetscFunctionReturn(0);
 }
 
-/* W = H_f^T (M^-1 H_f): H_f is the explicit transpose of H_f^T, its rows scaled in place by the diagonal M^-1,
-   then an A B product with the "scalable" algorithm (its symbolic phase keeps one dense row marker, not a
-   transpose of the second factor as A B^T does). The product's intermediate data and its references to
-   the factors are dropped at once (MatProductClear), and M^-1 H_f is freed before returning: W is the only
-   object of this function that outlives it, and H_f is rebuilt unscaled by KergsOperatorsGetHf on demand. */
-static PetscErrorCode ComputeDelassus(KergsOperators ops)
+/* Several ranks: W = H_f^T (M^-1 H_f) by PETSc's parallel product, since a rank does not know the other ranks'
+   contacts that share its bodies. H_f is the explicit transpose of H_f^T, its rows scaled in place by the
+   diagonal M^-1, then an A B product with the "scalable" algorithm (no transpose of the second factor, as
+   A B^T would keep). MatProductClear drops the intermediate data and the references to the factors at once,
+   and M^-1 H_f is freed before returning; KergsOperatorsGetHf rebuilds H_f unscaled on demand. */
+static PetscErrorCode ComputeDelassusProduct(KergsOperators ops)
 {
   Mat MinvHf;
 
@@ -240,6 +240,146 @@ static PetscErrorCode ComputeDelassus(KergsOperators ops)
   PetscCall(MatProductNumeric(ops->W));
   PetscCall(MatProductClear(ops->W));
   PetscCall(MatDestroy(&MinvHf));
+  PetscFunctionReturn(0);
+}
+
+/* The free bodies of a contact, numbered disks first (0 .. ndisks-1) then walls (ndisks + w); -1 for a driven
+   wall, whose DOFs are given (H_g), not free. */
+static void ContactBodies(KergsScene scene, const KergsContact *ct, PetscInt body[2])
+{
+  body[0] = ct->a;
+  if (ct->kind == KERGS_CONTACT_DISK_DISK) body[1] = ct->b;
+  else body[1] = scene->walls[ct->b].kind == KERGS_WALL_FREE ? scene->ndisks + ct->b : -1;
+}
+
+/* The contacts touching each free body, in CSR form: those of body q are list[start[q] .. start[q+1]), in
+   increasing order. This is the sparsity of H_f by blocks, at about one integer per contact end. */
+static PetscErrorCode BodyContacts(KergsScene scene, KergsContacts contacts, PetscInt **start, PetscInt **list)
+{
+  const PetscInt nb = scene->ndisks + scene->nwalls;
+  PetscInt       body[2], *fill;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscCalloc1(nb + 1, start));
+  for (PetscInt k = 0; k < contacts->n; k++) {
+    ContactBodies(scene, &contacts->c[k], body);
+    for (PetscInt e = 0; e < 2; e++)
+      if (body[e] >= 0) (*start)[body[e] + 1]++;
+  }
+  for (PetscInt q = 0; q < nb; q++) (*start)[q + 1] += (*start)[q];
+  PetscCall(PetscMalloc1((*start)[nb], list));
+  PetscCall(PetscMalloc1(nb, &fill));
+  PetscCall(PetscArraycpy(fill, *start, nb));
+  for (PetscInt k = 0; k < contacts->n; k++) {
+    ContactBodies(scene, &contacts->c[k], body);
+    for (PetscInt e = 0; e < 2; e++)
+      if (body[e] >= 0) (*list)[fill[body[e]]++] = k;
+  }
+  PetscCall(PetscFree(fill));
+  PetscFunctionReturn(0);
+}
+
+/* The contacts coupled to contact k in W (those sharing a free body with it, k included), sorted, into nb[];
+   returns their number. mark[] (one per contact, -1 on entry) is left as it was found. */
+static PetscInt CoupledContacts(KergsScene scene, KergsContacts contacts, const PetscInt *start, const PetscInt *list, PetscInt k, PetscInt *mark,
+                                PetscInt *nb)
+{
+  PetscInt body[2], n = 0;
+
+  ContactBodies(scene, &contacts->c[k], body);
+  for (PetscInt e = 0; e < 2; e++) {
+    if (body[e] < 0) continue;
+    for (PetscInt j = start[body[e]]; j < start[body[e] + 1]; j++)
+      if (mark[list[j]] != k) {
+        mark[list[j]] = k;
+        nb[n++]       = list[j];
+      }
+  }
+  for (PetscInt j = 0; j < n; j++) mark[nb[j]] = -1;
+  (void)PetscSortInt(n, nb);
+  return n;
+}
+
+/* W_ij = sum_d (H_f^T)_id (M^-1)_d (H_f^T)_jd, a merge of the two sorted rows i and j of H_f^T. */
+static PetscScalar RowProduct(const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscScalar *minv, PetscInt i, PetscInt j)
+{
+  PetscInt    p = ai[i], q = ai[j];
+  PetscScalar w = 0.0;
+
+  while (p < ai[i + 1] && q < ai[j + 1]) {
+    if (aj[p] < aj[q]) p++;
+    else if (aj[p] > aj[q]) q++;
+    else {
+      w += aa[p] * minv[aj[p]] * aa[q];
+      p++;
+      q++;
+    }
+  }
+  return w;
+}
+
+/* One rank: W assembled directly from its definition, W_ij = sum_d (H_f^T)_id (M^-1)_d (H_f^T)_jd. Contacts
+   alpha and beta are coupled iff they share a free body, so the body-to-contacts incidence gives W's
+   sparsity exactly: W is preallocated to the entry, and nothing of the size of W or H_f is built on the side
+   (a general sparse product would hold H_f and a growing copy of W's column indices). */
+static PetscErrorCode ComputeDelassusSeq(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+{
+  const PetscInt     nc = ops->ncomp, n = contacts->n;
+  PetscInt          *start, *list, *mark, *nnz, *nb, *cols, maxnb = 0, nrow;
+  const PetscInt    *ai, *aj;
+  const PetscScalar *aa, *minv;
+  PetscScalar       *vals;
+  PetscBool          done;
+
+  PetscFunctionBeginUser;
+  PetscCall(BodyContacts(scene, contacts, &start, &list));
+  PetscCall(PetscMalloc2(n, &mark, n * nc, &nnz));
+  for (PetscInt q = 0; q < scene->ndisks + scene->nwalls; q++) maxnb = PetscMax(maxnb, start[q + 1] - start[q]);
+  maxnb = PetscMin(2 * maxnb, n); /* a contact touches at most two bodies */
+  PetscCall(PetscMalloc3(maxnb, &nb, maxnb * nc, &cols, maxnb * nc, &vals));
+  for (PetscInt k = 0; k < n; k++) mark[k] = -1;
+  for (PetscInt k = 0; k < n; k++) {
+    const PetscInt m = CoupledContacts(scene, contacts, start, list, k, mark, nb);
+    for (PetscInt c = 0; c < nc; c++) nnz[k * nc + c] = m * nc;
+  }
+  PetscCall(MatCreateSeqAIJ(ops->comm, n * nc, n * nc, 0, nnz, &ops->W));
+  PetscCall(MatSetOption(ops->W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
+  PetscCall(MatGetRowIJ(ops->HfT, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &ai, &aj, &done));
+  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "ComputeDelassusSeq: no CSR arrays for H_f^T");
+  PetscCall(MatSeqAIJGetArrayRead(ops->HfT, &aa));
+  PetscCall(VecGetArrayRead(ops->Minv, &minv));
+  for (PetscInt k = 0; k < n; k++) {
+    const PetscInt m = CoupledContacts(scene, contacts, start, list, k, mark, nb);
+    for (PetscInt c = 0; c < nc; c++) {
+      const PetscInt row = k * nc + c;
+      for (PetscInt b = 0; b < m; b++)
+        for (PetscInt e = 0; e < nc; e++) {
+          cols[b * nc + e] = nb[b] * nc + e;
+          vals[b * nc + e] = RowProduct(ai, aj, aa, minv, row, nb[b] * nc + e);
+        }
+      PetscCall(MatSetValues(ops->W, 1, &row, m * nc, cols, vals, INSERT_VALUES));
+    }
+  }
+  PetscCall(VecRestoreArrayRead(ops->Minv, &minv));
+  PetscCall(MatSeqAIJRestoreArrayRead(ops->HfT, &aa));
+  PetscCall(MatRestoreRowIJ(ops->HfT, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &ai, &aj, &done));
+  PetscCall(MatAssemblyBegin(ops->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(ops->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(PetscFree3(nb, cols, vals));
+  PetscCall(PetscFree2(mark, nnz));
+  PetscCall(PetscFree(start));
+  PetscCall(PetscFree(list));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ComputeDelassus(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+{
+  PetscMPIInt size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(ops->comm, &size));
+  if (size == 1) PetscCall(ComputeDelassusSeq(ops, scene, contacts));
+  else PetscCall(ComputeDelassusProduct(ops));
   PetscFunctionReturn(0);
 }
 
@@ -276,7 +416,7 @@ PetscErrorCode KergsOperatorsAssemble(KergsOperators ops, KergsScene scene, Kerg
     PetscCall(VecGetLocalSize(ops->Vg, &nglocal));
     PetscCall(CreateHt(ops, scene, contacts, PETSC_FALSE, nglocal, ops->ngiven, &ops->HgT));
   }
-  PetscCall(ComputeDelassus(ops));
+  PetscCall(ComputeDelassus(ops, scene, contacts));
   PetscCall(ComputeFreeVelocity(ops));
   PetscCall(PetscLogEventEnd(KERGS_Assemble, 0, 0, 0, 0));
   PetscFunctionReturn(0);
