@@ -155,6 +155,9 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscCall(PetscTime(&t0));
   if (s->ops.setup) PetscCall((*s->ops.setup)(s, scene, contacts, ops));
   PetscCall((*s->ops.solve)(s, scene, contacts, ops, stats));
+  /* the sweep lives for one solve: drop its reference to this step's W, so that W is freed at the start of the
+     next assembly instead of coexisting with the next step's W (the peak memory) */
+  PetscCall(KergsSweepReset(s->sweep));
   PetscCall(PetscTime(&t1));
   stats->seconds = t1 - t0;
   PetscCall(PetscLogEventEnd(KERGS_Solve, 0, 0, 0, 0));
