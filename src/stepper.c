@@ -158,12 +158,18 @@ static PetscErrorCode SaveVelocities(KergsScene sc, PetscReal **vold, PetscReal 
 static PetscErrorCode RecordStep(KergsStepper st, const KergsSolveStats *ss, PetscLogDouble tdetect, PetscLogDouble tassemble)
 {
   KergsResults res = st->results;
-  PetscReal    mean = 0, max = 0, times[3] = {tdetect, tassemble, st->io_seconds}, tmax[3], peak;
+  PetscReal    mean = 0, max = 0, times[4] = {tdetect, tassemble, st->io_seconds, 0}, tmax[4], peak, sent;
   PetscInt     nactive = 0;
+  PetscLogDouble now;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscTime(&now));
+  times[3] = now - st->step_start;
+  /* point-to-point and personalised collective bytes (PETSc's MPI logging; reductions are counted, not sized) */
+  sent = (PetscReal)(petsc_send_len + petsc_isend_len - st->sent_start);
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sent, 1, MPIU_REAL, MPIU_SUM, st->comm));
   PetscCall(MeasureViolation(st, &mean, &max, &nactive));
-  PetscCall(MPIU_Allreduce(times, tmax, 3, MPIU_REAL, MPI_MAX, st->comm));
+  PetscCall(MPIU_Allreduce(times, tmax, 4, MPIU_REAL, MPI_MAX, st->comm));
   PetscCall(PeakMemory(st->comm, &peak));
   st->max_violation = PetscMax(st->max_violation, max);
   if (!ss->converged) st->nonconverged++;
@@ -182,6 +188,8 @@ static PetscErrorCode RecordStep(KergsStepper st, const KergsSolveStats *ss, Pet
   PetscCall(KergsResultsRecord(res, "assemble_seconds", tmax[1]));
   PetscCall(KergsResultsRecord(res, "sweep_seconds", ss->sweep_seconds));
   PetscCall(KergsResultsRecord(res, "io_seconds", tmax[2]));
+  PetscCall(KergsResultsRecord(res, "step_seconds", tmax[3]));
+  PetscCall(KergsResultsRecord(res, "sent_bytes", sent));
   PetscCall(KergsResultsRecord(res, "peak_memory", peak));
   PetscCall(KergsResultsRecord(res, "baseline_memory", st->baseline_rss));
   PetscCall(KergsSolverRecordStats(st->solver, st->ops, res));
@@ -202,6 +210,8 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscBool       due;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscTime(&st->step_start));
+  st->sent_start = petsc_send_len + petsc_isend_len;
   /* initial partition before the first detection, then checks every -partition_check_every steps, with the
      contacts of the previous step (after its solve): migrates the disks and their contacts when due */
   PetscCall(KergsPartitionUpdate(st->partition, sc, st->contacts, NULL));

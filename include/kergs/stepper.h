@@ -26,6 +26,8 @@ struct _p_KergsStepper {
   PetscInt       nonconverged;   /* steps whose solve hit max_it */
   PetscReal      max_violation;  /* largest interpenetration seen over the run */
   PetscReal      io_seconds;     /* snapshot time of the current step */
+  PetscLogDouble step_start;     /* wall clock at the start of the current step */
+  PetscLogDouble sent_start;     /* bytes this rank had sent (PETSc's message log) at the start of the current step */
   PetscReal      baseline_rss;   /* resident memory (bytes, summed over ranks) before the scene was built */
 };
 
