@@ -1,6 +1,6 @@
 /* kergs scene: where the disks come from (-disks_source): an explicit list, a lattice, a random
    non-overlapping sample, or a sample file of an earlier run. The generators are deterministic, so every rank
-   builds the same replicated disk set. */
+   builds the same disk set and KergsSceneSetDisks keeps its slice (O(N) per rank at the start of a run only). */
 #include <kergs/scene.h>
 #include <kergs/sample.h>
 
