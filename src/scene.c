@@ -360,7 +360,7 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
       "-alert", "Alert distance >= 0: potential contacts have gap < alert (default 0.1 * mean radius, once the disks are known)", NULL,
       scene->alert, &scene->alert, alert_set));
   PetscCall(PetscOptionsReal("-ghost_skin",
-                             "Skin of the ghost layer: ghosts are rebuilt once a disk moved half of it (default: the alert distance)",
+                             "Skin of the ghost layer: ghosts are rebuilt once a disk moved half of it (negative: the alert distance)",
                              "KergsSceneUpdateGhosts", scene->ghost_skin, &scene->ghost_skin, NULL));
   PetscFunctionReturn(0);
 }
@@ -619,6 +619,8 @@ static PetscErrorCode SceneCheckNumerics(KergsScene scene)
              scene->nsteps);
   PetscCheck(Finite(scene->alert) && scene->alert >= 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance -alert %g must be >= 0",
              scene->name, (double)scene->alert);
+  PetscCheck(Finite(scene->ghost_skin), comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -ghost_skin %g is not finite", scene->name,
+             (double)scene->ghost_skin);
   PetscCheck(scene->gaprule == KERGS_GAP_PAPER || scene->gaprule == KERGS_GAP_LMGC90, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Scene %s: unknown gap rule %d", scene->name, (int)scene->gaprule);
   for (PetscInt d = 0; d < KERGS_DIM; d++)
