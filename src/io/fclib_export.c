@@ -259,6 +259,7 @@ PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsO
   PetscCall(KergsFCLibGather(contacts, ops, active, rstart, &p.na, &rows, &pack));
   /* W restricted to the active contacts, as one sequential matrix on rank 0 (empty elsewhere) */
   PetscCall(ISCreateGeneral(PETSC_COMM_SELF, p.na * nc, rows, PETSC_USE_POINTER, &is));
+  PetscCall(ISSetBlockSize(is, nc)); /* whole contacts: BAIJ W extracts by blocks only */
   PetscCall(MatCreateSubMatrices(ops->W, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   if (rank == 0) {
