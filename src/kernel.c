@@ -716,6 +716,8 @@ PetscErrorCode KergsKernelGetZ(KergsKernel k, Mat *Z)
   PetscFunctionReturn(0);
 }
 
+/* Z as a shell over contact components, with W's ncomp x ncomp block size, so that an explicit Z (nlkergs)
+   can be stored by the same blocks as W. */
 static PetscErrorCode CreateShell(KergsKernel k, KergsOperators ops)
 {
   PetscInt n, N;
@@ -723,7 +725,12 @@ static PetscErrorCode CreateShell(KergsKernel k, KergsOperators ops)
   PetscFunctionBeginUser;
   PetscCall(VecGetLocalSize(ops->r, &n));
   PetscCall(VecGetSize(ops->r, &N));
-  PetscCall(MatCreateShell(k->comm, n, n, N, N, k, &k->Z));
+  PetscCall(MatCreate(k->comm, &k->Z));
+  PetscCall(MatSetSizes(k->Z, n, n, N, N));
+  PetscCall(MatSetBlockSize(k->Z, ops->ncomp));
+  PetscCall(MatSetType(k->Z, MATSHELL));
+  PetscCall(MatShellSetContext(k->Z, k));
+  PetscCall(MatSetUp(k->Z));
   PetscCall(MatShellSetOperation(k->Z, MATOP_MULT, (void (*)(void))ZMult));
   PetscCall(MatShellSetOperation(k->Z, MATOP_MULT_TRANSPOSE, (void (*)(void))ZMult));
   PetscCall(MatSetOption(k->Z, MAT_SYMMETRIC, PETSC_TRUE));

@@ -1,5 +1,6 @@
 /* kergs nlgs: one non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2, DESIGN.md sections 4
-   and 6). The sweep reads W's CSR arrays directly. Inside a rank it is Gauss-Seidel (contact alpha sees
+   and 6). The sweep reads W's block CSR arrays directly: one block row per contact, blocks W_alpha,beta of
+   ncomp x ncomp (BAIJ, each block stored column by column; AIJ is the case ncomp = 1). Inside a rank it is Gauss-Seidel (contact alpha sees
    the impulses already updated in this sweep); across ranks it is Jacobi: the impulses of other ranks'
    contacts are scattered once per sweep into rghost and enter through boff = Ao rghost.
    For Algorithm 6 (NLGS-Jac) the caller passes the extra right-hand side and the regularised diagonal
@@ -15,20 +16,47 @@ PetscErrorCode KergsSweepCreate(MPI_Comm comm, KergsSweep *sweep)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsSweepReset(KergsSweep s)
+/* The block CSR arrays of a local block of W (kept until KergsSweepReset): block row a holds the blocks
+   [ia[a], ia[a+1]), block j has block column ja[j] and its bs*bs values at a + j*bs*bs. For BAIJ (blocked)
+   the block-compressed row structure and the value array (column-major blocks); for AIJ the plain CSR,
+   not inode-compressed. */
+static PetscErrorCode GetBlockCSR(Mat A, PetscBool blocked, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
 {
-  PetscInt  nrow;
-  PetscBool done;
+  PetscInt     nrow;
+  PetscBool    done;
+  PetscScalar *v;
 
   PetscFunctionBeginUser;
-  if (s->Ad) {
-    if (s->aa) PetscCall(MatSeqAIJRestoreArrayRead(s->Ad, &s->aa));
-    if (s->ai) PetscCall(MatRestoreRowIJ(s->Ad, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &s->ai, &s->aj, &done));
+  PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, blocked, &nrow, ia, ja, &done));
+  PetscCheck(done, PetscObjectComm((PetscObject)A), PETSC_ERR_SUP, "nlgs.c: MatGetRowIJ cannot give the CSR arrays of W's local block");
+  if (blocked) {
+    PetscCall(MatSeqBAIJGetArray(A, &v));
+    *a = v;
+  } else PetscCall(MatSeqAIJGetArrayRead(A, a));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode RestoreBlockCSR(Mat A, PetscBool blocked, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
+{
+  PetscInt     nrow;
+  PetscBool    done;
+  PetscScalar *v = (PetscScalar *)*a;
+
+  PetscFunctionBeginUser;
+  if (*a) {
+    if (blocked) PetscCall(MatSeqBAIJRestoreArray(A, &v));
+    else PetscCall(MatSeqAIJRestoreArrayRead(A, a));
   }
-  if (s->Ao) {
-    if (s->ba) PetscCall(MatSeqAIJRestoreArrayRead(s->Ao, &s->ba));
-    if (s->bi) PetscCall(MatRestoreRowIJ(s->Ao, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &s->bi, &s->bj, &done));
-  }
+  PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, blocked, &nrow, ia, ja, &done));
+  *a = NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSweepReset(KergsSweep s)
+{
+  PetscFunctionBeginUser;
+  if (s->Ad && s->ai) PetscCall(RestoreBlockCSR(s->Ad, s->blocked, &s->ai, &s->aj, &s->aa));
+  if (s->Ao && s->bi) PetscCall(RestoreBlockCSR(s->Ao, s->blocked, &s->bi, &s->bj, &s->ba));
   s->ai = s->aj = s->bi = s->bj = NULL;
   s->aa = s->ba = NULL;
   s->Ad = s->Ao = NULL;
@@ -40,8 +68,9 @@ PetscErrorCode KergsSweepReset(KergsSweep s)
   PetscCall(MatDestroy(&s->W));
   s->mu     = NULL;
   s->active = NULL;
-  s->n      = 0;
-  s->ncomp  = 0;
+  s->n       = 0;
+  s->ncomp   = 0;
+  s->blocked = PETSC_FALSE;
   PetscFunctionReturn(0);
 }
 
@@ -54,44 +83,32 @@ PetscErrorCode KergsSweepDestroy(KergsSweep *sweep)
   PetscFunctionReturn(0);
 }
 
-/* Get the CSR arrays of a SeqAIJ block (kept until KergsSweepReset). */
-static PetscErrorCode GetCSR(Mat A, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
-{
-  PetscInt  nrow;
-  PetscBool done;
-
-  PetscFunctionBeginUser;
-  PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, PETSC_FALSE, &nrow, ia, ja, &done));
-  if (!done) SETERRQ(PetscObjectComm((PetscObject)A), PETSC_ERR_SUP, "nlgs.c: MatGetRowIJ cannot give the CSR arrays of W's local block");
-  PetscCall(MatSeqAIJGetArrayRead(A, a));
-  PetscFunctionReturn(0);
-}
-
-/* Copy the diagonal blocks W_aa and locate, in each (sorted) row, the entries of the own block, which the
-   sweep skips: row i = a*nc + c has its own block's entries at [dsplit[2i], dsplit[2i+1]). */
+/* Copy the diagonal blocks W_aa (row-major, as the law takes them; BAIJ stores a block column by column:
+   entry (c, e) at c + e*nc) and locate them in each sorted block row: the sweep skips the blocks
+   [dsplit[2a], dsplit[2a+1]) of row a, the own block (none if W_aa is not stored). */
 static PetscErrorCode ExtractDiagonalBlocks(KergsSweep s)
 {
-  const PetscInt nc = s->ncomp;
-  PetscInt       a, c, i, j, col0;
+  const PetscInt nc = s->ncomp, bs2 = nc * nc;
+  PetscInt       a, c, e, j;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscCalloc1(s->n * nc * nc, &s->Wdiag));
-  PetscCall(PetscMalloc1(2 * s->n * nc, &s->dsplit));
+  PetscCall(PetscCalloc1(s->n * bs2, &s->Wdiag));
+  PetscCall(PetscMalloc1(2 * s->n, &s->dsplit));
   for (a = 0; a < s->n; a++) {
-    col0 = a * nc;
-    for (c = 0; c < nc; c++) {
-      i = col0 + c;
-      for (j = s->ai[i]; j < s->ai[i + 1] && s->aj[j] < col0; j++) { }
-      s->dsplit[2 * i] = j;
-      for (; j < s->ai[i + 1] && s->aj[j] < col0 + nc; j++) s->Wdiag[(a * nc + c) * nc + (s->aj[j] - col0)] = PetscRealPart(s->aa[j]);
-      s->dsplit[2 * i + 1] = j;
+    for (j = s->ai[a]; j < s->ai[a + 1] && s->aj[j] < a; j++) { }
+    s->dsplit[2 * a] = j;
+    if (j < s->ai[a + 1] && s->aj[j] == a) {
+      for (c = 0; c < nc; c++)
+        for (e = 0; e < nc; e++) s->Wdiag[a * bs2 + c * nc + e] = PetscRealPart(s->aa[j * bs2 + e * nc + c]);
+      j++;
     }
+    s->dsplit[2 * a + 1] = j;
   }
   PetscFunctionReturn(0);
 }
 
-/* Scatter from the global r to the sequential rghost whose entry j is the global column colmap[j], so that
-   Ao's column j reads rghost[j]. */
+/* Scatter from the global r to the sequential rghost whose block j (ncomp entries) is the global block column
+   colmap[j] (an off-process contact), so that Ao's block column j reads rghost[j*ncomp .. j*ncomp+ncomp). */
 static PetscErrorCode CreateGhostScatter(KergsSweep s, const PetscInt *colmap)
 {
   PetscInt nghost;
@@ -101,7 +118,7 @@ static PetscErrorCode CreateGhostScatter(KergsSweep s, const PetscInt *colmap)
   PetscFunctionBeginUser;
   PetscCall(MatGetSize(s->Ao, NULL, &nghost));
   PetscCall(VecCreateSeq(PETSC_COMM_SELF, nghost, &s->rghost));
-  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nghost, colmap, PETSC_COPY_VALUES, &is));
+  PetscCall(ISCreateBlock(PETSC_COMM_SELF, s->ncomp, nghost / s->ncomp, colmap, PETSC_COPY_VALUES, &is));
   PetscCall(MatCreateVecs(s->W, &x, NULL));
   PetscCall(VecScatterCreate(x, is, s->rghost, NULL, &s->ghost_scatter));
   PetscCall(VecDestroy(&x));
@@ -109,10 +126,32 @@ static PetscErrorCode CreateGhostScatter(KergsSweep s, const PetscInt *colmap)
   PetscFunctionReturn(0);
 }
 
+/* W's storage: (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when ncomp = 1 (a block is one entry). */
+static PetscErrorCode CheckStorage(KergsSweep s, Mat W, PetscInt ncomp, PetscBool *ismpi, PetscBool *blocked)
+{
+  MatType   type;
+  PetscBool seqaij, mpiaij, seqbaij, mpibaij;
+  PetscInt  bs;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetType(W, &type));
+  PetscCall(PetscStrbeginswith(type, MATSEQAIJ, &seqaij));
+  PetscCall(PetscStrbeginswith(type, MATMPIAIJ, &mpiaij));
+  PetscCall(PetscStrbeginswith(type, MATSEQBAIJ, &seqbaij));
+  PetscCall(PetscStrbeginswith(type, MATMPIBAIJ, &mpibaij));
+  PetscCall(MatGetBlockSize(W, &bs));
+  *ismpi   = (PetscBool)(mpiaij || mpibaij);
+  *blocked = (PetscBool)(seqbaij || mpibaij);
+  PetscCheck(*blocked || seqaij || mpiaij, s->comm, PETSC_ERR_SUP, "KergsSweepSetUp: W has type %s; the sweep needs an assembled (seq|mpi)baij or (seq|mpi)aij matrix", type);
+  PetscCheck(*blocked ? bs == ncomp : ncomp == 1, s->comm, PETSC_ERR_SUP,
+             "KergsSweepSetUp: W of type %s, block size %" PetscInt_FMT ", for %" PetscInt_FMT " components per contact: the sweep needs baij with block size ncomp (aij for one component)",
+             type, bs, ncomp);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active)
 {
-  MatType         type;
-  PetscBool       isseq, ismpi;
+  PetscBool       ismpi = PETSC_FALSE, blocked = PETSC_FALSE;
   PetscInt        m, mcol, rstart, cstart;
   const PetscInt *colmap;
 
@@ -120,10 +159,7 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   PetscCall(KergsSweepReset(s));
   if (ncomp < 1 || ncomp > KERGS_MAXCOMP)
     SETERRQ(s->comm, PETSC_ERR_ARG_OUTOFRANGE, "KergsSweepSetUp: %" PetscInt_FMT " components per contact, expected 1 to %d", ncomp, KERGS_MAXCOMP);
-  PetscCall(MatGetType(W, &type));
-  PetscCall(PetscStrbeginswith(type, MATSEQAIJ, &isseq));
-  PetscCall(PetscStrbeginswith(type, MATMPIAIJ, &ismpi));
-  if (!isseq && !ismpi) SETERRQ(s->comm, PETSC_ERR_SUP, "KergsSweepSetUp: W has type %s; the sweep needs an assembled seqaij or mpiaij matrix", type);
+  PetscCall(CheckStorage(s, W, ncomp, &ismpi, &blocked));
   PetscCall(MatGetLocalSize(W, &m, &mcol));
   PetscCall(MatGetOwnershipRange(W, &rstart, NULL));
   PetscCall(MatGetOwnershipRangeColumn(W, &cstart, NULL));
@@ -131,16 +167,18 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   if (m % ncomp) SETERRQ(s->comm, PETSC_ERR_ARG_SIZ, "KergsSweepSetUp: %" PetscInt_FMT " local rows of W is not a multiple of %" PetscInt_FMT " components", m, ncomp);
 
   PetscCall(PetscObjectReference((PetscObject)W));
-  s->W      = W;
-  s->ncomp  = ncomp;
-  s->n      = m / ncomp;
-  s->mu     = (PetscReal *)mu;
-  s->active = (PetscBool *)active;
-  if (ismpi) PetscCall(MatMPIAIJGetSeqAIJ(W, &s->Ad, &s->Ao, &colmap));
+  s->W       = W;
+  s->ncomp   = ncomp;
+  s->n       = m / ncomp;
+  s->blocked = blocked;
+  s->mu      = (PetscReal *)mu;
+  s->active  = (PetscBool *)active;
+  if (ismpi && blocked) PetscCall(MatMPIBAIJGetSeqBAIJ(W, &s->Ad, &s->Ao, &colmap));
+  else if (ismpi) PetscCall(MatMPIAIJGetSeqAIJ(W, &s->Ad, &s->Ao, &colmap));
   else s->Ad = W;
-  PetscCall(GetCSR(s->Ad, &s->ai, &s->aj, &s->aa));
+  PetscCall(GetBlockCSR(s->Ad, blocked, &s->ai, &s->aj, &s->aa));
   if (s->Ao) {
-    PetscCall(GetCSR(s->Ao, &s->bi, &s->bj, &s->ba));
+    PetscCall(GetBlockCSR(s->Ao, blocked, &s->bi, &s->bj, &s->ba));
     PetscCall(CreateGhostScatter(s, colmap));
   }
   PetscCall(PetscCalloc1(m, &s->boff));
@@ -148,16 +186,29 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   PetscFunctionReturn(0);
 }
 
-/* boff = Ao rghost: the contributions of other ranks' contacts, frozen for the sweep (Jacobi across ranks). */
-static void OffProcessProduct(PetscInt m, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *rg, PetscReal *boff)
+/* b[c] += sum over the blocks [j0, j1) of a block row of W_block(c, e) x[ja[j]*nc + e], each block stored
+   column by column (entry (c, e) at c + e*nc). Inlined with a constant nc. */
+static inline void BlocksTimesX(const PetscInt nc, const PetscInt *ja, const PetscScalar *va, PetscInt j0, PetscInt j1, const PetscScalar *x, PetscReal *b)
 {
-  PetscInt  i, j;
-  PetscReal t;
+  PetscInt c, e, j;
 
-  for (i = 0; i < m; i++) {
-    t = 0.0;
-    for (j = bi[i]; j < bi[i + 1]; j++) t += ba[j] * rg[bj[j]];
-    boff[i] = t;
+  for (j = j0; j < j1; j++) {
+    const PetscScalar *v  = va + j * nc * nc;
+    const PetscScalar *xb = x + ja[j] * nc;
+    for (e = 0; e < nc; e++)
+      for (c = 0; c < nc; c++) b[c] += PetscRealPart(v[e * nc + c] * xb[e]);
+  }
+}
+
+/* boff = Ao rghost: the contributions of other ranks' contacts, frozen for the sweep (Jacobi across ranks). */
+static inline void OffProcessProduct(const PetscInt nc, PetscInt n, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *rg, PetscReal *boff)
+{
+  PetscInt a, c;
+
+  for (a = 0; a < n; a++) {
+    PetscReal t[KERGS_MAXCOMP] = {0.0};
+    BlocksTimesX(nc, bj, ba, bi[a], bi[a + 1], rg, t);
+    for (c = 0; c < nc; c++) boff[a * nc + c] = t[c];
   }
 }
 
@@ -170,21 +221,11 @@ typedef struct {
   PetscReal maxd;  /* max dr^T Waa dr */
 } SweepSums;
 
-/* Row i of W times r, skipping the row's own-block entries [d0, d1). */
-static inline PetscReal RowTimesR(const PetscInt *aj, const PetscScalar *aa, PetscInt j0, PetscInt d0, PetscInt d1, PetscInt j1, const PetscReal *r)
-{
-  PetscReal t = 0.0;
-  PetscInt  j;
-
-  for (j = j0; j < d0; j++) t += aa[j] * r[aj[j]];
-  for (j = d1; j < j1; j++) t += aa[j] * r[aj[j]];
-  return t;
-}
-
 /* The Gauss-Seidel loop over the rank's contacts (Algorithm 2): for contact a,
      b_a = vd_a + extra_a + boff_a + sum_{local beta != a} W_a,beta r_beta   (latest r),
-   then the exact law with the block Wlaw_a, r_a updated in place. nc is 1 or 2; the function is inlined
-   with a constant nc so that the small loops over components unroll. */
+   then the exact law with the block Wlaw_a, r_a updated in place. Block row a of W is contact a: its blocks
+   before and after the own block, [ai[a], ds[2a]) and [ds[2a+1], ai[a+1]), give the sum. nc is 1 or 2; the
+   function is inlined with a constant nc so that the small loops over components unroll. */
 static inline void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscInt *ds,
                                  const PetscScalar *vd, const PetscReal *boff, const PetscReal *extra, const PetscReal *Wlaw, const PetscReal *Wd,
                                  const PetscReal *mu, const PetscBool *active, PetscScalar *r, SweepSums *sums)
@@ -197,9 +238,12 @@ static inline void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *
     const PetscReal *w  = Wd + a * nc * nc;
 
     if (act) {
+      PetscReal t[KERGS_MAXCOMP] = {0.0};
+      BlocksTimesX(nc, aj, aa, ai[a], ds[2 * a], r, t);
+      BlocksTimesX(nc, aj, aa, ds[2 * a + 1], ai[a + 1], r, t);
       for (c = 0; c < nc; c++) {
         i    = a * nc + c;
-        b[c] = vd[i] + boff[i] + RowTimesR(aj, aa, ai[i], ds[2 * i], ds[2 * i + 1], ai[i + 1], r);
+        b[c] = PetscRealPart(vd[i]) + boff[i] + t[c];
         if (extra) b[c] += extra[i];
       }
     }
@@ -255,7 +299,8 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
     PetscCall(VecScatterEnd(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
     PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
     PetscCall(VecGetArrayRead(s->rghost, &rg));
-    OffProcessProduct(m, s->bi, s->bj, s->ba, rg, s->boff);
+    if (nc == 2) OffProcessProduct(2, s->n, s->bi, s->bj, s->ba, rg, s->boff);
+    else OffProcessProduct(1, s->n, s->bi, s->bj, s->ba, rg, s->boff);
     PetscCall(VecRestoreArrayRead(s->rghost, &rg));
   }
   PetscCall(VecGetArray(r, &rl));
@@ -265,7 +310,7 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override ? Wdiag_override : s->Wdiag, s->Wdiag, s->mu, s->active, rl, &loc);
   PetscCall(VecRestoreArrayRead(vd, &vdl));
   PetscCall(VecRestoreArray(r, &rl));
-  PetscCall(PetscLogFlops(2.0 * (s->ai[m] + (s->bi ? s->bi[m] : 0))));
+  PetscCall(PetscLogFlops(2.0 * nc * nc * (s->ai[s->n] + (s->bi ? s->bi[s->n] : 0))));
 
   sums[0] = loc.dWd;
   sums[1] = loc.rWr;

@@ -201,6 +201,7 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
     }
   PetscCall(MatCreate(ops->comm, Ht));
   PetscCall(MatSetSizes(*Ht, nrows, ncols_local, PETSC_DETERMINE, ncols));
+  PetscCall(MatSetBlockSizes(*Ht, ops->ncomp, 1)); /* rows by contact, so that W = H_f^T M^-1 H_f gets ncomp x ncomp blocks */
   PetscCall(MatSetType(*Ht, MATAIJ));
   PetscCall(MatSeqAIJSetPreallocation(*Ht, 0, dnz));
   PetscCall(MatMPIAIJSetPreallocation(*Ht, 0, dnz, 0, onz));
@@ -223,7 +224,9 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
    contacts that share its bodies. H_f is the explicit transpose of H_f^T, its rows scaled in place by the
    diagonal M^-1, then an A B product with the "scalable" algorithm (no transpose of the second factor, as
    A B^T would keep). MatProductClear drops the intermediate data and the references to the factors at once,
-   and M^-1 H_f is freed before returning; KergsOperatorsGetHf rebuilds H_f unscaled on demand. */
+   and M^-1 H_f is freed before the product, an MPIAIJ with ncomp x ncomp block sizes (H_f^T's rows come by
+   contact), is converted in place to MPIBAIJ (one column index per block, as the sweep reads it); the
+   conversion holds both copies of W for a moment. KergsOperatorsGetHf rebuilds H_f unscaled on demand. */
 static PetscErrorCode ComputeDelassusProduct(KergsOperators ops)
 {
   Mat MinvHf;
@@ -240,6 +243,7 @@ static PetscErrorCode ComputeDelassusProduct(KergsOperators ops)
   PetscCall(MatProductNumeric(ops->W));
   PetscCall(MatProductClear(ops->W));
   PetscCall(MatDestroy(&MinvHf));
+  if (ops->ncomp > 1) PetscCall(MatConvert(ops->W, MATMPIBAIJ, MAT_INPLACE_MATRIX, &ops->W));
   PetscFunctionReturn(0);
 }
 
@@ -318,14 +322,26 @@ static PetscScalar RowProduct(const PetscInt *ai, const PetscInt *aj, const Pets
   return w;
 }
 
+/* The block row of contact k, [W_k,nb[0] ... W_k,nb[m-1]], row-major as MatSetValuesBlocked takes it: the
+   entry (c, b*nc + e) is W_(k nc + c),(nb[b] nc + e). */
+static void BlockRow(const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscScalar *minv, PetscInt nc, PetscInt k, PetscInt m,
+                     const PetscInt *nb, PetscScalar *vals)
+{
+  for (PetscInt c = 0; c < nc; c++)
+    for (PetscInt b = 0; b < m; b++)
+      for (PetscInt e = 0; e < nc; e++) vals[(c * m + b) * nc + e] = RowProduct(ai, aj, aa, minv, k * nc + c, nb[b] * nc + e);
+}
+
 /* One rank: W assembled directly from its definition, W_ij = sum_d (H_f^T)_id (M^-1)_d (H_f^T)_jd. Contacts
    alpha and beta are coupled iff they share a free body, so the body-to-contacts incidence gives W's
-   sparsity exactly: W is preallocated to the entry, and nothing of the size of W or H_f is built on the side
-   (a general sparse product would hold H_f and a growing copy of W's column indices). */
+   sparsity exactly: W is preallocated to the block, and nothing of the size of W or H_f is built on the side
+   (a general sparse product would hold H_f and a growing copy of W's column indices). W is stored by
+   ncomp x ncomp blocks, one block row per contact (BAIJ; AIJ when ncomp = 1), so that a block W_alpha,beta
+   carries one column index. */
 static PetscErrorCode ComputeDelassusSeq(KergsOperators ops, KergsScene scene, KergsContacts contacts)
 {
   const PetscInt     nc = ops->ncomp, n = contacts->n;
-  PetscInt          *start, *list, *mark, *nnz, *nb, *cols, maxnb = 0, nrow;
+  PetscInt          *start, *list, *mark, *bnnz, *nb, maxnb = 0, nrow;
   const PetscInt    *ai, *aj;
   const PetscScalar *aa, *minv;
   PetscScalar       *vals;
@@ -333,16 +349,17 @@ static PetscErrorCode ComputeDelassusSeq(KergsOperators ops, KergsScene scene, K
 
   PetscFunctionBeginUser;
   PetscCall(BodyContacts(scene, contacts, &start, &list));
-  PetscCall(PetscMalloc2(n, &mark, n * nc, &nnz));
+  PetscCall(PetscMalloc2(n, &mark, n, &bnnz));
   for (PetscInt q = 0; q < scene->ndisks + scene->nwalls; q++) maxnb = PetscMax(maxnb, start[q + 1] - start[q]);
   maxnb = PetscMin(2 * maxnb, n); /* a contact touches at most two bodies */
-  PetscCall(PetscMalloc3(maxnb, &nb, maxnb * nc, &cols, maxnb * nc, &vals));
+  PetscCall(PetscMalloc2(maxnb, &nb, maxnb * nc * nc, &vals));
   for (PetscInt k = 0; k < n; k++) mark[k] = -1;
-  for (PetscInt k = 0; k < n; k++) {
-    const PetscInt m = CoupledContacts(scene, contacts, start, list, k, mark, nb);
-    for (PetscInt c = 0; c < nc; c++) nnz[k * nc + c] = m * nc;
-  }
-  PetscCall(MatCreateSeqAIJ(ops->comm, n * nc, n * nc, 0, nnz, &ops->W));
+  for (PetscInt k = 0; k < n; k++) bnnz[k] = CoupledContacts(scene, contacts, start, list, k, mark, nb);
+  PetscCall(MatCreate(ops->comm, &ops->W));
+  PetscCall(MatSetSizes(ops->W, n * nc, n * nc, n * nc, n * nc));
+  PetscCall(MatSetBlockSize(ops->W, nc));
+  PetscCall(MatSetType(ops->W, nc > 1 ? MATSEQBAIJ : MATSEQAIJ));
+  PetscCall(MatXAIJSetPreallocation(ops->W, nc, bnnz, NULL, NULL, NULL));
   PetscCall(MatSetOption(ops->W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
   PetscCall(MatGetRowIJ(ops->HfT, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &ai, &aj, &done));
   PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "ComputeDelassusSeq: no CSR arrays for H_f^T");
@@ -350,23 +367,16 @@ static PetscErrorCode ComputeDelassusSeq(KergsOperators ops, KergsScene scene, K
   PetscCall(VecGetArrayRead(ops->Minv, &minv));
   for (PetscInt k = 0; k < n; k++) {
     const PetscInt m = CoupledContacts(scene, contacts, start, list, k, mark, nb);
-    for (PetscInt c = 0; c < nc; c++) {
-      const PetscInt row = k * nc + c;
-      for (PetscInt b = 0; b < m; b++)
-        for (PetscInt e = 0; e < nc; e++) {
-          cols[b * nc + e] = nb[b] * nc + e;
-          vals[b * nc + e] = RowProduct(ai, aj, aa, minv, row, nb[b] * nc + e);
-        }
-      PetscCall(MatSetValues(ops->W, 1, &row, m * nc, cols, vals, INSERT_VALUES));
-    }
+    BlockRow(ai, aj, aa, minv, nc, k, m, nb, vals);
+    PetscCall(MatSetValuesBlocked(ops->W, 1, &k, m, nb, vals, INSERT_VALUES));
   }
   PetscCall(VecRestoreArrayRead(ops->Minv, &minv));
   PetscCall(MatSeqAIJRestoreArrayRead(ops->HfT, &aa));
   PetscCall(MatRestoreRowIJ(ops->HfT, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &ai, &aj, &done));
   PetscCall(MatAssemblyBegin(ops->W, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(ops->W, MAT_FINAL_ASSEMBLY));
-  PetscCall(PetscFree3(nb, cols, vals));
-  PetscCall(PetscFree2(mark, nnz));
+  PetscCall(PetscFree2(nb, vals));
+  PetscCall(PetscFree2(mark, bnnz));
   PetscCall(PetscFree(start));
   PetscCall(PetscFree(list));
   PetscFunctionReturn(0);

@@ -226,7 +226,13 @@ static PetscErrorCode LatticeProblem(MPI_Comm comm, const Lattice *L, PetscInt n
 
   PetscFunctionBeginUser;
   PetscCall(LocalCount(comm, L->ncontact, &nloc));
-  PetscCall(MatCreateAIJ(comm, PETSC_DECIDE, ncomp * nloc, 3 * ngrain, ncomp * L->ncontact, 14 * ncomp, NULL, 14 * ncomp, NULL, &Hs));
+  /* columns by contact, so that W = Hs^T Hs has ncomp x ncomp blocks: stored as BAIJ for the sweep when ncomp > 1 */
+  PetscCall(MatCreate(comm, &Hs));
+  PetscCall(MatSetSizes(Hs, PETSC_DECIDE, ncomp * nloc, 3 * ngrain, ncomp * L->ncontact));
+  PetscCall(MatSetBlockSizes(Hs, 1, ncomp));
+  PetscCall(MatSetType(Hs, MATAIJ));
+  PetscCall(MatSeqAIJSetPreallocation(Hs, 14 * ncomp, NULL));
+  PetscCall(MatMPIAIJSetPreallocation(Hs, 14 * ncomp, NULL, 14 * ncomp, NULL));
   PetscCall(MatSetOption(Hs, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
   PetscCall(MatGetOwnershipRangeColumn(Hs, &kstart, &kend));
   kstart /= ncomp;
@@ -235,6 +241,7 @@ static PetscErrorCode LatticeProblem(MPI_Comm comm, const Lattice *L, PetscInt n
   PetscCall(MatAssemblyBegin(Hs, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(Hs, MAT_FINAL_ASSEMBLY));
   PetscCall(MatTransposeMatMult(Hs, Hs, MAT_INITIAL_MATRIX, PETSC_DEFAULT, W));
+  if (ncomp > 1) PetscCall(MatConvert(*W, MATBAIJ, MAT_INPLACE_MATRIX, W));
   PetscCall(MatShift(*W, shift));
   PetscCall(MatDestroy(&Hs));
 

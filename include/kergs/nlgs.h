@@ -1,5 +1,5 @@
-/* kergs nlgs: the non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2), reading W's CSR
-   arrays directly. Gauss-Seidel inside a rank, Jacobi across ranks: the impulses of other ranks'
+/* kergs nlgs: the non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2), reading W's block
+   CSR arrays directly (one block row of ncomp x ncomp blocks per contact). Gauss-Seidel inside a rank, Jacobi across ranks: the impulses of other ranks'
    contacts are scattered once per sweep (DESIGN.md section 6).
    Regularised variants (Algorithm 6, NLGS-Jac) pass an extra right-hand side per component and
    replacement diagonal blocks. */
@@ -13,16 +13,17 @@ typedef struct _p_KergsSweep *KergsSweep;
 struct _p_KergsSweep {
   MPI_Comm comm;
   PetscInt ncomp, n;          /* components per contact, local contacts */
-  Mat      W, Ad, Ao;         /* W and its local diagonal / off-process blocks (Ao NULL when W is seqaij) */
-  const PetscInt    *ai, *aj, *bi, *bj;
-  const PetscScalar *aa, *ba;
+  Mat      W, Ad, Ao;         /* W and its local diagonal / off-process blocks (Ao NULL when W is sequential) */
+  PetscBool blocked;          /* W is (seq|mpi)baij with block size ncomp; otherwise (seq|mpi)aij with ncomp = 1 */
+  const PetscInt    *ai, *aj, *bi, *bj; /* block CSR of Ad and Ao: block rows = local contacts */
+  const PetscScalar *aa, *ba;           /* their values, ncomp*ncomp per block, each block column by column */
   PetscReal *Wdiag;           /* n blocks of ncomp x ncomp: W_alpha,alpha */
   PetscReal *mu;              /* per contact (the caller's array; NULL: frictionless) */
   PetscBool *active;          /* per contact: predicted gap <= 0 (the caller's array; NULL: all active) */
-  Vec        rghost;          /* off-process impulses, ordered as Ao's columns */
+  Vec        rghost;          /* off-process impulses, ordered as Ao's (block) columns */
   VecScatter ghost_scatter;
   PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep) */
-  PetscInt  *dsplit;          /* per local row i: [start, end) of the own block's entries in aj (skipped by the sweep) */
+  PetscInt  *dsplit;          /* per local contact a: [start, end) of its own block W_aa in aj (skipped by the sweep) */
 };
 
 /* Measures of one sweep, reduced over ranks by KergsSweepRun.
@@ -35,7 +36,7 @@ typedef struct {
 } KergsSweepMeasures;
 
 PETSC_EXTERN PetscErrorCode KergsSweepCreate(MPI_Comm, KergsSweep *);
-/* Take W (assembled seqaij/mpiaij for the current contacts, row and column layouts equal, ncomp rows per local
+/* Take W (assembled (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when ncomp = 1, for the current contacts, row and column layouts equal, ncomp rows per local
    contact) and per-contact mu and activity. Keeps a reference to W and its CSR arrays, and the pointers mu and
    active (owned by the caller, read at every sweep). Calling it again resets first; if W's values change,
    call it again (the diagonal blocks are copied). */

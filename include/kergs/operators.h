@@ -5,8 +5,9 @@
    Contact components: normal, plus tangential only when the scene is frictional.
 
    HfT = H_f^T (contact components x free DOFs) is assembled (each contact's rows are local to its owner);
-   H_f itself is its explicit transpose, built on demand. W = H_f^T M^-1 H_f is a parallel AIJ Mat over
-   contact components. */
+   H_f itself is its explicit transpose, built on demand. W = H_f^T M^-1 H_f is a Mat over
+   contact components stored by ncomp x ncomp blocks, one block row per contact: (MPI)BAIJ when frictional,
+   (MPI)AIJ when ncomp = 1. */
 #ifndef KERGS_OPERATORS_H
 #define KERGS_OPERATORS_H
 
@@ -23,7 +24,7 @@ struct _p_KergsOperators {
   Mat HfT;            /* H_f^T */
   Mat Hf;             /* H_f, NULL until KergsOperatorsGetHf */
   Mat HgT;            /* H_g^T, NULL when the scene has no driven wall */
-  Mat W;              /* H_f^T M^-1 H_f */
+  Mat W;              /* H_f^T M^-1 H_f, (MPI)BAIJ with block size ncomp (AIJ when ncomp = 1) */
   Vec Minv;           /* diagonal of M^-1 over free DOFs */
   Vec Vf;             /* free velocities V_f (V_f^- on entry of a step, V_f^+ after the update) */
   Vec Rd;             /* impulse of external forces over the step */

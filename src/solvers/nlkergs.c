@@ -41,7 +41,9 @@ static PetscErrorCode KergsSolverSetUp_NLKerGS(KergsSolver s, KergsScene scene, 
   PetscCall(KergsRegularisedSetUp(s, reg, scene, contacts, ops));
   PetscCall(MatDestroy(&nk->Wt));
   PetscCall(KergsKernelGetZ(reg->kernel, &Z));
-  PetscCall(MatComputeOperator(Z, MATAIJ, &nk->Wt));
+  /* explicit Z stored like W, by ncomp x ncomp blocks (Z carries W's block size), so that W~ = Z + W is one
+     block row per contact for the sweep */
+  PetscCall(MatComputeOperator(Z, ops->ncomp > 1 ? MATBAIJ : MATAIJ, &nk->Wt));
   PetscCall(MatAXPY(nk->Wt, 1.0, ops->W, DIFFERENT_NONZERO_PATTERN));
   PetscCall(MatGetInfo(nk->Wt, MAT_GLOBAL_SUM, &info));
   nk->nnz_Wt = (PetscInt)info.nz_used;
