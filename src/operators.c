@@ -201,7 +201,6 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
     }
   PetscCall(MatCreate(ops->comm, Ht));
   PetscCall(MatSetSizes(*Ht, nrows, ncols_local, PETSC_DETERMINE, ncols));
-  PetscCall(MatSetBlockSizes(*Ht, ops->ncomp, 1)); /* rows by contact, so that W = H_f^T M^-1 H_f gets ncomp x ncomp blocks */
   PetscCall(MatSetType(*Ht, MATAIJ));
   PetscCall(MatSeqAIJSetPreallocation(*Ht, 0, dnz));
   PetscCall(MatMPIAIJSetPreallocation(*Ht, 0, dnz, 0, onz));
@@ -220,13 +219,96 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
   PetscFunctionReturn(0);
 }
 
+/* The block columns of block row a (global contact indices, sorted, distinct) of an AIJ W with nc rows per
+   contact: the columns of rows a*nc .. a*nc+nc-1, divided by nc, merged into bcol[]; returns their number. */
+static PetscErrorCode BlockColumns(Mat W, PetscInt nc, PetscInt a, PetscInt *bcol, PetscInt *nb)
+{
+  const PetscInt *cols;
+  PetscInt        ncols, row;
+
+  PetscFunctionBeginUser;
+  *nb = 0;
+  for (PetscInt c = 0; c < nc; c++) {
+    row = a * nc + c;
+    PetscCall(MatGetRow(W, row, &ncols, &cols, NULL));
+    for (PetscInt j = 0; j < ncols; j++) bcol[(*nb)++] = cols[j] / nc;
+    PetscCall(MatRestoreRow(W, row, &ncols, &cols, NULL));
+  }
+  PetscCall(PetscSortRemoveDupsInt(nb, bcol));
+  PetscFunctionReturn(0);
+}
+
+/* The block row a of an AIJ W, row-major as MatSetValuesBlocked takes it: entry (c, b*nc + e) is
+   W_(a nc + c),(bcol[b] nc + e), zero where the AIJ row has no entry. */
+static PetscErrorCode BlockRowValues(Mat W, PetscInt nc, PetscInt a, const PetscInt *bcol, PetscInt nb, PetscScalar *vals)
+{
+  const PetscInt    *cols;
+  const PetscScalar *v;
+  PetscInt           ncols, row, b;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscArrayzero(vals, nc * nb * nc));
+  for (PetscInt c = 0; c < nc; c++) {
+    row = a * nc + c;
+    PetscCall(MatGetRow(W, row, &ncols, &cols, &v));
+    for (PetscInt j = 0; j < ncols; j++) {
+      PetscCall(PetscFindInt(cols[j] / nc, nb, bcol, &b));
+      vals[(c * nb + b) * nc + cols[j] % nc] = v[j];
+    }
+    PetscCall(MatRestoreRow(W, row, &ncols, &cols, &v));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Several ranks: the MPIAIJ product W re-stored as MPIBAIJ with block size nc, preallocated exactly by block
+   (PETSc 3.18's MatConvert preallocates from the first row of each block only and inserts entry by entry,
+   seconds on biaxial 20k). Both copies exist until the AIJ one is destroyed. */
+static PetscErrorCode ConvertToBlocks(Mat *W, PetscInt nc)
+{
+  Mat          Wb;
+  PetscInt     m, M, rstart, rend, n, *dnz, *onz, *bcol, nb, maxcols = 0, ncols;
+  PetscScalar *vals;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetLocalSize(*W, &m, NULL));
+  PetscCall(MatGetSize(*W, &M, NULL));
+  PetscCall(MatGetOwnershipRange(*W, &rstart, &rend));
+  n = m / nc;
+  for (PetscInt i = rstart; i < rend; i++) {
+    PetscCall(MatGetRow(*W, i, &ncols, NULL, NULL));
+    maxcols = PetscMax(maxcols, ncols);
+    PetscCall(MatRestoreRow(*W, i, &ncols, NULL, NULL));
+  }
+  PetscCall(PetscMalloc4(n, &dnz, n, &onz, nc * maxcols, &bcol, nc * nc * nc * maxcols, &vals));
+  for (PetscInt a = 0; a < n; a++) {
+    PetscCall(BlockColumns(*W, nc, rstart / nc + a, bcol, &nb));
+    dnz[a] = onz[a] = 0;
+    for (PetscInt b = 0; b < nb; b++) {
+      if (bcol[b] >= rstart / nc && bcol[b] < rend / nc) dnz[a]++;
+      else onz[a]++;
+    }
+  }
+  PetscCall(MatCreateBAIJ(PetscObjectComm((PetscObject)*W), nc, m, m, M, M, 0, dnz, 0, onz, &Wb));
+  PetscCall(MatSetOption(Wb, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
+  for (PetscInt a = rstart / nc; a < rend / nc; a++) {
+    PetscCall(BlockColumns(*W, nc, a, bcol, &nb));
+    PetscCall(BlockRowValues(*W, nc, a, bcol, nb, vals));
+    PetscCall(MatSetValuesBlocked(Wb, 1, &a, nb, bcol, vals, INSERT_VALUES));
+  }
+  PetscCall(MatAssemblyBegin(Wb, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(Wb, MAT_FINAL_ASSEMBLY));
+  PetscCall(PetscFree4(dnz, onz, bcol, vals));
+  PetscCall(MatDestroy(W));
+  *W = Wb;
+  PetscFunctionReturn(0);
+}
+
 /* Several ranks: W = H_f^T (M^-1 H_f) by PETSc's parallel product, since a rank does not know the other ranks'
    contacts that share its bodies. H_f is the explicit transpose of H_f^T, its rows scaled in place by the
    diagonal M^-1, then an A B product with the "scalable" algorithm (no transpose of the second factor, as
    A B^T would keep). MatProductClear drops the intermediate data and the references to the factors at once,
-   and M^-1 H_f is freed before the product, an MPIAIJ with ncomp x ncomp block sizes (H_f^T's rows come by
-   contact), is converted in place to MPIBAIJ (one column index per block, as the sweep reads it); the
-   conversion holds both copies of W for a moment. KergsOperatorsGetHf rebuilds H_f unscaled on demand. */
+   and M^-1 H_f is freed before the product is re-stored as MPIBAIJ with block size ncomp (one column index per
+   block, as the sweep reads it); the conversion holds both copies of W for a moment. KergsOperatorsGetHf rebuilds H_f unscaled on demand. */
 static PetscErrorCode ComputeDelassusProduct(KergsOperators ops)
 {
   Mat MinvHf;
@@ -243,7 +325,7 @@ static PetscErrorCode ComputeDelassusProduct(KergsOperators ops)
   PetscCall(MatProductNumeric(ops->W));
   PetscCall(MatProductClear(ops->W));
   PetscCall(MatDestroy(&MinvHf));
-  if (ops->ncomp > 1) PetscCall(MatConvert(ops->W, MATMPIBAIJ, MAT_INPLACE_MATRIX, &ops->W));
+  if (ops->ncomp > 1) PetscCall(ConvertToBlocks(&ops->W, ops->ncomp));
   PetscFunctionReturn(0);
 }
 
