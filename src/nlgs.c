@@ -7,6 +7,14 @@
    blocks W_aa + Z_aa; both are used as given. */
 #include <kergs/nlgs.h>
 
+/* The block kernels are specialised by inlining with a constant number of components (1 or 2); the compiler's
+   heuristics alone do not inline the sweep loop into its two call sites. */
+#if PetscHasAttribute(always_inline)
+  #define KERGS_ALWAYS_INLINE __attribute__((always_inline))
+#else
+  #define KERGS_ALWAYS_INLINE
+#endif
+
 PetscErrorCode KergsSweepCreate(MPI_Comm comm, KergsSweep *sweep)
 {
   PetscFunctionBeginUser;
@@ -188,7 +196,7 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
 
 /* b[c] += sum over the blocks [j0, j1) of a block row of W_block(c, e) x[ja[j]*nc + e], each block stored
    column by column (entry (c, e) at c + e*nc). Inlined with a constant nc. */
-static inline void BlocksTimesX(const PetscInt nc, const PetscInt *ja, const PetscScalar *va, PetscInt j0, PetscInt j1, const PetscScalar *x, PetscReal *b)
+static inline KERGS_ALWAYS_INLINE void BlocksTimesX(const PetscInt nc, const PetscInt *ja, const PetscScalar *va, PetscInt j0, PetscInt j1, const PetscScalar *x, PetscReal *b)
 {
   PetscInt c, e, j;
 
@@ -201,7 +209,7 @@ static inline void BlocksTimesX(const PetscInt nc, const PetscInt *ja, const Pet
 }
 
 /* boff = Ao rghost: the contributions of other ranks' contacts, frozen for the sweep (Jacobi across ranks). */
-static inline void OffProcessProduct(const PetscInt nc, PetscInt n, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *rg, PetscReal *boff)
+static inline KERGS_ALWAYS_INLINE void OffProcessProduct(const PetscInt nc, PetscInt n, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *rg, PetscReal *boff)
 {
   PetscInt a, c;
 
@@ -226,7 +234,7 @@ typedef struct {
    then the exact law with the block Wlaw_a, r_a updated in place. Block row a of W is contact a: its blocks
    before and after the own block, [ai[a], ds[2a]) and [ds[2a+1], ai[a+1]), give the sum. nc is 1 or 2; the
    function is inlined with a constant nc so that the small loops over components unroll. */
-static inline void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscInt *ds,
+static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscInt *ds,
                                  const PetscScalar *vd, const PetscReal *boff, const PetscReal *extra, const PetscReal *Wlaw, const PetscReal *Wd,
                                  const PetscReal *mu, const PetscBool *active, PetscScalar *r, SweepSums *sums)
 {
