@@ -171,6 +171,7 @@ PetscErrorCode KergsSolverRecordStats(KergsSolver s, KergsOperators ops, KergsRe
   PetscFunctionBeginUser;
   PetscCall(MatGetInfo(ops->HfT, MAT_GLOBAL_SUM, &info));
   PetscCall(KergsResultsRecord(res, "nnz_Hf", info.nz_used));
+  /* scalar entries stored: for BAIJ nz_used counts ncomp^2 per block */
   PetscCall(MatGetInfo(ops->W, MAT_GLOBAL_SUM, &info));
   PetscCall(KergsResultsRecord(res, "nnz_W", info.nz_used));
   if (s->ops.record) PetscCall((*s->ops.record)(s, res));
