@@ -44,6 +44,8 @@ PetscErrorCode KergsContactsDestroy(KergsContacts *contacts)
   if (!contacts || !*contacts) PetscFunctionReturn(0);
   PetscCall(PetscFree((*contacts)->c));
   PetscCall(PetscFree((*contacts)->prev));
+  PetscCall(PetscFree((*contacts)->foreign));
+  PetscCall(PetscFree((*contacts)->foreign_index));
   PetscCall(PetscFree((*contacts)->cellhead));
   PetscCall(PetscFree((*contacts)->next));
   PetscCall(PetscFree(*contacts));
@@ -211,16 +213,50 @@ static inline void SetContact(KergsContact *c, KergsContactKind kind, PetscInt a
   c->persistent = PETSC_FALSE;
 }
 
-/* Contacts of owned disk a with every local disk b of larger grain id within the alert distance, appended to
-   ct->c and sorted by the id of b. Gap g = |x_a - x_b| - R_a - R_b, normal n = (x_a - x_b) / |x_a - x_b|. */
-static PetscErrorCode DetectDiskDisk(KergsContacts ct, KergsScene scene, PetscInt a)
+/* The disk-disk pair (p, q), p of smaller grain id, as contact c if it lies within the alert distance (returns
+   PETSC_FALSE otherwise). Gap g = |x_p - x_q| - R_p - R_q, normal n = (x_p - x_q) / |x_p - x_q|. Always evaluated
+   in this order, so that the two ranks holding the pair (one of them as a ghost) compute the same bits. */
+static PetscErrorCode PairContact(KergsScene scene, PetscInt p, PetscInt q, KergsContact *c, PetscBool *touching)
 {
   const PetscReal *x = scene->x, *rad = scene->radius;
+  const PetscReal  dx = x[KERGS_DIM * p] - x[KERGS_DIM * q], dy = x[KERGS_DIM * p + 1] - x[KERGS_DIM * q + 1];
+  const PetscReal  reach = rad[p] + rad[q] + scene->alert, d2 = dx * dx + dy * dy;
+  PetscReal        dist;
+
+  PetscFunctionBeginUser;
+  *touching = (PetscBool)(d2 < reach * reach);
+  if (!*touching) PetscFunctionReturn(0);
+  PetscCheck(d2 > 0.0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+             "Scene %s: grains %" PetscInt_FMT " and %" PetscInt_FMT " (disks %" PetscInt_FMT " and %" PetscInt_FMT
+             ") have coincident centres (%g, %g): contact normal undefined",
+             scene->name, scene->id[p], scene->id[q], scene->gidx[p], scene->gidx[q], (double)x[KERGS_DIM * p], (double)x[KERGS_DIM * p + 1]);
+  dist = PetscSqrtReal(d2);
+  SetContact(c, KERGS_CONTACT_DISK_DISK, p, q, scene->id[q], dx / dist, dy / dist, rad[p], rad[q], dist - rad[p] - rad[q],
+             scene->mu[scene->material[p] * scene->nmaterials + scene->material[q]]);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ForeignReserve(KergsContacts ct, PetscInt needed)
+{
+  PetscFunctionBeginUser;
+  if (needed <= ct->nforeignalloc) PetscFunctionReturn(0);
+  ct->nforeignalloc = PetscMax(PetscMax(2 * ct->nforeignalloc, needed), 16);
+  PetscCall(PetscRealloc((size_t)ct->nforeignalloc * sizeof(KergsContact), &ct->foreign));
+  PetscCall(PetscRealloc((size_t)ct->nforeignalloc * sizeof(PetscInt), &ct->foreign_index));
+  PetscFunctionReturn(0);
+}
+
+/* Contacts of owned disk a with every local disk b of larger grain id within the alert distance, appended to
+   ct->c and sorted by the id of b; and the foreign contacts of a: those with a ghost b of smaller id (owned by
+   b's owner), appended to ct->foreign as the pair (b, a). */
+static PetscErrorCode DetectDiskDisk(KergsContacts ct, KergsScene scene, PetscInt a)
+{
+  const PetscReal *x = scene->x;
   const PetscInt  *next = ct->next, *head = ct->cellhead, nx = ct->ncellx, ny = ct->ncelly;
-  const PetscReal  xa = x[KERGS_DIM * a], ya = x[KERGS_DIM * a + 1], ra = rad[a], alert = scene->alert, inv = 1.0 / ct->cellsize;
-  const PetscInt   first = ct->n, *mat = scene->material, *id = scene->id, ida = id[a];
-  const PetscReal *murow = scene->mu + mat[a] * scene->nmaterials; /* row of a's material in the friction table */
+  const PetscReal  xa = x[KERGS_DIM * a], ya = x[KERGS_DIM * a + 1], inv = 1.0 / ct->cellsize;
+  const PetscInt   first = ct->n, *id = scene->id, ida = id[a];
   PetscInt         ix = (PetscInt)((xa - ct->origin[0]) * inv), iy = (PetscInt)((ya - ct->origin[1]) * inv);
+  PetscBool        touching;
 
   PetscFunctionBeginUser;
   ix = PetscMin(PetscMax(ix, 0), nx - 1);
@@ -228,18 +264,15 @@ static PetscErrorCode DetectDiskDisk(KergsContacts ct, KergsScene scene, PetscIn
   for (PetscInt cy = PetscMax(iy - 1, 0); cy <= PetscMin(iy + 1, ny - 1); cy++) {
     for (PetscInt cx = PetscMax(ix - 1, 0); cx <= PetscMin(ix + 1, nx - 1); cx++) {
       for (PetscInt b = head[cy * nx + cx]; b >= 0; b = next[b]) {
-        if (id[b] <= ida) continue; /* the pair belongs to the disk of smaller id (also skips b == a) */
-        const PetscReal dx = xa - x[KERGS_DIM * b], dy = ya - x[KERGS_DIM * b + 1], reach = ra + rad[b] + alert, d2 = dx * dx + dy * dy;
-        PetscReal       dist;
-
-        if (d2 >= reach * reach) continue;
-        PetscCheck(d2 > 0.0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
-                   "Scene %s: grains %" PetscInt_FMT " and %" PetscInt_FMT " (disks %" PetscInt_FMT " and %" PetscInt_FMT
-                   ") have coincident centres (%g, %g): contact normal undefined",
-                   scene->name, ida, id[b], scene->gidx[a], scene->gidx[b], (double)xa, (double)ya);
-        if (ct->n == ct->nalloc) PetscCall(ContactsReserve(ct, ct->n + 1));
-        dist = PetscSqrtReal(d2);
-        SetContact(&ct->c[ct->n++], KERGS_CONTACT_DISK_DISK, a, b, id[b], dx / dist, dy / dist, ra, rad[b], dist - ra - rad[b], murow[mat[b]]);
+        if (id[b] > ida) { /* the pair belongs to the disk of smaller id: a */
+          if (ct->n == ct->nalloc) PetscCall(ContactsReserve(ct, ct->n + 1));
+          PetscCall(PairContact(scene, a, b, &ct->c[ct->n], &touching));
+          ct->n += touching;
+        } else if (b >= scene->nowned) { /* a ghost of smaller id: the pair is its owner's, foreign here */
+          PetscCall(ForeignReserve(ct, ct->nforeign + 1));
+          PetscCall(PairContact(scene, b, a, &ct->foreign[ct->nforeign], &touching));
+          ct->nforeign += touching;
+        } /* b == a, or an owned disk of smaller id: found from b */
       }
     }
   }
@@ -377,6 +410,76 @@ static PetscErrorCode SetGlobalNumbering(KergsContacts ct)
   PetscFunctionReturn(0);
 }
 
+/* A key of a disk-disk contact by grain ids and its global index, as owners send it to the ranks holding it as
+   foreign. */
+typedef struct {
+  PetscInt ida, idb, index;
+} ForeignKey;
+
+static int CompareForeignKeys(const void *x, const void *y)
+{
+  const ForeignKey *p = (const ForeignKey *)x, *q = (const ForeignKey *)y;
+  if (p->ida != q->ida) return p->ida < q->ida ? -1 : 1;
+  return p->idb < q->idb ? -1 : (p->idb > q->idb ? 1 : 0);
+}
+
+/* The global index of every foreign contact, from its owner: each rank sends (ids, index) of its contacts with a
+   ghost b to b's owner (one personalised exchange), which matches them with its foreign list. Both sides found the
+   pair from the same bits, so the lists must agree exactly; a mismatch is an error, not a silent loss. */
+static PetscErrorCode NumberForeignContacts(KergsContacts ct, KergsScene scene)
+{
+  PetscMPIInt size, *scount, *sdispl, *rcount, *rdispl;
+  ForeignKey *send, *recv, *mine;
+  PetscInt    nsend = 0, nrecv = 0, *fill;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(ct->comm, &size));
+  if (size == 1) PetscFunctionReturn(0);
+  PetscCall(PetscCalloc4(size, &scount, size, &sdispl, size, &rcount, size, &rdispl));
+  for (PetscInt k = 0; k < ct->n; k++)
+    if (ct->c[k].kind == KERGS_CONTACT_DISK_DISK && ct->c[k].b >= scene->nowned) {
+      scount[scene->ghost_owner[ct->c[k].b - scene->nowned]]++;
+      nsend++;
+    }
+  PetscCall(PetscMalloc2(nsend + 1, &send, size, &fill));
+  for (PetscMPIInt q = 1; q < size; q++) sdispl[q] = sdispl[q - 1] + scount[q - 1];
+  for (PetscMPIInt q = 0; q < size; q++) fill[q] = sdispl[q];
+  for (PetscInt k = 0; k < ct->n; k++) {
+    const KergsContact *c = &ct->c[k];
+    if (c->kind != KERGS_CONTACT_DISK_DISK || c->b < scene->nowned) continue;
+    send[fill[scene->ghost_owner[c->b - scene->nowned]]++] = (ForeignKey){scene->id[c->a], c->idb, ct->start + k};
+  }
+  PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, ct->comm));
+  for (PetscMPIInt q = 0; q < size; q++) {
+    rdispl[q] = (PetscMPIInt)nrecv;
+    nrecv += rcount[q];
+  }
+  for (PetscMPIInt q = 0; q < size; q++) { /* in bytes */
+    scount[q] *= (PetscMPIInt)sizeof(ForeignKey);
+    sdispl[q] *= (PetscMPIInt)sizeof(ForeignKey);
+    rcount[q] *= (PetscMPIInt)sizeof(ForeignKey);
+    rdispl[q] *= (PetscMPIInt)sizeof(ForeignKey);
+  }
+  PetscCall(PetscMalloc2(nrecv + 1, &recv, ct->nforeign + 1, &mine));
+  PetscCallMPI(MPI_Alltoallv(send, scount, sdispl, MPI_BYTE, recv, rcount, rdispl, MPI_BYTE, ct->comm));
+  PetscCheck(nrecv == ct->nforeign, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "Scene %s: %" PetscInt_FMT " contacts of other ranks touch this rank's disks, but %" PetscInt_FMT " were found here (ghost layer incomplete)",
+             scene->name, nrecv, ct->nforeign);
+  for (PetscInt f = 0; f < ct->nforeign; f++) mine[f] = (ForeignKey){scene->id[ct->foreign[f].a], ct->foreign[f].idb, f};
+  qsort(recv, (size_t)nrecv, sizeof(ForeignKey), CompareForeignKeys);
+  qsort(mine, (size_t)ct->nforeign, sizeof(ForeignKey), CompareForeignKeys);
+  for (PetscInt f = 0; f < ct->nforeign; f++) {
+    PetscCheck(CompareForeignKeys(&recv[f], &mine[f]) == 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "Scene %s: the pair of grains %" PetscInt_FMT " and %" PetscInt_FMT " is a contact on one rank and not on the other", scene->name,
+               recv[f].ida, recv[f].idb);
+    ct->foreign_index[mine[f].index] = recv[f].index;
+  }
+  PetscCall(PetscFree2(recv, mine));
+  PetscCall(PetscFree2(send, fill));
+  PetscCall(PetscFree4(scount, sdispl, rcount, rdispl));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode DetectContacts(KergsContacts ct, KergsScene scene)
 {
   WallFrame *frames = NULL;
@@ -387,7 +490,7 @@ static PetscErrorCode DetectContacts(KergsContacts ct, KergsScene scene)
   PetscCall(CheckScene(ct, scene));
   /* the current contacts leave their keys and impulses; their storage is reused for the new list */
   PetscCall(SaveHistory(ct));
-  ct->n = 0;
+  ct->n = ct->nforeign = 0;
 
   PetscCall(BuildCellList(ct, scene));
   PetscCall(PetscMalloc1(scene->nwalls, &frames));
@@ -399,6 +502,7 @@ static PetscErrorCode DetectContacts(KergsContacts ct, KergsScene scene)
   PetscCall(PetscFree(frames));
   PetscCall(CarryOverImpulses(ct));
   PetscCall(SetGlobalNumbering(ct));
+  PetscCall(NumberForeignContacts(ct, scene));
   for (PetscInt i = 0; i < ct->n; i++) npersistent += ct->c[i].persistent;
   PetscCall(PetscInfo(NULL,
                       "Scene %s: %" PetscInt_FMT " contacts here (%" PetscInt_FMT " persistent) of %" PetscInt_FMT

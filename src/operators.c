@@ -219,274 +219,286 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
   PetscFunctionReturn(0);
 }
 
-/* bcol[0 .. nb) (sorted, distinct) merged with the block columns cols[]/nc of one sorted row, through tmp;
-   returns the new count. Linear: the rows come sorted from MatGetRow. */
-static PetscInt MergeBlockColumns(PetscInt nb, PetscInt *bcol, PetscInt ncols, const PetscInt *cols, PetscInt nc, PetscInt *tmp)
-{
-  PetscInt i = 0, j = 0, n = 0, b;
+/* ------------------------------------------------------------------------------------------------ */
+/* W = H_f^T M^-1 H_f, assembled body by body                                                       */
+/*
+   M is block diagonal by bodies, so W = sum over free bodies q of H_q^T M_q^-1 H_q: body q couples every pair of
+   contacts (alpha, beta) that touch it, by the block H_alpha,q M_q^-1 H_beta,q^T (ncomp x ncomp; H_alpha,q are the
+   rows of contact alpha on q's DOFs). Each rank adds the terms of the disks it owns: their contacts are its own
+   plus its foreign ones (detect.h), all known here with their global indices; rows of foreign contacts go to their
+   owners through PETSc's stash. A free wall's terms are added by each rank for its own contacts at that wall, from
+   the list of every contact at the wall (gathered: a free wall couples all of them). The pattern is counted
+   exactly beforehand: row alpha holds the contacts at its body a (always owned by alpha's owner) and at its body
+   b, alpha itself in both; for a ghost b the counts come from b's owner. W is stored by ncomp x ncomp blocks, one
+   block row per contact (BAIJ; AIJ when ncomp = 1), as the sweep reads it. Nothing of the size of W or H_f is
+   built on the side.
+*/
 
-  while (i < nb || j < ncols) {
-    if (j == ncols || (i < nb && bcol[i] <= cols[j] / nc)) b = bcol[i++];
-    else b = cols[j++] / nc;
-    if (!n || tmp[n - 1] != b) tmp[n++] = b;
+/* A contact at one body: global index, owning rank, and its rows of H_f^T on the body's DOFs (h[c * nd + j]). */
+typedef struct {
+  PetscInt    index;
+  PetscMPIInt owner;
+  PetscReal   h[KERGS_MAXCOMP * (KERGS_DIM + KERGS_NROT)];
+} BodyContact;
+
+/* The rows of contact ct restricted to the DOFs [dof, dof + nd) of one of its bodies. */
+static void RestrictToBody(KergsOperators ops, KergsScene scene, const KergsContact *ct, PetscInt dof, PetscInt nd, PetscReal *h)
+{
+  HtRow fr, gr;
+
+  for (PetscInt i = 0; i < ops->ncomp * nd; i++) h[i] = 0.0;
+  for (PetscInt c = 0; c < ops->ncomp; c++) {
+    ContactRows(ops, scene, ct, c, &fr, &gr);
+    for (PetscInt j = 0; j < fr.ncol; j++)
+      if (fr.col[j] >= dof && fr.col[j] < dof + nd) h[c * nd + fr.col[j] - dof] = fr.val[j];
   }
-  for (i = 0; i < n; i++) bcol[i] = tmp[i];
-  return n;
 }
 
-/* The block columns of block row a (global contact indices, sorted, distinct) of an AIJ W with nc rows per
-   contact: the columns of rows a*nc .. a*nc+nc-1, divided by nc, merged into bcol[]; returns their number. */
-static PetscErrorCode BlockColumns(Mat W, PetscInt nc, PetscInt a, PetscInt *bcol, PetscInt *tmp, PetscInt *nb)
+/* The contacts at each owned disk, in CSR form (start[q] .. start[q+1] in list): entry k < n is owned contact k,
+   entry n + f is foreign contact f. */
+static PetscErrorCode DiskIncidence(KergsScene scene, KergsContacts ct, PetscInt **start, PetscInt **list)
 {
-  const PetscInt *cols;
-  PetscInt        ncols, row;
+  const PetscInt nq = scene->nowned;
+  PetscInt      *fill;
 
   PetscFunctionBeginUser;
-  *nb = 0;
-  for (PetscInt c = 0; c < nc; c++) {
-    row = a * nc + c;
-    PetscCall(MatGetRow(W, row, &ncols, &cols, NULL));
-    *nb = MergeBlockColumns(*nb, bcol, ncols, cols, nc, tmp);
-    PetscCall(MatRestoreRow(W, row, &ncols, &cols, NULL));
+  PetscCall(PetscCalloc1(nq + 1, start));
+  for (PetscInt k = 0; k < ct->n; k++) {
+    (*start)[ct->c[k].a + 1]++;
+    if (ct->c[k].kind == KERGS_CONTACT_DISK_DISK && ct->c[k].b < nq) (*start)[ct->c[k].b + 1]++;
   }
-  PetscFunctionReturn(0);
-}
-
-/* The block row a of an AIJ W, row-major as MatSetValuesBlocked takes it: entry (c, b*nc + e) is
-   W_(a nc + c),(bcol[b] nc + e), zero where the AIJ row has no entry. A row's sorted columns walk bcol once. */
-static PetscErrorCode BlockRowValues(Mat W, PetscInt nc, PetscInt a, const PetscInt *bcol, PetscInt nb, PetscScalar *vals)
-{
-  const PetscInt    *cols;
-  const PetscScalar *v;
-  PetscInt           ncols, row, b;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscArrayzero(vals, nc * nb * nc));
-  for (PetscInt c = 0; c < nc; c++) {
-    row = a * nc + c;
-    PetscCall(MatGetRow(W, row, &ncols, &cols, &v));
-    b = 0;
-    for (PetscInt j = 0; j < ncols; j++) {
-      while (bcol[b] < cols[j] / nc) b++;
-      vals[(c * nb + b) * nc + cols[j] % nc] = v[j];
-    }
-    PetscCall(MatRestoreRow(W, row, &ncols, &cols, &v));
+  for (PetscInt f = 0; f < ct->nforeign; f++) (*start)[ct->foreign[f].b + 1]++;
+  for (PetscInt q = 0; q < nq; q++) (*start)[q + 1] += (*start)[q];
+  PetscCall(PetscMalloc1((*start)[nq] + 1, list));
+  PetscCall(PetscMalloc1(nq + 1, &fill));
+  PetscCall(PetscArraycpy(fill, *start, nq));
+  for (PetscInt k = 0; k < ct->n; k++) {
+    (*list)[fill[ct->c[k].a]++] = k;
+    if (ct->c[k].kind == KERGS_CONTACT_DISK_DISK && ct->c[k].b < nq) (*list)[fill[ct->c[k].b]++] = k;
   }
-  PetscFunctionReturn(0);
-}
-
-/* Several ranks: the MPIAIJ product W re-stored as MPIBAIJ with block size nc, preallocated exactly by block
-   and filled a block row at a time (MatConvert in PETSc 3.18, entry by entry, took 4.8 s per step on biaxial
-   20k with 2 ranks against 0.04 s here). Both copies exist until the AIJ one is destroyed. */
-static PetscErrorCode ConvertToBlocks(Mat *W, PetscInt nc)
-{
-  Mat          Wb;
-  PetscInt     m, M, rstart, rend, n, *dnz, *onz, *bcol, *tmp, nb, maxcols = 0, ncols;
-  PetscScalar *vals;
-
-  PetscFunctionBeginUser;
-  PetscCall(MatGetLocalSize(*W, &m, NULL));
-  PetscCall(MatGetSize(*W, &M, NULL));
-  PetscCall(MatGetOwnershipRange(*W, &rstart, &rend));
-  n = m / nc;
-  for (PetscInt i = rstart; i < rend; i++) {
-    PetscCall(MatGetRow(*W, i, &ncols, NULL, NULL));
-    maxcols = PetscMax(maxcols, ncols);
-    PetscCall(MatRestoreRow(*W, i, &ncols, NULL, NULL));
-  }
-  PetscCall(PetscMalloc5(n, &dnz, n, &onz, nc * maxcols, &bcol, nc * maxcols, &tmp, nc * nc * nc * maxcols, &vals));
-  for (PetscInt a = 0; a < n; a++) {
-    PetscCall(BlockColumns(*W, nc, rstart / nc + a, bcol, tmp, &nb));
-    dnz[a] = onz[a] = 0;
-    for (PetscInt b = 0; b < nb; b++) {
-      if (bcol[b] >= rstart / nc && bcol[b] < rend / nc) dnz[a]++;
-      else onz[a]++;
-    }
-  }
-  PetscCall(MatCreateBAIJ(PetscObjectComm((PetscObject)*W), nc, m, m, M, M, 0, dnz, 0, onz, &Wb));
-  PetscCall(MatSetOption(Wb, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
-  for (PetscInt a = rstart / nc; a < rend / nc; a++) {
-    PetscCall(BlockColumns(*W, nc, a, bcol, tmp, &nb));
-    PetscCall(BlockRowValues(*W, nc, a, bcol, nb, vals));
-    PetscCall(MatSetValuesBlocked(Wb, 1, &a, nb, bcol, vals, INSERT_VALUES));
-  }
-  PetscCall(MatAssemblyBegin(Wb, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(Wb, MAT_FINAL_ASSEMBLY));
-  PetscCall(PetscFree5(dnz, onz, bcol, tmp, vals));
-  PetscCall(MatDestroy(W));
-  *W = Wb;
-  PetscFunctionReturn(0);
-}
-
-/* Several ranks: W = H_f^T (M^-1 H_f) by PETSc's parallel product, since a rank does not know the other ranks'
-   contacts that share its bodies. H_f is the explicit transpose of H_f^T, its rows scaled in place by the
-   diagonal M^-1, then an A B product with the "scalable" algorithm (no transpose of the second factor, as
-   A B^T would keep). MatProductClear drops the intermediate data and the references to the factors at once,
-   and M^-1 H_f is freed before the product is re-stored as MPIBAIJ with block size ncomp (one column index per
-   block, as the sweep reads it); the conversion holds both copies of W for a moment. KergsOperatorsGetHf rebuilds H_f unscaled on demand. */
-static PetscErrorCode ComputeDelassusProduct(KergsOperators ops)
-{
-  Mat MinvHf;
-
-  PetscFunctionBeginUser;
-  PetscCall(MatTranspose(ops->HfT, MAT_INITIAL_MATRIX, &MinvHf));
-  PetscCall(MatDiagonalScale(MinvHf, ops->Minv, NULL));
-  PetscCall(MatProductCreate(ops->HfT, MinvHf, NULL, &ops->W));
-  PetscCall(MatProductSetType(ops->W, MATPRODUCT_AB));
-  PetscCall(MatProductSetAlgorithm(ops->W, "scalable"));
-  PetscCall(MatProductSetFill(ops->W, PETSC_DEFAULT));
-  PetscCall(MatProductSetFromOptions(ops->W));
-  PetscCall(MatProductSymbolic(ops->W));
-  PetscCall(MatProductNumeric(ops->W));
-  PetscCall(MatProductClear(ops->W));
-  PetscCall(MatDestroy(&MinvHf));
-  if (ops->ncomp > 1) PetscCall(ConvertToBlocks(&ops->W, ops->ncomp));
-  PetscFunctionReturn(0);
-}
-
-/* The free bodies of a contact, numbered disks first (0 .. ndisks-1) then walls (ndisks + w); -1 for a driven
-   wall, whose DOFs are given (H_g), not free. */
-static void ContactBodies(KergsScene scene, const KergsContact *ct, PetscInt body[2])
-{
-  body[0] = ct->a;
-  if (ct->kind == KERGS_CONTACT_DISK_DISK) body[1] = ct->b;
-  else body[1] = scene->walls[ct->b].kind == KERGS_WALL_FREE ? scene->ndisks + ct->b : -1;
-}
-
-/* The contacts touching each free body, in CSR form: those of body q are list[start[q] .. start[q+1]), in
-   increasing order. This is the sparsity of H_f by blocks, at about one integer per contact end. */
-static PetscErrorCode BodyContacts(KergsScene scene, KergsContacts contacts, PetscInt **start, PetscInt **list)
-{
-  const PetscInt nb = scene->ndisks + scene->nwalls;
-  PetscInt       body[2], *fill;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscCalloc1(nb + 1, start));
-  for (PetscInt k = 0; k < contacts->n; k++) {
-    ContactBodies(scene, &contacts->c[k], body);
-    for (PetscInt e = 0; e < 2; e++)
-      if (body[e] >= 0) (*start)[body[e] + 1]++;
-  }
-  for (PetscInt q = 0; q < nb; q++) (*start)[q + 1] += (*start)[q];
-  PetscCall(PetscMalloc1((*start)[nb], list));
-  PetscCall(PetscMalloc1(nb, &fill));
-  PetscCall(PetscArraycpy(fill, *start, nb));
-  for (PetscInt k = 0; k < contacts->n; k++) {
-    ContactBodies(scene, &contacts->c[k], body);
-    for (PetscInt e = 0; e < 2; e++)
-      if (body[e] >= 0) (*list)[fill[body[e]]++] = k;
-  }
+  for (PetscInt f = 0; f < ct->nforeign; f++) (*list)[fill[ct->foreign[f].b]++] = ct->n + f;
   PetscCall(PetscFree(fill));
   PetscFunctionReturn(0);
 }
 
-/* The contacts coupled to contact k in W (those sharing a free body with it, k included), sorted, into nb[];
-   returns their number. mark[] (one per contact, -1 on entry) is left as it was found. */
-static PetscInt CoupledContacts(KergsScene scene, KergsContacts contacts, const PetscInt *start, const PetscInt *list, PetscInt k, PetscInt *mark,
-                                PetscInt *nb)
+/* The contacts at owned disk q with their rows on q's DOFs, into bc[0 .. m). */
+static PetscInt DiskContacts(KergsOperators ops, KergsScene scene, KergsContacts ct, const PetscInt *start, const PetscInt *list, PetscInt q,
+                             BodyContact *bc)
 {
-  PetscInt body[2], n = 0;
+  const PetscInt nd = ops->ndof_disk, dof = KergsOperatorsDiskDof(ops, scene->gidx[q]);
+  PetscMPIInt    rank;
+  PetscInt       m = 0;
 
-  ContactBodies(scene, &contacts->c[k], body);
-  for (PetscInt e = 0; e < 2; e++) {
-    if (body[e] < 0) continue;
-    for (PetscInt j = start[body[e]]; j < start[body[e] + 1]; j++)
-      if (mark[list[j]] != k) {
-        mark[list[j]] = k;
-        nb[n++]       = list[j];
-      }
+  (void)MPI_Comm_rank(ops->comm, &rank);
+  for (PetscInt j = start[q]; j < start[q + 1]; j++, m++) {
+    const PetscInt      e  = list[j];
+    const KergsContact *c  = e < ct->n ? &ct->c[e] : &ct->foreign[e - ct->n];
+    bc[m].index            = e < ct->n ? ct->start + e : ct->foreign_index[e - ct->n];
+    bc[m].owner            = e < ct->n ? rank : (PetscMPIInt)scene->ghost_owner[c->a - scene->nowned];
+    RestrictToBody(ops, scene, c, dof, nd, bc[m].h);
   }
-  for (PetscInt j = 0; j < n; j++) mark[nb[j]] = -1;
-  (void)PetscSortInt(n, nb);
-  return n;
+  return m;
 }
 
-/* W_ij = sum_d (H_f^T)_id (M^-1)_d (H_f^T)_jd, a merge of the two sorted rows i and j of H_f^T. */
-static PetscScalar RowProduct(const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscScalar *minv, PetscInt i, PetscInt j)
+/* Every contact at free wall w, on every rank (rows on the wall's KERGS_DIM DOFs); *m of them in *bc (PetscFree). */
+static PetscErrorCode WallContacts(KergsOperators ops, KergsScene scene, KergsContacts ct, PetscInt w, PetscInt *m, BodyContact **bc)
 {
-  PetscInt    p = ai[i], q = ai[j];
-  PetscScalar w = 0.0;
-
-  while (p < ai[i + 1] && q < ai[j + 1]) {
-    if (aj[p] < aj[q]) p++;
-    else if (aj[p] > aj[q]) q++;
-    else {
-      w += aa[p] * minv[aj[p]] * aa[q];
-      p++;
-      q++;
-    }
-  }
-  return w;
-}
-
-/* The block row of contact k, [W_k,nb[0] ... W_k,nb[m-1]], row-major as MatSetValuesBlocked takes it: the
-   entry (c, b*nc + e) is W_(k nc + c),(nb[b] nc + e). */
-static void BlockRow(const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscScalar *minv, PetscInt nc, PetscInt k, PetscInt m,
-                     const PetscInt *nb, PetscScalar *vals)
-{
-  for (PetscInt c = 0; c < nc; c++)
-    for (PetscInt b = 0; b < m; b++)
-      for (PetscInt e = 0; e < nc; e++) vals[(c * m + b) * nc + e] = RowProduct(ai, aj, aa, minv, k * nc + c, nb[b] * nc + e);
-}
-
-/* One rank: W assembled directly from its definition, W_ij = sum_d (H_f^T)_id (M^-1)_d (H_f^T)_jd. Contacts
-   alpha and beta are coupled iff they share a free body, so the body-to-contacts incidence gives W's
-   sparsity exactly: W is preallocated to the block, and nothing of the size of W or H_f is built on the side
-   (a general sparse product would hold H_f and a growing copy of W's column indices). W is stored by
-   ncomp x ncomp blocks, one block row per contact (BAIJ; AIJ when ncomp = 1), so that a block W_alpha,beta
-   carries one column index. */
-static PetscErrorCode ComputeDelassusSeq(KergsOperators ops, KergsScene scene, KergsContacts contacts)
-{
-  const PetscInt     nc = ops->ncomp, n = contacts->n;
-  PetscInt          *start, *list, *mark, *bnnz, *nb, maxnb = 0, nrow;
-  const PetscInt    *ai, *aj;
-  const PetscScalar *aa, *minv;
-  PetscScalar       *vals;
-  PetscBool          done;
-
-  PetscFunctionBeginUser;
-  PetscCall(BodyContacts(scene, contacts, &start, &list));
-  PetscCall(PetscMalloc2(n, &mark, n, &bnnz));
-  for (PetscInt q = 0; q < scene->ndisks + scene->nwalls; q++) maxnb = PetscMax(maxnb, start[q + 1] - start[q]);
-  maxnb = PetscMin(2 * maxnb, n); /* a contact touches at most two bodies */
-  PetscCall(PetscMalloc2(maxnb, &nb, maxnb * nc * nc, &vals));
-  for (PetscInt k = 0; k < n; k++) mark[k] = -1;
-  for (PetscInt k = 0; k < n; k++) bnnz[k] = CoupledContacts(scene, contacts, start, list, k, mark, nb);
-  PetscCall(MatCreate(ops->comm, &ops->W));
-  PetscCall(MatSetSizes(ops->W, n * nc, n * nc, n * nc, n * nc));
-  PetscCall(MatSetBlockSize(ops->W, nc));
-  PetscCall(MatSetType(ops->W, nc > 1 ? MATSEQBAIJ : MATSEQAIJ));
-  PetscCall(MatXAIJSetPreallocation(ops->W, nc, bnnz, NULL, NULL, NULL));
-  PetscCall(MatSetOption(ops->W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
-  PetscCall(MatGetRowIJ(ops->HfT, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &ai, &aj, &done));
-  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "ComputeDelassusSeq: no CSR arrays for H_f^T");
-  PetscCall(MatSeqAIJGetArrayRead(ops->HfT, &aa));
-  PetscCall(VecGetArrayRead(ops->Minv, &minv));
-  for (PetscInt k = 0; k < n; k++) {
-    const PetscInt m = CoupledContacts(scene, contacts, start, list, k, mark, nb);
-    BlockRow(ai, aj, aa, minv, nc, k, m, nb, vals);
-    PetscCall(MatSetValuesBlocked(ops->W, 1, &k, m, nb, vals, INSERT_VALUES));
-  }
-  PetscCall(VecRestoreArrayRead(ops->Minv, &minv));
-  PetscCall(MatSeqAIJRestoreArrayRead(ops->HfT, &aa));
-  PetscCall(MatRestoreRowIJ(ops->HfT, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &ai, &aj, &done));
-  PetscCall(MatAssemblyBegin(ops->W, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(ops->W, MAT_FINAL_ASSEMBLY));
-  PetscCall(PetscFree2(nb, vals));
-  PetscCall(PetscFree2(mark, bnnz));
-  PetscCall(PetscFree(start));
-  PetscCall(PetscFree(list));
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode ComputeDelassus(KergsOperators ops, KergsScene scene, KergsContacts contacts)
-{
-  PetscMPIInt size;
+  PetscMPIInt  size, rank, nmine = 0, *counts, *displs;
+  BodyContact *mine;
+  PetscInt     total = 0;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(ops->comm, &size));
-  if (size == 1) PetscCall(ComputeDelassusSeq(ops, scene, contacts));
-  else PetscCall(ComputeDelassusProduct(ops));
+  PetscCallMPI(MPI_Comm_rank(ops->comm, &rank));
+  for (PetscInt k = 0; k < ct->n; k++) nmine += ct->c[k].kind == KERGS_CONTACT_DISK_WALL && ct->c[k].b == w;
+  PetscCall(PetscMalloc1(nmine + 1, &mine));
+  for (PetscInt k = 0, i = 0; k < ct->n; k++)
+    if (ct->c[k].kind == KERGS_CONTACT_DISK_WALL && ct->c[k].b == w) {
+      mine[i].index = ct->start + k;
+      mine[i].owner = rank;
+      RestrictToBody(ops, scene, &ct->c[k], ops->wall_dof[w], KERGS_DIM, mine[i++].h);
+    }
+  PetscCall(PetscMalloc2(size, &counts, size, &displs));
+  nmine *= (PetscMPIInt)sizeof(BodyContact);
+  PetscCallMPI(MPI_Allgather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, ops->comm));
+  for (PetscMPIInt p = 0; p < size; p++) {
+    displs[p] = (PetscMPIInt)(total * (PetscInt)sizeof(BodyContact));
+    total += counts[p] / (PetscMPIInt)sizeof(BodyContact);
+  }
+  PetscCall(PetscMalloc1(total + 1, bc));
+  PetscCallMPI(MPI_Allgatherv(mine, nmine, MPI_BYTE, *bc, counts, displs, MPI_BYTE, ops->comm));
+  *m = total;
+  PetscCall(PetscFree2(counts, displs));
+  PetscCall(PetscFree(mine));
+  PetscFunctionReturn(0);
+}
+
+/* Block pattern counts of row alpha from the contacts bc[0 .. m) at one of its bodies, alpha among them when
+   counted twice (dup): the diagonal part holds those of rank `owner`. */
+static void CountBlocks(const BodyContact *bc, PetscInt m, PetscMPIInt owner, PetscBool dup, PetscInt *d, PetscInt *o)
+{
+  for (PetscInt j = 0; j < m; j++) {
+    if (bc[j].owner == owner) (*d)++;
+    else (*o)++;
+  }
+  if (dup) (*d)--;
+}
+
+/* The counts of the rows of foreign contacts at owned disks, sent to their owners, added to dnz/onz there. */
+static PetscErrorCode CountRemoteRows(KergsOperators ops, KergsScene scene, KergsContacts ct, const PetscInt *start, const PetscInt *list,
+                                      BodyContact *bc, PetscInt *dnz, PetscInt *onz)
+{
+  PetscMPIInt size, *scount, *sdispl, *rcount, *rdispl;
+  PetscInt   *send, *recv, nrecv = 0, *fill;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(ops->comm, &size));
+  if (size == 1) PetscFunctionReturn(0);
+  PetscCall(PetscCalloc4(size, &scount, size, &sdispl, size, &rcount, size, &rdispl));
+  PetscCall(PetscMalloc2(3 * ct->nforeign + 1, &send, size, &fill));
+  for (PetscInt f = 0; f < ct->nforeign; f++) scount[scene->ghost_owner[ct->foreign[f].a - scene->nowned]] += 3;
+  for (PetscMPIInt p = 1; p < size; p++) sdispl[p] = sdispl[p - 1] + scount[p - 1];
+  for (PetscMPIInt p = 0; p < size; p++) fill[p] = sdispl[p];
+  for (PetscInt q = 0; q < scene->nowned; q++) {
+    PetscInt m = -1;
+    for (PetscInt j = start[q]; j < start[q + 1]; j++) {
+      PetscInt    f = list[j] - ct->n, d = 0, o = 0, *r;
+      PetscMPIInt p;
+      if (f < 0) continue;
+      if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, bc);
+      p = (PetscMPIInt)scene->ghost_owner[ct->foreign[f].a - scene->nowned];
+      CountBlocks(bc, m, p, PETSC_TRUE, &d, &o);
+      r    = &send[fill[p]];
+      r[0] = ct->foreign_index[f];
+      r[1] = d;
+      r[2] = o;
+      fill[p] += 3;
+    }
+  }
+  PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, ops->comm));
+  for (PetscMPIInt p = 0; p < size; p++) {
+    rdispl[p] = (PetscMPIInt)nrecv;
+    nrecv += rcount[p];
+  }
+  PetscCall(PetscMalloc1(nrecv + 1, &recv));
+  PetscCallMPI(MPI_Alltoallv(send, scount, sdispl, MPIU_INT, recv, rcount, rdispl, MPIU_INT, ops->comm));
+  for (PetscInt i = 0; i < nrecv; i += 3) {
+    const PetscInt k = recv[i] - ct->start;
+    PetscCheck(k >= 0 && k < ct->n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W pattern: contact %" PetscInt_FMT " is not owned here", recv[i]);
+    dnz[k] += recv[i + 1];
+    onz[k] += recv[i + 2];
+  }
+  PetscCall(PetscFree(recv));
+  PetscCall(PetscFree2(send, fill));
+  PetscCall(PetscFree4(scount, sdispl, rcount, rdispl));
+  PetscFunctionReturn(0);
+}
+
+/* Add the blocks H_alpha,q M_q^-1 H_beta,q^T of body q (contacts bc[0 .. m), inverse masses minv on its nd DOFs)
+   to the block rows of the contacts bc[rows[i]] (all of them when rows is NULL). */
+static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const PetscReal *minv, const BodyContact *bc, PetscInt m, const PetscInt *rows,
+                                    PetscInt nrows, PetscInt *cols, PetscScalar *vals)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt j = 0; j < m; j++) cols[j] = bc[j].index;
+  for (PetscInt i = 0; i < (rows ? nrows : m); i++) {
+    const BodyContact *a = &bc[rows ? rows[i] : i];
+    for (PetscInt j = 0; j < m; j++)
+      for (PetscInt c = 0; c < nc; c++)
+        for (PetscInt e = 0; e < nc; e++) {
+          PetscReal w = 0.0;
+          for (PetscInt d = 0; d < nd; d++) w += a->h[c * nd + d] * minv[d] * bc[j].h[e * nd + d];
+          vals[c * m * nc + j * nc + e] = w; /* row-major block row, as MatSetValuesBlocked takes it */
+        }
+    PetscCall(MatSetValuesBlocked(W, 1, &a->index, m, cols, vals, ADD_VALUES));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The free walls' terms: each rank adds the rows of its own contacts at each free wall; with the counts of those
+   rows when dnz is given (then nothing is added). */
+static PetscErrorCode AddWallTerms(KergsOperators ops, KergsScene scene, KergsContacts ct, PetscInt *dnz, PetscInt *onz)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(ops->comm, &rank));
+  for (PetscInt w = 0; w < scene->nwalls; w++) {
+    BodyContact *bc;
+    PetscInt     m, *rows, nrows = 0, *cols;
+    PetscScalar *vals;
+    PetscReal    minv[KERGS_DIM];
+
+    if (scene->walls[w].kind != KERGS_WALL_FREE) continue;
+    PetscCall(WallContacts(ops, scene, ct, w, &m, &bc));
+    PetscCall(PetscMalloc3(m + 1, &rows, m + 1, &cols, m * ops->ncomp * ops->ncomp + 1, &vals));
+    for (PetscInt j = 0; j < m; j++)
+      if (bc[j].owner == rank) rows[nrows++] = j;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) minv[d] = 1.0 / scene->walls[w].mass;
+    if (dnz)
+      for (PetscInt i = 0; i < nrows; i++) CountBlocks(bc, m, rank, PETSC_TRUE, &dnz[bc[rows[i]].index - ct->start], &onz[bc[rows[i]].index - ct->start]);
+    else PetscCall(AddBodyBlocks(ops->W, ops->ncomp, KERGS_DIM, minv, bc, m, rows, nrows, cols, vals));
+    PetscCall(PetscFree3(rows, cols, vals));
+    PetscCall(PetscFree(bc));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Exact block counts of this rank's rows: the contacts at body a (owned here), plus those at body b (owned here,
+   from b's owner for a ghost, or at a free wall), alpha itself once. */
+static PetscErrorCode CountPattern(KergsOperators ops, KergsScene scene, KergsContacts ct, const PetscInt *start, const PetscInt *list,
+                                   BodyContact *bc, PetscInt *dnz, PetscInt *onz)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(ops->comm, &rank));
+  for (PetscInt k = 0; k < ct->n; k++) dnz[k] = onz[k] = 0;
+  for (PetscInt q = 0; q < scene->nowned; q++) {
+    PetscInt m = -1;
+    for (PetscInt j = start[q]; j < start[q + 1]; j++) {
+      const PetscInt k = list[j];
+      if (k >= ct->n) continue; /* a foreign row: counted by its owner, from CountRemoteRows */
+      if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, bc);
+      CountBlocks(bc, m, rank, (PetscBool)(q != ct->c[k].a), &dnz[k], &onz[k]); /* at b: alpha is counted already */
+    }
+  }
+  PetscCall(CountRemoteRows(ops, scene, ct, start, list, bc, dnz, onz));
+  PetscCall(AddWallTerms(ops, scene, ct, dnz, onz));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ComputeDelassus(KergsOperators ops, KergsScene scene, KergsContacts ct)
+{
+  const PetscInt     nc = ops->ncomp, nd = ops->ndof_disk;
+  PetscInt          *start, *list, *dnz, *onz, *cols, maxm = 1;
+  BodyContact       *bc;
+  PetscScalar       *vals;
+  const PetscScalar *minv;
+
+  PetscFunctionBeginUser;
+  PetscCall(DiskIncidence(scene, ct, &start, &list));
+  for (PetscInt q = 0; q < scene->nowned; q++) maxm = PetscMax(maxm, start[q + 1] - start[q]);
+  PetscCall(PetscMalloc5(maxm, &bc, maxm, &cols, maxm * nc * nc, &vals, ct->n + 1, &dnz, ct->n + 1, &onz));
+  PetscCall(CountPattern(ops, scene, ct, start, list, bc, dnz, onz));
+  PetscCall(MatCreate(ops->comm, &ops->W));
+  PetscCall(MatSetSizes(ops->W, ct->n * nc, ct->n * nc, PETSC_DETERMINE, PETSC_DETERMINE));
+  PetscCall(MatSetBlockSize(ops->W, nc));
+  PetscCall(MatSetType(ops->W, nc > 1 ? MATBAIJ : MATAIJ));
+  PetscCall(MatXAIJSetPreallocation(ops->W, nc, dnz, onz, NULL, NULL));
+  PetscCall(MatSetOption(ops->W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
+  PetscCall(VecGetArrayRead(ops->Minv, &minv));
+  for (PetscInt q = 0; q < scene->nowned; q++) {
+    const PetscInt m = DiskContacts(ops, scene, ct, start, list, q, bc);
+    PetscCall(AddBodyBlocks(ops->W, nc, nd, &minv[q * nd], bc, m, NULL, m, cols, vals));
+  }
+  PetscCall(VecRestoreArrayRead(ops->Minv, &minv));
+  PetscCall(AddWallTerms(ops, scene, ct, NULL, NULL));
+  PetscCall(MatAssemblyBegin(ops->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(ops->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(PetscFree5(bc, cols, vals, dnz, onz));
+  PetscCall(PetscFree(start));
+  PetscCall(PetscFree(list));
   PetscFunctionReturn(0);
 }
 

@@ -330,6 +330,52 @@ static PetscErrorCode TestConvergedResidual(void)
   PetscFunctionReturn(0);
 }
 
+/* W assembled body by body (each rank adds its own disks' terms, rows of other ranks' contacts through the stash,
+   a free wall's terms from the gathered list of its contacts) equals PETSc's product H_f^T M^-1 H_f, entry by entry
+   and with the same pattern. A frictional deposit pushed by a free (pressure-controlled) wall, on 1, 2 ranks. */
+static PetscErrorCode TestDelassusAssembly(void)
+{
+  KergsStepper   st;
+  KergsOperators ops;
+  Mat            MinvHf, Wref, Waij;
+  PetscReal      nref, ndiff;
+  MatInfo        iw, ir;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper("-gravity 0,-9.81 -friction 0.4 -dt 1e-3 -disks_source random -random_n 200 -random_box 0,0,0.5,0.8 "
+                        "-random_radius 0.018,0.02 -box 0,0,0.5,1 -box_open_top -alert 0.01 -walls piston -wall_piston_a 0.5,0.685 "
+                        "-wall_piston_b 0,0.685 -wall_piston_type free -wall_piston_mass 0.5 -wall_piston_force 0,-5 -solver_max_it 50",
+                        &st));
+  for (PetscInt s = 0; s < 30; s++) PetscCall(KergsStepperStep(st));
+  PetscCall(KergsContactsDetect(st->contacts, st->scene));
+  PetscCall(KergsOperatorsAssemble(st->ops, st->scene, st->contacts));
+  ops = st->ops;
+  PetscCall(MatTranspose(ops->HfT, MAT_INITIAL_MATRIX, &MinvHf));
+  PetscCall(MatDiagonalScale(MinvHf, ops->Minv, NULL));
+  PetscCall(MatMatMult(ops->HfT, MinvHf, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Wref));
+  PetscCall(MatConvert(ops->W, MATAIJ, MAT_INITIAL_MATRIX, &Waij));
+  PetscCall(MatGetInfo(Waij, MAT_GLOBAL_SUM, &iw));
+  PetscCall(MatGetInfo(Wref, MAT_GLOBAL_SUM, &ir));
+  PetscCall(MatNorm(Wref, NORM_FROBENIUS, &nref));
+  PetscCall(MatAXPY(Wref, -1.0, Waij, DIFFERENT_NONZERO_PATTERN));
+  PetscCall(MatNorm(Wref, NORM_FROBENIUS, &ndiff));
+  {
+    PetscInt atwall = 0; /* contacts at the free wall, all ranks */
+    for (PetscInt k = 0; k < st->contacts->n; k++)
+      atwall += st->contacts->c[k].kind == KERGS_CONTACT_DISK_WALL && st->scene->walls[st->contacts->c[k].b].kind == KERGS_WALL_FREE;
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &atwall, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
+    PetscCall(Check((PetscBool)(ops->nfreewalls == 1 && atwall >= 5 && st->contacts->nglobal > 100), "W by bodies: contacts at the free wall",
+                    (PetscReal)atwall, 5));
+  }
+  PetscCall(Check((PetscBool)(ndiff <= 1e-14 * nref), "W by bodies = H_f^T M^-1 H_f (relative Frobenius)", ndiff / nref, 0));
+  PetscCall(Check((PetscBool)(iw.nz_used == ir.nz_used), "W by bodies: same pattern as the product (nonzeros)", iw.nz_used, ir.nz_used));
+  PetscCall(MatDestroy(&MinvHf));
+  PetscCall(MatDestroy(&Wref));
+  PetscCall(MatDestroy(&Waij));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
@@ -339,6 +385,7 @@ int main(int argc, char **argv)
   PetscCall(TestWedgedPair());
   PetscCall(TestMomentumBalance());
   PetscCall(TestAdjoint());
+  PetscCall(TestDelassusAssembly());
   PetscCall(TestInfeasibleRow());
   PetscCall(TestConvergedResidual());
   {

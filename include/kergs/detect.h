@@ -44,6 +44,12 @@ struct _p_KergsContacts {
   PetscInt      n, nalloc; /* contacts owned by this rank */
   KergsContact *c;         /* sorted by (a, kind, idb) */
   PetscInt      nglobal, start; /* global count and global index of c[0] */
+  /* foreign contacts: disk-disk contacts of another rank (their body a is a ghost here, of smaller id) whose body b
+     is a disk owned here, with their global index. Together with the owned contacts they are every contact at an
+     owned disk, as the assembly of W needs (each rank adds its bodies' terms). */
+  PetscInt      nforeign, nforeignalloc;
+  KergsContact *foreign;
+  PetscInt     *foreign_index;
   /* previous detection, for persistence, sorted by (a, kind, idb) */
   PetscInt             nprev, nprevalloc;
   KergsContactHistory *prev;
