@@ -282,9 +282,10 @@ static PetscErrorCode ReportPartition(const char *label, KergsStepper st)
   PetscFunctionBeginUser;
   PetscCall(PetscPrintf(PETSC_COMM_WORLD,
                         "     %s: partition %s (latest %s), %" PetscInt_FMT " repartitions, %" PetscInt_FMT
-                        " grains moved; edge cut %" PetscInt_FMT " of %" PetscInt_FMT " edges, imbalance %.4f, ghosts %" PetscInt_FMT "\n",
+                        " grains moved; edge cut %" PetscInt_FMT " of %" PetscInt_FMT " edges, imbalance %.4f, ghosts %" PetscInt_FMT
+                        ", ghost layers built %" PetscInt_FMT "\n",
                         label, KergsPartitionTypes[p->type], KergsPartitionTypes[p->last_method], p->nrepartitions, p->nmoved,
-                        p->last.edgecut, p->last.edges, (double)p->last.imbalance, p->last.ghosts));
+                        p->last.edgecut, p->last.edges, (double)p->last.imbalance, p->last.ghosts, st->scene->ghost_rebuilds));
   PetscFunctionReturn(0);
 }
 
@@ -302,6 +303,30 @@ static PetscErrorCode TestSamePhysics(const char *label, const char *opts, Petsc
   PetscCall(ReportPartition(label, tst));
   PetscCall(KergsStepperDestroy(&ref));
   PetscCall(KergsStepperDestroy(&tst));
+  PetscFunctionReturn(0);
+}
+
+/* The ghost layer follows moving grains: in the falling deposit (grains move far more than the skin), the layer is
+   rebuilt on displacement, not only after repartitions, and the run still matches the 1-rank one step by step
+   (TestSamePhysics above); with a skin as large as the box it is never rebuilt after the first build. */
+static PetscErrorCode TestGhostRebuilds(void)
+{
+  KergsStepper st;
+  PetscMPIInt  size;
+  PetscInt     built[2];
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  for (PetscInt big = 0; big < 2; big++) {
+    PetscCall(StepperWithExtra(PETSC_COMM_WORLD, DEPOSIT, big ? "-partition_type contiguous -ghost_skin 2" : "-partition_type contiguous", &st));
+    for (PetscInt s = 0; s < 50; s++) PetscCall(KergsStepperStep(st));
+    built[big] = st->scene->ghost_rebuilds;
+    PetscCall(KergsStepperDestroy(&st));
+  }
+  if (size > 1) {
+    PetscCall(Check((PetscBool)(built[0] > 1), "ghosts: rebuilt as the grains fall (default skin)", (PetscReal)built[0], 2));
+    PetscCall(Check((PetscBool)(built[1] == 1), "ghosts: built once with a skin larger than the box", (PetscReal)built[1], 1));
+  } else PetscCall(Check((PetscBool)(built[0] == 0 && built[1] == 0), "ghosts: none on one rank", (PetscReal)(built[0] + built[1]), 0));
   PetscFunctionReturn(0);
 }
 
@@ -647,6 +672,7 @@ int main(int argc, char **argv)
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "partition tests on %d rank(s)\n", size));
   PetscCall(TestSamePhysics("confine5 frictionless, 1 vs n ranks", CONFINE5 "-steps 8", 8, 4));
   PetscCall(TestSamePhysics("deposit frictionless, 1 vs n ranks", DEPOSIT, 50, 50));
+  PetscCall(TestGhostRebuilds());
   PetscCall(TestSamePhysics("confine500 frictionless, 1 vs n ranks", "-options_file cases/confine500.opts -steps 5 " TIGHT, 5, 5));
   PetscCall(TestRenumberingKeepsPhysics());
   PetscCall(TestMigrationKeepsImpulses(PETSC_TRUE));
