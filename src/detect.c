@@ -209,7 +209,7 @@ static inline void SetContact(KergsContact *c, KergsContactKind kind, PetscInt a
   c->rb   = rb;
   c->gap  = gap;
   c->mu   = mu;
-  for (PetscInt k = 0; k < KERGS_MAXCOMP; k++) c->r[k] = c->v[k] = 0.0;
+  for (PetscInt k = 0; k < KERGS_MAXCOMP; k++) c->r[k] = 0.0;
   c->persistent = PETSC_FALSE;
 }
 

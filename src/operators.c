@@ -563,20 +563,15 @@ PetscErrorCode KergsOperatorsGetImpulses(KergsOperators ops, KergsContacts conta
 
 PetscErrorCode KergsOperatorsSetImpulses(KergsOperators ops, KergsContacts contacts)
 {
-  const PetscScalar *r, *v;
+  const PetscScalar *r;
 
   PetscFunctionBeginUser;
   PetscCall(VecGetArrayRead(ops->r, &r));
-  PetscCall(VecGetArrayRead(ops->v, &v));
   for (PetscInt k = 0; k < contacts->n; k++) {
-    for (PetscInt c = 0; c < KERGS_MAXCOMP; c++) contacts->c[k].r[c] = contacts->c[k].v[c] = 0.0;
-    for (PetscInt c = 0; c < ops->ncomp; c++) {
-      contacts->c[k].r[c] = r[k * ops->ncomp + c];
-      contacts->c[k].v[c] = v[k * ops->ncomp + c];
-    }
+    for (PetscInt c = 0; c < KERGS_MAXCOMP; c++) contacts->c[k].r[c] = 0.0;
+    for (PetscInt c = 0; c < ops->ncomp; c++) contacts->c[k].r[c] = r[k * ops->ncomp + c];
   }
   PetscCall(VecRestoreArrayRead(ops->r, &r));
-  PetscCall(VecRestoreArrayRead(ops->v, &v));
   PetscFunctionReturn(0);
 }
 

@@ -286,8 +286,6 @@ static PetscErrorCode CheckContact(KergsScene s, const KergsContact *c, const Re
              k);
   PetscCheck(c->ra == ref->ra && c->rb == ref->rb, PETSC_COMM_SELF, PETSC_ERR_PLIB, "contact %" PetscInt_FMT ": wrong radii", k);
   PetscCheck(c->mu == ref->mu, PETSC_COMM_SELF, PETSC_ERR_PLIB, "contact %" PetscInt_FMT ": wrong friction coefficient", k);
-  for (PetscInt d = 0; d < KERGS_MAXCOMP; d++)
-    PetscCheck(c->v[d] == 0.0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "contact %" PetscInt_FMT ": v not zeroed", k);
   PetscFunctionReturn(0);
 }
 
@@ -425,7 +423,6 @@ static PetscErrorCode SetImpulses(KergsContacts ct, KergsScene s, PetscInt **old
     KergsContact *c = &ct->c[k];
     for (PetscInt d = 0; d < KERGS_MAXCOMP; d++) {
       c->r[d] = PairImpulse(s->id[c->a], c->kind, c->idb, d);
-      c->v[d] = 99.0;
     }
     (*oldkeys)[3 * k]     = s->id[c->a];
     (*oldkeys)[3 * k + 1] = c->kind;

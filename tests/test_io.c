@@ -146,8 +146,6 @@ static void ContactOfGlobal(PetscInt g, PetscInt step, KergsContact *c)
   c->mu   = 0.3 + 0.01 * g;
   c->r[0] = 0.5 + g + step / 3.0;
   c->r[1] = 0.1 * g - 1.0 / 7.0;
-  c->v[0] = 1e-3 * g;
-  c->v[1] = -1e-3 * g;
 }
 
 /* Global order of contacts: by disk a, then disk-disk before disk-wall. */

@@ -27,7 +27,6 @@ typedef struct {
   PetscReal        gap;                 /* g^- : gap at the start of the step (negative = interpenetration) */
   PetscReal        mu;                  /* friction coefficient of the material pair */
   PetscReal        r[KERGS_MAXCOMP];    /* impulse (n, t): warm start in, solution out */
-  PetscReal        v[KERGS_MAXCOMP];    /* local relative velocity (n, t) after the solve */
   PetscBool        persistent;          /* the pair touched at the previous detection too */
 } KergsContact;
 

@@ -41,7 +41,7 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsCreate(MPI_Comm, KergsOperators *);
 /* Build H_f^T, H_g^T, M^-1, W, V_f^-, V_g^+, R^d, v^d for the current scene and contact set. */
 PETSC_EXTERN PetscErrorCode KergsOperatorsAssemble(KergsOperators, KergsScene, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetHf(KergsOperators, Mat *);
-/* r <- impulses stored in the contacts; contacts <- r and v (after a solve) */
+/* r <- impulses stored in the contacts; contacts <- r (after a solve; the local velocities stay in ops->v) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetImpulses(KergsOperators, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsSetImpulses(KergsOperators, KergsContacts);
 /* V_f^+ = V_f^- + M^-1 (H_f r + R^d), then copy the new velocities into the owned disks (velocities, angular
