@@ -2,8 +2,8 @@
 
    Rank p owns the disks of global indices [dstart, dend), so a partition is a new numbering of the disks, part
    after part. It is computed on rank 0 from the grain graph gathered there (vertices: grains with work
-   1 + contacts and their centres and ids; edges: disk-disk contacts), broadcast as the new order of the disks;
-   the disks then migrate to their new owners with their whole state (KergsSceneMigrate), and the contacts follow
+   1 + contacts and their centres and ids; edges: disk-disk contacts); each rank receives the new global index of
+   its own disks (MPI_Scatterv); the disks then migrate to their new owners with their whole state (KergsSceneMigrate), and the contacts follow
    their disk a with their impulses, so that the next detection warm-starts them (Algorithm 1). METIS and the
    Hilbert sort run serially on rank 0 (O(ndisks) memory there at each partition, the only such place); at
    hundreds of ranks ParMETIS and a parallel sort would replace them. */
@@ -254,7 +254,7 @@ static int CompareContactKeys(const void *x, const void *y)
 /* Send every contact to the new owner of its disk a. The received ones replace ct->c, sorted by key and holding
    only their key and impulse (b = -1: the ghost layer is gone), so that the next detection carries the impulses
    over; nothing else may read them before that detection. */
-static PetscErrorCode MigrateContacts(KergsScene sc, KergsContacts ct, const PetscInt old2new[], const PetscInt newranges[], PetscMPIInt rank,
+static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[], const PetscInt newranges[], PetscMPIInt rank,
                                       PetscMPIInt size)
 {
   PetscMPIInt   *scount, *sdispl, *rcount, *rdispl, *dest;
@@ -266,14 +266,14 @@ static PetscErrorCode MigrateContacts(KergsScene sc, KergsContacts ct, const Pet
   PetscCall(PetscCalloc4(size, &scount, size, &sdispl, size, &rcount, size, &rdispl));
   PetscCall(PetscMalloc3(ct->n + 1, &dest, ct->n + 1, &sendbuf, size, &fill));
   for (PetscInt k = 0; k < ct->n; k++) {
-    dest[k] = OwnerOf(newranges, size, old2new[sc->gidx[ct->c[k].a]]);
+    dest[k] = OwnerOf(newranges, size, newidx[ct->c[k].a]);
     scount[dest[k]]++;
   }
   for (PetscMPIInt q = 1; q < size; q++) sdispl[q] = sdispl[q - 1] + scount[q - 1];
   for (PetscMPIInt q = 0; q < size; q++) fill[q] = sdispl[q];
   for (PetscInt k = 0; k < ct->n; k++) {
     MovingContact *m = &sendbuf[fill[dest[k]]++];
-    m->a             = old2new[sc->gidx[ct->c[k].a]];
+    m->a             = newidx[ct->c[k].a];
     m->idb           = ct->c[k].idb;
     m->kind          = ct->c[k].kind;
     for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) m->r[j] = ct->c[k].r[j];
@@ -338,26 +338,40 @@ static PetscErrorCode CheckRenumbering(KergsScene sc, const PetscInt order[], co
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsPartitionRenumber(KergsScene sc, KergsContacts ct, const PetscInt order[], const PetscInt counts[], PetscInt *nmoved)
+/* The migration proper: owned disk i gets the global index newidx[i], rank p then owns counts[p] disks. The
+   contacts follow their disk a (keys and impulses), then the disks move. */
+static PetscErrorCode MigrateOwned(KergsScene sc, KergsContacts ct, const PetscInt newidx[], const PetscInt counts[], PetscInt *nmoved)
 {
   PetscMPIInt rank, size;
-  PetscInt   *old2new, *oldranges, *newranges, *newidx, moved = 0;
+  PetscInt   *newranges, moved = 0;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
   PetscCallMPI(MPI_Comm_size(sc->comm, &size));
-  PetscCall(PetscMalloc3(sc->ndisks + 1, &old2new, size + 1, &newranges, sc->nowned + 1, &newidx));
-  PetscCall(CheckRenumbering(sc, order, counts, size, old2new));
-  PetscCall(GetRanges(sc, &oldranges));
+  PetscCall(PetscMalloc1(size + 1, &newranges));
   newranges[0] = 0;
   for (PetscMPIInt q = 0; q < size; q++) newranges[q + 1] = newranges[q] + counts[q];
-  for (PetscInt k = 0; k < sc->ndisks; k++) moved += OwnerOf(oldranges, size, order[k]) != OwnerOf(newranges, size, k);
-  if (ct) PetscCall(MigrateContacts(sc, ct, old2new, newranges, rank, size)); /* reads the old numbering of the disks */
-  for (PetscInt i = 0; i < sc->nowned; i++) newidx[i] = old2new[sc->dstart + i];
+  for (PetscInt i = 0; i < sc->nowned; i++) moved += OwnerOf(newranges, size, newidx[i]) != rank;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &moved, 1, MPIU_INT, MPI_SUM, sc->comm));
+  if (ct) PetscCall(MigrateContacts(ct, newidx, newranges, rank, size)); /* reads the owned disks before they move */
   PetscCall(KergsSceneMigrate(sc, newidx, counts));
   if (nmoved) *nmoved = moved;
-  PetscCall(PetscFree(oldranges));
-  PetscCall(PetscFree3(old2new, newranges, newidx));
+  PetscCall(PetscFree(newranges));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionRenumber(KergsScene sc, KergsContacts ct, const PetscInt order[], const PetscInt counts[], PetscInt *nmoved)
+{
+  PetscMPIInt size;
+  PetscInt   *old2new, *newidx;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(PetscMalloc2(sc->ndisks + 1, &old2new, sc->nowned + 1, &newidx));
+  PetscCall(CheckRenumbering(sc, order, counts, size, old2new));
+  for (PetscInt i = 0; i < sc->nowned; i++) newidx[i] = old2new[sc->dstart + i];
+  PetscCall(MigrateOwned(sc, ct, newidx, counts, nmoved));
+  PetscCall(PetscFree2(old2new, newidx));
   PetscFunctionReturn(0);
 }
 
@@ -832,11 +846,35 @@ static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, KergsScene sc, co
   PetscFunctionReturn(0);
 }
 
+/* From the new order computed on rank 0 (new index k holds old disk order[k]), each rank receives the new global
+   index of each of its owned disks (*newidx, PetscFree): O(owned disks) per rank, not the whole order. */
+static PetscErrorCode ScatterNewIndices(KergsScene sc, const PetscInt oldranges[], const PetscInt order[], PetscInt **newidx)
+{
+  PetscMPIInt rank, size, *counts = NULL, *displs = NULL;
+  PetscInt   *old2new = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
+  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  if (rank == 0) {
+    PetscCall(PetscMalloc3(sc->ndisks + 1, &old2new, size, &counts, size, &displs));
+    for (PetscInt k = 0; k < sc->ndisks; k++) old2new[order[k]] = k;
+    for (PetscMPIInt q = 0; q < size; q++) {
+      counts[q] = (PetscMPIInt)(oldranges[q + 1] - oldranges[q]);
+      displs[q] = (PetscMPIInt)oldranges[q];
+    }
+  }
+  PetscCall(PetscMalloc1(sc->nowned + 1, newidx));
+  PetscCallMPI(MPI_Scatterv(old2new, counts, displs, MPIU_INT, *newidx, (PetscMPIInt)sc->nowned, MPIU_INT, 0, sc->comm));
+  if (rank == 0) PetscCall(PetscFree3(old2new, counts, displs));
+  PetscFunctionReturn(0);
+}
+
 /* Compute a partition with the object's type from the current contacts and renumber (collective). */
 static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts ct)
 {
   PetscMPIInt      rank, size;
-  PetscInt        *order, *counts, *oldranges, moved;
+  PetscInt        *order, *counts, *oldranges, *newidx, moved;
   GrainGraph       g;
   PartitionOutcome out = {KERGS_PARTITION_CONTIGUOUS, -1, METIS_OK, PETSC_FALSE, 1.0};
   PetscLogDouble   t0, t1;
@@ -847,7 +885,7 @@ static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts
   PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
   PetscCallMPI(MPI_Comm_size(p->comm, &size));
   PetscCall(GetRanges(sc, &oldranges));
-  PetscCall(PetscMalloc2(sc->ndisks + 1, &order, 2 * size, &counts));
+  PetscCall(PetscMalloc2(rank == 0 ? sc->ndisks + 1 : 1, &order, 2 * size, &counts));
   PetscCall(GatherGrainGraph(sc, ct, &g));
   if (rank == 0) PetscCall(ComputePartitionOnRoot(p, sc, &g, oldranges, size, order, counts, &out));
   PetscCall(GrainGraphDestroy(&g));
@@ -863,9 +901,10 @@ static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts
   PetscCheck(out.status == METIS_OK, p->comm, PETSC_ERR_LIB,
              "METIS_PartGraphKway failed (status %" PetscInt_FMT ") partitioning the %" PetscInt_FMT " grains of scene %s into %d parts",
              out.status, sc->ndisks, sc->name, size);
-  PetscCallMPI(MPI_Bcast(order, (PetscMPIInt)sc->ndisks, MPIU_INT, 0, p->comm));
   PetscCallMPI(MPI_Bcast(counts, size, MPIU_INT, 0, p->comm));
-  PetscCall(KergsPartitionRenumber(sc, ct, order, counts, &moved));
+  PetscCall(ScatterNewIndices(sc, oldranges, order, &newidx));
+  PetscCall(MigrateOwned(sc, ct, newidx, counts, &moved));
+  PetscCall(PetscFree(newidx));
   p->last_method    = out.method;
   p->provisional    = (PetscBool)(p->type == KERGS_PARTITION_METIS && !out.metis_tried);
   p->edgecut_base   = out.edgecut;
