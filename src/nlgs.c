@@ -3,6 +3,12 @@
    ncomp x ncomp (BAIJ, each block stored column by column; AIJ is the case ncomp = 1). Inside a rank it is Gauss-Seidel (contact alpha sees
    the impulses already updated in this sweep); across ranks it is Jacobi: the impulses of other ranks'
    contacts are scattered once per sweep into rghost and enter through boff = Ao rghost.
+   W symmetric may be stored by its upper block triangle only (SBAIJ: W_alpha,beta for beta >= alpha), which halves
+   the memory the sweep streams. Then, with the same Gauss-Seidel order, sum_{beta < alpha} W_alpha,beta r_beta(new)
+   = sum_{beta < alpha} W_beta,alpha^T r_beta(new) is gathered in acc_alpha: once r_beta(new) is known, row beta
+   (still in cache) adds W_beta,gamma^T r_beta(new) to acc_gamma for its stored gamma > beta. Across ranks, the
+   off-process part B of a rank holds the columns of higher ranks only; the coupling with lower ranks is B^T r
+   computed on those ranks and added back through the same scatter reversed.
    For Algorithm 6 (NLGS-Jac) the caller passes the extra right-hand side and the regularised diagonal
    blocks W_aa + Z_aa; both are used as given. */
 #include <kergs/nlgs.h>
@@ -28,7 +34,7 @@ PetscErrorCode KergsSweepCreate(MPI_Comm comm, KergsSweep *sweep)
    [ia[a], ia[a+1]), block j has block column ja[j] and its bs*bs values at a + j*bs*bs. For BAIJ (blocked)
    the block-compressed row structure and the value array (column-major blocks); for AIJ the plain CSR,
    not inode-compressed. */
-static PetscErrorCode GetBlockCSR(Mat A, PetscBool blocked, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
+static PetscErrorCode GetBlockCSR(Mat A, PetscBool blocked, PetscBool upper, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
 {
   PetscInt     nrow;
   PetscBool    done;
@@ -37,14 +43,17 @@ static PetscErrorCode GetBlockCSR(Mat A, PetscBool blocked, const PetscInt **ia,
   PetscFunctionBeginUser;
   PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, blocked, &nrow, ia, ja, &done));
   PetscCheck(done, PetscObjectComm((PetscObject)A), PETSC_ERR_SUP, "nlgs.c: MatGetRowIJ cannot give the CSR arrays of W's local block");
-  if (blocked) {
+  if (upper) {
+    PetscCall(MatSeqSBAIJGetArray(A, &v));
+    *a = v;
+  } else if (blocked) {
     PetscCall(MatSeqBAIJGetArray(A, &v));
     *a = v;
   } else PetscCall(MatSeqAIJGetArrayRead(A, a));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode RestoreBlockCSR(Mat A, PetscBool blocked, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
+static PetscErrorCode RestoreBlockCSR(Mat A, PetscBool blocked, PetscBool upper, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
 {
   PetscInt     nrow;
   PetscBool    done;
@@ -52,7 +61,8 @@ static PetscErrorCode RestoreBlockCSR(Mat A, PetscBool blocked, const PetscInt *
 
   PetscFunctionBeginUser;
   if (*a) {
-    if (blocked) PetscCall(MatSeqBAIJRestoreArray(A, &v));
+    if (upper) PetscCall(MatSeqSBAIJRestoreArray(A, &v));
+    else if (blocked) PetscCall(MatSeqBAIJRestoreArray(A, &v));
     else PetscCall(MatSeqAIJRestoreArrayRead(A, a));
   }
   PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, blocked, &nrow, ia, ja, &done));
@@ -63,8 +73,13 @@ static PetscErrorCode RestoreBlockCSR(Mat A, PetscBool blocked, const PetscInt *
 PetscErrorCode KergsSweepReset(KergsSweep s)
 {
   PetscFunctionBeginUser;
-  if (s->Ad && s->ai) PetscCall(RestoreBlockCSR(s->Ad, s->blocked, &s->ai, &s->aj, &s->aa));
-  if (s->Ao && s->bi) PetscCall(RestoreBlockCSR(s->Ao, s->blocked, &s->bi, &s->bj, &s->ba));
+  if (s->Ad && s->ai) PetscCall(RestoreBlockCSR(s->Ad, s->blocked, s->upper, &s->ai, &s->aj, &s->aa));
+  if (s->Ao && s->bi) PetscCall(RestoreBlockCSR(s->Ao, s->blocked, PETSC_FALSE, &s->bi, &s->bj, &s->ba));
+  PetscCall(PetscFree(s->ubi));
+  PetscCall(PetscFree(s->ubj));
+  PetscCall(PetscFree(s->uba));
+  PetscCall(PetscFree(s->acc));
+  PetscCall(VecDestroy(&s->blower));
   s->ai = s->aj = s->bi = s->bj = NULL;
   s->aa = s->ba = NULL;
   s->Ad = s->Ao = NULL;
@@ -79,6 +94,7 @@ PetscErrorCode KergsSweepReset(KergsSweep s)
   s->n       = 0;
   s->ncomp   = 0;
   s->blocked = PETSC_FALSE;
+  s->upper   = PETSC_FALSE;
   PetscFunctionReturn(0);
 }
 
@@ -116,29 +132,30 @@ static PetscErrorCode ExtractDiagonalBlocks(KergsSweep s)
 }
 
 /* Scatter from the global r to the sequential rghost whose block j (ncomp entries) is the global block column
-   colmap[j] (an off-process contact), so that Ao's block column j reads rghost[j*ncomp .. j*ncomp+ncomp). */
-static PetscErrorCode CreateGhostScatter(KergsSweep s, const PetscInt *colmap)
+   colmap[j] (an off-process contact, nghost of them), so that the off-process part's block column j reads
+   rghost[j*ncomp .. j*ncomp+ncomp). */
+static PetscErrorCode CreateGhostScatter(KergsSweep s, PetscInt nghost, const PetscInt *colmap)
 {
-  PetscInt nghost;
-  IS       is;
-  Vec      x;
+  IS  is;
+  Vec x;
 
   PetscFunctionBeginUser;
-  PetscCall(MatGetSize(s->Ao, NULL, &nghost));
-  PetscCall(VecCreateSeq(PETSC_COMM_SELF, nghost, &s->rghost));
-  PetscCall(ISCreateBlock(PETSC_COMM_SELF, s->ncomp, nghost / s->ncomp, colmap, PETSC_COPY_VALUES, &is));
+  PetscCall(VecCreateSeq(PETSC_COMM_SELF, nghost * s->ncomp, &s->rghost));
+  PetscCall(ISCreateBlock(PETSC_COMM_SELF, s->ncomp, nghost, colmap, PETSC_COPY_VALUES, &is));
   PetscCall(MatCreateVecs(s->W, &x, NULL));
   PetscCall(VecScatterCreate(x, is, s->rghost, NULL, &s->ghost_scatter));
+  if (s->upper) PetscCall(VecDuplicate(x, &s->blower));
   PetscCall(VecDestroy(&x));
   PetscCall(ISDestroy(&is));
   PetscFunctionReturn(0);
 }
 
-/* W's storage: (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when ncomp = 1 (a block is one entry). */
-static PetscErrorCode CheckStorage(KergsSweep s, Mat W, PetscInt ncomp, PetscBool *ismpi, PetscBool *blocked)
+/* W's storage: (seq|mpi)sbaij (upper block triangle) or (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when
+   ncomp = 1 (a block is one entry). */
+static PetscErrorCode CheckStorage(KergsSweep s, Mat W, PetscInt ncomp, PetscBool *ismpi, PetscBool *blocked, PetscBool *upper)
 {
   MatType   type;
-  PetscBool seqaij, mpiaij, seqbaij, mpibaij;
+  PetscBool seqaij, mpiaij, seqbaij, mpibaij, seqsbaij, mpisbaij;
   PetscInt  bs;
 
   PetscFunctionBeginUser;
@@ -147,27 +164,112 @@ static PetscErrorCode CheckStorage(KergsSweep s, Mat W, PetscInt ncomp, PetscBoo
   PetscCall(PetscStrbeginswith(type, MATMPIAIJ, &mpiaij));
   PetscCall(PetscStrbeginswith(type, MATSEQBAIJ, &seqbaij));
   PetscCall(PetscStrbeginswith(type, MATMPIBAIJ, &mpibaij));
+  PetscCall(PetscStrbeginswith(type, MATSEQSBAIJ, &seqsbaij));
+  PetscCall(PetscStrbeginswith(type, MATMPISBAIJ, &mpisbaij));
   PetscCall(MatGetBlockSize(W, &bs));
-  *ismpi   = (PetscBool)(mpiaij || mpibaij);
-  *blocked = (PetscBool)(seqbaij || mpibaij);
-  PetscCheck(*blocked || seqaij || mpiaij, s->comm, PETSC_ERR_SUP, "KergsSweepSetUp: W has type %s; the sweep needs an assembled (seq|mpi)baij or (seq|mpi)aij matrix", type);
+  *ismpi   = (PetscBool)(mpiaij || mpibaij || mpisbaij);
+  *upper   = (PetscBool)(seqsbaij || mpisbaij);
+  *blocked = (PetscBool)(seqbaij || mpibaij || *upper);
+  PetscCheck(*blocked || seqaij || mpiaij, s->comm, PETSC_ERR_SUP, "KergsSweepSetUp: W has type %s; the sweep needs an assembled (seq|mpi)(s)baij or (seq|mpi)aij matrix", type);
   PetscCheck(*blocked ? bs == ncomp : ncomp == 1, s->comm, PETSC_ERR_SUP,
-             "KergsSweepSetUp: W of type %s, block size %" PetscInt_FMT ", for %" PetscInt_FMT " components per contact: the sweep needs baij with block size ncomp (aij for one component)",
+             "KergsSweepSetUp: W of type %s, block size %" PetscInt_FMT ", for %" PetscInt_FMT " components per contact: the sweep needs (s)baij with block size ncomp (aij for one component)",
              type, bs, ncomp);
+  PetscFunctionReturn(0);
+}
+
+/* Values of the stored blocks of W's off-process part in the local scalar row `row` (block row a, component c),
+   columns >= cend (upper storage: the higher ranks' contacts), into the block CSR copy: the k-th such column is
+   entry (c, col % nc) of block ubi[a] + k / nc (a stored block holds nc entries in each of its rows), block column
+   col / nc (global for now). */
+static PetscErrorCode CopyOffProcessRow(KergsSweep s, PetscInt row, PetscInt a, PetscInt c, PetscInt cend)
+{
+  const PetscInt     nc = s->ncomp;
+  PetscInt           ncols, k, j, pos;
+  const PetscInt    *cols;
+  const PetscScalar *vals;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetRow(s->W, row, &ncols, &cols, &vals));
+  for (k = 0; k < ncols && cols[k] < cend; k++) { }
+  PetscCheck((ncols - k) == nc * (s->ubi[a + 1] - s->ubi[a]), PETSC_COMM_SELF, PETSC_ERR_PLIB, "KergsSweepSetUp: W's row %" PetscInt_FMT " is not made of whole blocks", row);
+  for (j = 0; k < ncols; k++, j++) {
+    pos                                     = s->ubi[a] + j / nc;
+    s->ubj[pos]                             = cols[k] / nc;
+    s->uba[pos * nc * nc + (cols[k] % nc) * nc + c] = vals[k];
+  }
+  PetscCall(MatRestoreRow(s->W, row, &ncols, &cols, &vals));
+  PetscFunctionReturn(0);
+}
+
+/* Upper storage on several ranks: the off-process part of an MPISBAIJ W (block columns right of this rank's range)
+   is private to PETSc, so it is copied through MatGetRow (upper rows) into block CSR (ubi, ubj, uba), block column j
+   being the contact colmap[j] (sorted, nghost of them; PetscFree). It is the coupling with higher ranks only. */
+static PetscErrorCode CopyOffProcessUpper(KergsSweep s, PetscInt *nghost, PetscInt **colmap)
+{
+  const PetscInt nc = s->ncomp;
+  PetscInt       rstart, cend, ncols, a, c, j, nb;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetOwnershipRange(s->W, &rstart, &cend));
+  PetscCall(PetscCalloc1(s->n + 1, &s->ubi));
+  PetscCall(MatGetRowUpperTriangular(s->W));
+  for (a = 0; a < s->n; a++) { /* block counts from each block row's first row */
+    const PetscInt *cols;
+    PetscCall(MatGetRow(s->W, rstart + a * nc, &ncols, &cols, NULL));
+    for (j = 0; j < ncols; j++) s->ubi[a + 1] += cols[j] >= cend;
+    PetscCall(MatRestoreRow(s->W, rstart + a * nc, &ncols, &cols, NULL));
+    s->ubi[a + 1] = s->ubi[a] + s->ubi[a + 1] / nc;
+  }
+  nb = s->ubi[s->n];
+  PetscCall(PetscMalloc1(nb + 1, &s->ubj));
+  PetscCall(PetscMalloc1(nb * nc * nc + 1, &s->uba));
+  for (a = 0; a < s->n; a++)
+    for (c = 0; c < nc; c++) PetscCall(CopyOffProcessRow(s, rstart + a * nc + c, a, c, cend));
+  PetscCall(MatRestoreRowUpperTriangular(s->W));
+  /* global block columns -> positions in the sorted list of ghost contacts */
+  PetscCall(PetscMalloc1(nb + 1, colmap));
+  PetscCall(PetscArraycpy(*colmap, s->ubj, nb));
+  *nghost = nb;
+  PetscCall(PetscSortRemoveDupsInt(nghost, *colmap));
+  for (j = 0; j < nb; j++) PetscCall(PetscFindInt(s->ubj[j], *nghost, *colmap, &s->ubj[j]));
+  s->bi = s->ubi;
+  s->bj = s->ubj;
+  s->ba = s->uba;
+  PetscFunctionReturn(0);
+}
+
+/* The local diagonal block and the off-process part (with its ghost scatter) of a distributed W. */
+static PetscErrorCode SetUpParts(KergsSweep s)
+{
+  const PetscInt *colmap;
+  PetscInt       *ucolmap, nghost, ncol;
+
+  PetscFunctionBeginUser;
+  if (s->upper) {
+    PetscCall(MatGetDiagonalBlock(s->W, &s->Ad));
+    PetscCall(CopyOffProcessUpper(s, &nghost, &ucolmap));
+    PetscCall(CreateGhostScatter(s, nghost, ucolmap));
+    PetscCall(PetscFree(ucolmap));
+    PetscFunctionReturn(0);
+  }
+  if (s->blocked) PetscCall(MatMPIBAIJGetSeqBAIJ(s->W, &s->Ad, &s->Ao, &colmap));
+  else PetscCall(MatMPIAIJGetSeqAIJ(s->W, &s->Ad, &s->Ao, &colmap));
+  PetscCall(GetBlockCSR(s->Ao, s->blocked, PETSC_FALSE, &s->bi, &s->bj, &s->ba));
+  PetscCall(MatGetSize(s->Ao, NULL, &ncol));
+  PetscCall(CreateGhostScatter(s, ncol / s->ncomp, colmap));
   PetscFunctionReturn(0);
 }
 
 PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active)
 {
-  PetscBool       ismpi = PETSC_FALSE, blocked = PETSC_FALSE;
-  PetscInt        m, mcol, rstart, cstart;
-  const PetscInt *colmap;
+  PetscBool ismpi = PETSC_FALSE, blocked = PETSC_FALSE, upper = PETSC_FALSE;
+  PetscInt  m, mcol, rstart, cstart;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSweepReset(s));
   if (ncomp < 1 || ncomp > KERGS_MAXCOMP)
     SETERRQ(s->comm, PETSC_ERR_ARG_OUTOFRANGE, "KergsSweepSetUp: %" PetscInt_FMT " components per contact, expected 1 to %d", ncomp, KERGS_MAXCOMP);
-  PetscCall(CheckStorage(s, W, ncomp, &ismpi, &blocked));
+  PetscCall(CheckStorage(s, W, ncomp, &ismpi, &blocked, &upper));
   PetscCall(MatGetLocalSize(W, &m, &mcol));
   PetscCall(MatGetOwnershipRange(W, &rstart, NULL));
   PetscCall(MatGetOwnershipRangeColumn(W, &cstart, NULL));
@@ -179,17 +281,14 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   s->ncomp   = ncomp;
   s->n       = m / ncomp;
   s->blocked = blocked;
+  s->upper   = upper;
   s->mu      = (PetscReal *)mu;
   s->active  = (PetscBool *)active;
-  if (ismpi && blocked) PetscCall(MatMPIBAIJGetSeqBAIJ(W, &s->Ad, &s->Ao, &colmap));
-  else if (ismpi) PetscCall(MatMPIAIJGetSeqAIJ(W, &s->Ad, &s->Ao, &colmap));
+  if (ismpi) PetscCall(SetUpParts(s));
   else s->Ad = W;
-  PetscCall(GetBlockCSR(s->Ad, blocked, &s->ai, &s->aj, &s->aa));
-  if (s->Ao) {
-    PetscCall(GetBlockCSR(s->Ao, blocked, &s->bi, &s->bj, &s->ba));
-    PetscCall(CreateGhostScatter(s, colmap));
-  }
+  PetscCall(GetBlockCSR(s->Ad, blocked, upper, &s->ai, &s->aj, &s->aa));
   PetscCall(PetscCalloc1(m, &s->boff));
+  if (upper) PetscCall(PetscMalloc1(m + 1, &s->acc));
   PetscCall(ExtractDiagonalBlocks(s));
   PetscFunctionReturn(0);
 }
@@ -220,6 +319,33 @@ static inline KERGS_ALWAYS_INLINE void OffProcessProduct(const PetscInt nc, Pets
   }
 }
 
+/* y[ja[j]*nc + e] += sum_c W_block(c, e) x[c] over the blocks [j0, j1) of a block row: the transposed blocks
+   W_block^T applied to x, the ncomp values of the row's contact. Inlined with a constant nc. */
+static inline KERGS_ALWAYS_INLINE void BlocksTransposeTimesX(const PetscInt nc, const PetscInt *ja, const PetscScalar *va, PetscInt j0, PetscInt j1, const PetscReal *x, PetscReal *y)
+{
+  PetscInt c, e, j;
+
+  for (j = j0; j < j1; j++) {
+    const PetscScalar *v  = va + j * nc * nc;
+    PetscReal         *yb = y + ja[j] * nc;
+    for (e = 0; e < nc; e++)
+      for (c = 0; c < nc; c++) yb[e] += PetscRealPart(v[e * nc + c]) * x[c];
+  }
+}
+
+/* y = B^T r over the n local contacts (upper storage): the coupling of this rank's contacts with the higher ranks'
+   ones seen from those ranks, y ordered as B's block columns (rghost). */
+static inline KERGS_ALWAYS_INLINE void OffProcessTransposeProduct(const PetscInt nc, PetscInt n, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *r, PetscReal *y)
+{
+  PetscInt a, c;
+
+  for (a = 0; a < n; a++) {
+    PetscReal x[KERGS_MAXCOMP];
+    for (c = 0; c < nc; c++) x[c] = PetscRealPart(r[a * nc + c]);
+    BlocksTransposeTimesX(nc, bj, ba, bi[a], bi[a + 1], x, y);
+  }
+}
+
 /* Local quantities of one sweep, reduced over ranks into KergsSweepMeasures. */
 typedef struct {
   PetscReal dWd;   /* sum dr^T Waa dr */
@@ -232,11 +358,14 @@ typedef struct {
 /* The Gauss-Seidel loop over the rank's contacts (Algorithm 2): for contact a,
      b_a = vd_a + extra_a + boff_a + sum_{local beta != a} W_a,beta r_beta   (latest r),
    then the exact law with the block Wlaw_a, r_a updated in place. Block row a of W is contact a: its blocks
-   before and after the own block, [ai[a], ds[2a]) and [ds[2a+1], ai[a+1]), give the sum. nc is 1 or 2; the
+   before and after the own block, [ai[a], ds[2a]) and [ds[2a+1], ai[a+1]), give the sum. With upper storage
+   (acc not NULL, zero on entry) the row holds beta > a only (r_beta not yet updated: the old values, as
+   Gauss-Seidel wants), and acc_a = sum_{beta < a} W_beta,a^T r_beta(new) = sum_{beta < a} W_a,beta r_beta(new)
+   completes the sum; once r_a(new) is known the same row adds W_a,beta^T r_a(new) to acc_beta. nc is 1 or 2; the
    function is inlined with a constant nc so that the small loops over components unroll. */
 static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscInt *ds,
                                  const PetscScalar *vd, const PetscReal *boff, const PetscReal *extra, const PetscReal *Wlaw, const PetscReal *Wd,
-                                 const PetscReal *mu, const PetscBool *active, PetscScalar *r, SweepSums *sums)
+                                 const PetscReal *mu, const PetscBool *active, PetscScalar *r, PetscReal *acc, SweepSums *sums)
 {
   PetscReal b[KERGS_MAXCOMP], rnew[KERGS_MAXCOMP], dr[KERGS_MAXCOMP], dWd, rWr;
   PetscInt  a, c, e, i;
@@ -247,6 +376,8 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
 
     if (act) {
       PetscReal t[KERGS_MAXCOMP] = {0.0};
+      if (acc) /* upper storage: the blocks before the own one, summed in the same order as whole storage does */
+        for (c = 0; c < nc; c++) t[c] = acc[a * nc + c];
       BlocksTimesX(nc, aj, aa, ai[a], ds[2 * a], r, t);
       BlocksTimesX(nc, aj, aa, ds[2 * a + 1], ai[a + 1], r, t);
       for (c = 0; c < nc; c++) {
@@ -267,6 +398,11 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
         dWd += dr[c] * w[c * nc + e] * dr[e];
         rWr += rnew[c] * w[c * nc + e] * rnew[e];
       }
+    if (acc) {
+      PetscBool zero = PETSC_TRUE;
+      for (c = 0; c < nc; c++) zero = (PetscBool)(zero && rnew[c] == 0.0);
+      if (!zero) BlocksTransposeTimesX(nc, aj, aa, ds[2 * a + 1], ai[a + 1], rnew, acc);
+    }
     rWr = PetscMax(rWr, 0.0);
     sums->dWd += dWd;
     sums->rWr += rWr;
@@ -284,6 +420,34 @@ static void MeasuresFromSums(const SweepSums *g, KergsSweepMeasures *m)
 
   m->quad = g->rWr > 0 ? PetscSqrtReal(g->dWd / g->rWr) : (g->dWd > 0 ? 1.0 : 0.0);
   m->maxm = mean > 0 ? PetscSqrtReal(g->maxd) / mean : (g->maxd > 0 ? 1.0 : 0.0);
+}
+
+/* Upper storage: the lower ranks' share of boff, (B^T r) computed on each of them and added back through the ghost
+   scatter reversed (r is the impulse at the start of the sweep, as for the forward part: Jacobi across ranks). */
+static PetscErrorCode AddLowerRanksCoupling(KergsSweep s, Vec r)
+{
+  const PetscInt     nc = s->ncomp;
+  const PetscScalar *rl, *bl;
+  PetscScalar       *y;
+  PetscInt           i;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecSet(s->rghost, 0.0));
+  PetscCall(VecGetArrayRead(r, &rl));
+  PetscCall(VecGetArray(s->rghost, &y));
+  if (nc == 2) OffProcessTransposeProduct(2, s->n, s->bi, s->bj, s->ba, rl, y);
+  else OffProcessTransposeProduct(1, s->n, s->bi, s->bj, s->ba, rl, y);
+  PetscCall(VecRestoreArray(s->rghost, &y));
+  PetscCall(VecRestoreArrayRead(r, &rl));
+  PetscCall(VecSet(s->blower, 0.0));
+  PetscCall(PetscLogEventBegin(KERGS_Exchange, 0, 0, 0, 0));
+  PetscCall(VecScatterBegin(s->ghost_scatter, s->rghost, s->blower, ADD_VALUES, SCATTER_REVERSE));
+  PetscCall(VecScatterEnd(s->ghost_scatter, s->rghost, s->blower, ADD_VALUES, SCATTER_REVERSE));
+  PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
+  PetscCall(VecGetArrayRead(s->blower, &bl));
+  for (i = 0; i < s->n * nc; i++) s->boff[i] += PetscRealPart(bl[i]);
+  PetscCall(VecRestoreArrayRead(s->blower, &bl));
+  PetscFunctionReturn(0);
 }
 
 PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wdiag_override, KergsSweepMeasures *measures)
@@ -310,15 +474,18 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
     if (nc == 2) OffProcessProduct(2, s->n, s->bi, s->bj, s->ba, rg, s->boff);
     else OffProcessProduct(1, s->n, s->bi, s->bj, s->ba, rg, s->boff);
     PetscCall(VecRestoreArrayRead(s->rghost, &rg));
+    if (s->upper) PetscCall(AddLowerRanksCoupling(s, r));
   }
+  if (s->acc) PetscCall(PetscArrayzero(s->acc, m));
   PetscCall(VecGetArray(r, &rl));
   PetscCall(VecGetArrayRead(vd, &vdl));
   if (nc == 2)
-    SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override ? Wdiag_override : s->Wdiag, s->Wdiag, s->mu, s->active, rl, &loc);
-  else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override ? Wdiag_override : s->Wdiag, s->Wdiag, s->mu, s->active, rl, &loc);
+    SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override ? Wdiag_override : s->Wdiag, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
+  else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override ? Wdiag_override : s->Wdiag, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
   PetscCall(VecRestoreArrayRead(vd, &vdl));
   PetscCall(VecRestoreArray(r, &rl));
-  PetscCall(PetscLogFlops(2.0 * nc * nc * (s->ai[s->n] + (s->bi ? s->bi[s->n] : 0))));
+  /* upper storage: each stored off-diagonal block is applied twice (as itself and transposed) */
+  PetscCall(PetscLogFlops(2.0 * nc * nc * ((s->upper ? 2 : 1) * (s->ai[s->n] + (s->bi ? s->bi[s->n] : 0)))));
 
   sums[0] = loc.dWd;
   sums[1] = loc.rWr;

@@ -1,5 +1,6 @@
 /* kergs nlgs: the non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2), reading W's block
-   CSR arrays directly (one block row of ncomp x ncomp blocks per contact). Gauss-Seidel inside a rank, Jacobi across ranks: the impulses of other ranks'
+   CSR arrays directly (one block row of ncomp x ncomp blocks per contact), whole (AIJ, BAIJ) or upper block
+   triangle only (SBAIJ). Gauss-Seidel inside a rank, Jacobi across ranks: the impulses of other ranks'
    contacts are scattered once per sweep (DESIGN.md section 6).
    Regularised variants (Algorithm 6, NLGS-Jac) pass an extra right-hand side per component and
    replacement diagonal blocks. */
@@ -14,7 +15,8 @@ struct _p_KergsSweep {
   MPI_Comm comm;
   PetscInt ncomp, n;          /* components per contact, local contacts */
   Mat      W, Ad, Ao;         /* W and its local diagonal / off-process blocks (Ao NULL when W is sequential) */
-  PetscBool blocked;          /* W is (seq|mpi)baij with block size ncomp; otherwise (seq|mpi)aij with ncomp = 1 */
+  PetscBool blocked;          /* W is (seq|mpi)(s)baij with block size ncomp; otherwise (seq|mpi)aij with ncomp = 1 */
+  PetscBool upper;            /* W is (seq|mpi)sbaij: only the blocks W_alpha,beta with beta >= alpha are stored */
   const PetscInt    *ai, *aj, *bi, *bj; /* block CSR of Ad and Ao: block rows = local contacts */
   const PetscScalar *aa, *ba;           /* their values, ncomp*ncomp per block, each block column by column */
   PetscReal *Wdiag;           /* n blocks of ncomp x ncomp: W_alpha,alpha */
@@ -24,6 +26,11 @@ struct _p_KergsSweep {
   VecScatter ghost_scatter;
   PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep) */
   PetscInt  *dsplit;          /* per local contact a: [start, end) of its own block W_aa in aj (skipped by the sweep) */
+  /* upper storage only */
+  PetscReal   *acc;           /* per local component: sum_{beta < alpha local} W_beta,alpha^T r_beta (new), within a sweep */
+  Vec          blower;        /* W's layout: the lower ranks' coupling B^T r, scattered back (added) from them */
+  PetscInt    *ubi, *ubj;     /* the copy of the off-process part (upper: columns right of this rank), owned */
+  PetscScalar *uba;
 };
 
 /* Measures of one sweep, reduced over ranks by KergsSweepRun.
@@ -36,8 +43,8 @@ typedef struct {
 } KergsSweepMeasures;
 
 PETSC_EXTERN PetscErrorCode KergsSweepCreate(MPI_Comm, KergsSweep *);
-/* Take W (assembled (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when ncomp = 1, for the current contacts, row and column layouts equal, ncomp rows per local
-   contact) and per-contact mu and activity. Keeps a reference to W and its CSR arrays, and the pointers mu and
+/* Take W (assembled (seq|mpi)sbaij or (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when ncomp = 1, for the current contacts, row and column layouts
+   equal, ncomp rows per local contact) and per-contact mu and activity. Keeps a reference to W and its CSR arrays, and the pointers mu and
    active (owned by the caller, read at every sweep). Calling it again resets first; if W's values change,
    call it again (the diagonal blocks are copied). */
 PETSC_EXTERN PetscErrorCode KergsSweepSetUp(KergsSweep, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active);
