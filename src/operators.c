@@ -229,9 +229,10 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
    owners through PETSc's stash. A free wall's terms are added by each rank for its own contacts at that wall, from
    the list of every contact at the wall (gathered: a free wall couples all of them). The pattern is counted
    exactly beforehand: row alpha holds the contacts at its body a (always owned by alpha's owner) and at its body
-   b, alpha itself in both; for a ghost b the counts come from b's owner. W is stored by ncomp x ncomp blocks, one
-   block row per contact (BAIJ; AIJ when ncomp = 1), as the sweep reads it. Nothing of the size of W or H_f is
-   built on the side.
+   b, alpha itself in both; for a ghost b the counts come from b's owner. W is symmetric: only its upper block
+   triangle is stored (SBAIJ, blocks W_alpha,beta with beta >= alpha, diagonal blocks whole), by ncomp x ncomp
+   blocks, one block row per contact (block size 1 when frictionless), as the sweep reads it. Only those blocks are
+   computed and counted. Nothing of the size of W or H_f is built on the side.
 */
 
 /* A contact at one body: global index, owning rank, and its rows of H_f^T on the body's DOFs (h[c * nd + j]). */
@@ -333,11 +334,13 @@ static PetscErrorCode WallContacts(KergsOperators ops, KergsScene scene, KergsCo
   PetscFunctionReturn(0);
 }
 
-/* Block pattern counts of row alpha from the contacts bc[0 .. m) at one of its bodies, alpha among them when
-   counted twice (dup): the diagonal part holds those of rank `owner`. */
-static void CountBlocks(const BodyContact *bc, PetscInt m, PetscMPIInt owner, PetscBool dup, PetscInt *d, PetscInt *o)
+/* Upper block pattern counts of row alpha (global contact index `row`) from the contacts bc[0 .. m) at one of its
+   bodies: only the blocks W_alpha,beta with beta >= alpha are stored. Alpha is among them; when it is counted
+   twice (dup) it is taken off once. The diagonal part holds those of rank `owner`. */
+static void CountBlocks(const BodyContact *bc, PetscInt m, PetscInt row, PetscMPIInt owner, PetscBool dup, PetscInt *d, PetscInt *o)
 {
   for (PetscInt j = 0; j < m; j++) {
+    if (bc[j].index < row) continue;
     if (bc[j].owner == owner) (*d)++;
     else (*o)++;
   }
@@ -367,7 +370,7 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, KergsScene scene, Kerg
       if (f < 0) continue;
       if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, bc);
       p = (PetscMPIInt)scene->ghost_owner[ct->foreign[f].a - scene->nowned];
-      CountBlocks(bc, m, p, PETSC_TRUE, &d, &o);
+      CountBlocks(bc, m, ct->foreign_index[f], p, PETSC_TRUE, &d, &o);
       r    = &send[fill[p]];
       r[0] = ct->foreign_index[f];
       r[1] = d;
@@ -395,22 +398,27 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, KergsScene scene, Kerg
 }
 
 /* Add the blocks H_alpha,q M_q^-1 H_beta,q^T of body q (contacts bc[0 .. m), inverse masses minv on its nd DOFs)
-   to the block rows of the contacts bc[rows[i]] (all of them when rows is NULL). */
+   to the block rows of the contacts bc[rows[i]] (all of them when rows is NULL); only the upper blocks, beta >= alpha
+   (global contact indices), as W is stored by its upper block triangle (W_beta,alpha = W_alpha,beta^T). */
 static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const PetscReal *minv, const BodyContact *bc, PetscInt m, const PetscInt *rows,
                                     PetscInt nrows, PetscInt *cols, PetscScalar *vals)
 {
   PetscFunctionBeginUser;
-  for (PetscInt j = 0; j < m; j++) cols[j] = bc[j].index;
   for (PetscInt i = 0; i < (rows ? nrows : m); i++) {
     const BodyContact *a = &bc[rows ? rows[i] : i];
+    PetscInt           n = 0;
     for (PetscInt j = 0; j < m; j++)
+      if (bc[j].index >= a->index) cols[n++] = j;
+    for (PetscInt k = 0; k < n; k++)
       for (PetscInt c = 0; c < nc; c++)
         for (PetscInt e = 0; e < nc; e++) {
-          PetscReal w = 0.0;
-          for (PetscInt d = 0; d < nd; d++) w += a->h[c * nd + d] * minv[d] * bc[j].h[e * nd + d];
-          vals[c * m * nc + j * nc + e] = w; /* row-major block row, as MatSetValuesBlocked takes it */
+          const BodyContact *b = &bc[cols[k]];
+          PetscReal          w = 0.0;
+          for (PetscInt d = 0; d < nd; d++) w += a->h[c * nd + d] * minv[d] * b->h[e * nd + d];
+          vals[c * n * nc + k * nc + e] = w; /* row-major block row, as MatSetValuesBlocked takes it */
         }
-    PetscCall(MatSetValuesBlocked(W, 1, &a->index, m, cols, vals, ADD_VALUES));
+    for (PetscInt k = 0; k < n; k++) cols[k] = bc[cols[k]].index;
+    PetscCall(MatSetValuesBlocked(W, 1, &a->index, n, cols, vals, ADD_VALUES));
   }
   PetscFunctionReturn(0);
 }
@@ -436,7 +444,7 @@ static PetscErrorCode AddWallTerms(KergsOperators ops, KergsScene scene, KergsCo
       if (bc[j].owner == rank) rows[nrows++] = j;
     for (PetscInt d = 0; d < KERGS_DIM; d++) minv[d] = 1.0 / scene->walls[w].mass;
     if (dnz)
-      for (PetscInt i = 0; i < nrows; i++) CountBlocks(bc, m, rank, PETSC_TRUE, &dnz[bc[rows[i]].index - ct->start], &onz[bc[rows[i]].index - ct->start]);
+      for (PetscInt i = 0; i < nrows; i++) CountBlocks(bc, m, bc[rows[i]].index, rank, PETSC_TRUE, &dnz[bc[rows[i]].index - ct->start], &onz[bc[rows[i]].index - ct->start]);
     else PetscCall(AddBodyBlocks(ops->W, ops->ncomp, KERGS_DIM, minv, bc, m, rows, nrows, cols, vals));
     PetscCall(PetscFree3(rows, cols, vals));
     PetscCall(PetscFree(bc));
@@ -460,7 +468,7 @@ static PetscErrorCode CountPattern(KergsOperators ops, KergsScene scene, KergsCo
       const PetscInt k = list[j];
       if (k >= ct->n) continue; /* a foreign row: counted by its owner, from CountRemoteRows */
       if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, bc);
-      CountBlocks(bc, m, rank, (PetscBool)(q != ct->c[k].a), &dnz[k], &onz[k]); /* at b: alpha is counted already */
+      CountBlocks(bc, m, ct->start + k, rank, (PetscBool)(q != ct->c[k].a), &dnz[k], &onz[k]); /* at b: alpha is counted already */
     }
   }
   PetscCall(CountRemoteRows(ops, scene, ct, start, list, bc, dnz, onz));
@@ -484,8 +492,9 @@ static PetscErrorCode ComputeDelassus(KergsOperators ops, KergsScene scene, Kerg
   PetscCall(MatCreate(ops->comm, &ops->W));
   PetscCall(MatSetSizes(ops->W, ct->n * nc, ct->n * nc, PETSC_DETERMINE, PETSC_DETERMINE));
   PetscCall(MatSetBlockSize(ops->W, nc));
-  PetscCall(MatSetType(ops->W, nc > 1 ? MATBAIJ : MATAIJ));
-  PetscCall(MatXAIJSetPreallocation(ops->W, nc, dnz, onz, NULL, NULL));
+  PetscCall(MatSetType(ops->W, MATSBAIJ));
+  PetscCall(MatSeqSBAIJSetPreallocation(ops->W, nc, 0, dnz));
+  PetscCall(MatMPISBAIJSetPreallocation(ops->W, nc, 0, dnz, 0, onz));
   PetscCall(MatSetOption(ops->W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
   PetscCall(VecGetArrayRead(ops->Minv, &minv));
   for (PetscInt q = 0; q < scene->nowned; q++) {
@@ -546,6 +555,14 @@ PetscErrorCode KergsOperatorsGetHf(KergsOperators ops, Mat *Hf)
   PetscFunctionBeginUser;
   if (!ops->Hf) PetscCall(MatTranspose(ops->HfT, MAT_INITIAL_MATRIX, &ops->Hf));
   *Hf = ops->Hf;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsGetFullW(KergsOperators ops, Mat *Wfull)
+{
+  PetscFunctionBeginUser;
+  /* from SBAIJ, PETSc's conversion writes W_beta,alpha = W_alpha,beta^T below the diagonal */
+  PetscCall(MatConvert(ops->W, ops->ncomp > 1 ? MATBAIJ : MATAIJ, MAT_INITIAL_MATRIX, Wfull));
   PetscFunctionReturn(0);
 }
 

@@ -6,8 +6,8 @@
 
    HfT = H_f^T (contact components x free DOFs) is assembled (each contact's rows are local to its owner);
    H_f itself is its explicit transpose, built on demand. W = H_f^T M^-1 H_f is a Mat over
-   contact components stored by ncomp x ncomp blocks, one block row per contact: (MPI)BAIJ when frictional,
-   (MPI)AIJ when ncomp = 1. */
+   contact components stored by ncomp x ncomp blocks, one block row per contact, upper block triangle only
+   ((MPI)SBAIJ with block size ncomp, 1 when frictionless; W is symmetric). */
 #ifndef KERGS_OPERATORS_H
 #define KERGS_OPERATORS_H
 
@@ -24,7 +24,7 @@ struct _p_KergsOperators {
   Mat HfT;            /* H_f^T */
   Mat Hf;             /* H_f, NULL until KergsOperatorsGetHf */
   Mat HgT;            /* H_g^T, NULL when the scene has no driven wall */
-  Mat W;              /* H_f^T M^-1 H_f, (MPI)BAIJ with block size ncomp (AIJ when ncomp = 1) */
+  Mat W;              /* H_f^T M^-1 H_f, (MPI)SBAIJ with block size ncomp: upper block triangle */
   Vec Minv;           /* diagonal of M^-1 over free DOFs */
   Vec Vf;             /* free velocities V_f (V_f^- on entry of a step, V_f^+ after the update) */
   Vec Rd;             /* impulse of external forces over the step */
@@ -41,6 +41,9 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsCreate(MPI_Comm, KergsOperators *);
 /* Build H_f^T, H_g^T, M^-1, W, V_f^-, V_g^+, R^d, v^d for the current scene and contact set. */
 PETSC_EXTERN PetscErrorCode KergsOperatorsAssemble(KergsOperators, KergsScene, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetHf(KergsOperators, Mat *);
+/* W with both triangles stored, (MPI)BAIJ with block size ncomp ((MPI)AIJ when ncomp = 1), for the users that need
+   whole rows (a new matrix: MatDestroy it) */
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetFullW(KergsOperators, Mat *);
 /* r <- impulses stored in the contacts; contacts <- r (after a solve; the local velocities stay in ops->v) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetImpulses(KergsOperators, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsSetImpulses(KergsOperators, KergsContacts);

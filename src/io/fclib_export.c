@@ -260,7 +260,12 @@ PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsO
   /* W restricted to the active contacts, as one sequential matrix on rank 0 (empty elsewhere) */
   PetscCall(ISCreateGeneral(PETSC_COMM_SELF, p.na * nc, rows, PETSC_USE_POINTER, &is));
   PetscCall(ISSetBlockSize(is, nc)); /* whole contacts: BAIJ W extracts by blocks only */
-  PetscCall(MatCreateSubMatrices(ops->W, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
+  {
+    Mat Wfull; /* whole rows: W itself is stored by its upper triangle */
+    PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
+    PetscCall(MatCreateSubMatrices(Wfull, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
+    PetscCall(MatDestroy(&Wfull));
+  }
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   if (rank == 0) {
     p.m      = KERGS_FCLIB_SPACEDIM * p.na;

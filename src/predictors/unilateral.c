@@ -33,99 +33,63 @@ static PetscErrorCode KergsPredictorSetFromOptions_Unilateral(KergsPredictor p, 
   PetscFunctionReturn(0);
 }
 
-/* Number of blocks in each block row of a local block A of a BAIJ W. */
-static PetscErrorCode BlockRowCounts(Mat A, PetscInt *nz)
+/* The entries (W_alpha,beta)_nn of W's local normal rows (alpha nc) in the normal columns (beta nc), read row by
+   row from any storage of W (upper rows only for SBAIJ): counted into dnz/onz (columns of this rank's contacts or
+   not) when dnz is given, set into Wnn otherwise. */
+static PetscErrorCode NormalEntries(Mat W, PetscInt nc, Mat Wnn, PetscInt *dnz, PetscInt *onz)
 {
-  const PetscInt *ia, *ja;
-  PetscInt        nrow;
-  PetscBool       done;
+  PetscInt           rstart, rend, ncols, row, col;
+  const PetscInt    *cols;
+  const PetscScalar *vals;
 
   PetscFunctionBeginUser;
-  PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, PETSC_TRUE, &nrow, &ia, &ja, &done));
-  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "unilateral predictor: no block CSR arrays for W");
-  for (PetscInt a = 0; a < nrow; a++) nz[a] = ia[a + 1] - ia[a];
-  PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, PETSC_TRUE, &nrow, &ia, &ja, &done));
-  PetscFunctionReturn(0);
-}
-
-/* W_nn(alpha, beta) = (W_alpha,beta)_nn, the first entry of each block of a local block A of W: block column j
-   is the global contact garray[j] (off-process block) or cstart + j. */
-static PetscErrorCode SetNormalEntries(Mat Wnn, Mat A, PetscInt nc, PetscInt rstart, PetscInt cstart, const PetscInt *garray)
-{
-  const PetscInt *ia, *ja;
-  PetscInt        nrow, row, col;
-  PetscBool       done;
-  PetscScalar    *v;
-
-  PetscFunctionBeginUser;
-  PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, PETSC_TRUE, &nrow, &ia, &ja, &done));
-  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "unilateral predictor: no block CSR arrays for W");
-  PetscCall(MatSeqBAIJGetArray(A, &v));
-  for (PetscInt a = 0; a < nrow; a++)
-    for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
-      row = rstart + a;
-      col = garray ? garray[ja[j]] : cstart + ja[j];
-      PetscCall(MatSetValues(Wnn, 1, &row, 1, &col, &v[j * nc * nc], INSERT_VALUES));
+  PetscCall(MatGetOwnershipRange(W, &rstart, &rend));
+  for (PetscInt i = rstart; i < rend; i += nc) {
+    row = i / nc;
+    PetscCall(MatGetRow(W, i, &ncols, &cols, &vals));
+    for (PetscInt k = 0; k < ncols; k++) {
+      if (cols[k] % nc) continue;
+      col = cols[k] / nc;
+      if (!dnz) PetscCall(MatSetValues(Wnn, 1, &row, 1, &col, &vals[k], INSERT_VALUES));
+      else if (cols[k] >= rstart && cols[k] < rend) dnz[row - rstart / nc]++;
+      else onz[row - rstart / nc]++;
     }
-  PetscCall(MatSeqBAIJRestoreArray(A, &v));
-  PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, PETSC_TRUE, &nrow, &ia, &ja, &done));
+    PetscCall(MatRestoreRow(W, i, &ncols, &cols, &vals));
+  }
   PetscFunctionReturn(0);
 }
 
-/* W_nn from a (seq|mpi)baij W with block size nc, read from its blocks (PETSc's BAIJ extracts whole blocks
-   only, and converting an MPIBAIJ W to AIJ re-assembles W itself); contact alpha is row and column alpha. */
-static PetscErrorCode NormalFromBlocks(Mat W, PetscInt nc, Mat *Wnn)
+/* W_nn, the normal components' sub-block, contact alpha being row and column alpha; stored like W: by its upper
+   triangle (SBAIJ, block size 1) when W is, so that the sweep streams half of it, AIJ otherwise. */
+static PetscErrorCode NormalSubmatrix(KergsOperators ops, Mat *Wnn)
 {
-  Mat             Ad, Ao = NULL;
-  const PetscInt *garray = NULL;
-  PetscInt        m, n, rstart, *dnz, *onz;
-  PetscBool       mpi;
+  const PetscInt nc = ops->ncomp;
+  PetscInt       m, n, *dnz, *onz;
+  PetscBool      upper;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscObjectTypeCompare((PetscObject)W, MATMPIBAIJ, &mpi));
-  if (mpi) PetscCall(MatMPIBAIJGetSeqBAIJ(W, &Ad, &Ao, &garray));
-  else Ad = W;
-  PetscCall(MatGetLocalSize(W, &m, NULL));
-  PetscCall(MatGetOwnershipRange(W, &rstart, NULL));
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)ops->W, &upper, MATSEQSBAIJ, MATMPISBAIJ, ""));
+  PetscCall(MatGetLocalSize(ops->W, &m, NULL));
   n = m / nc;
-  rstart /= nc;
-  PetscCall(PetscCalloc2(n, &dnz, n, &onz));
-  PetscCall(BlockRowCounts(Ad, dnz));
-  if (Ao) PetscCall(BlockRowCounts(Ao, onz));
-  PetscCall(MatCreateAIJ(PetscObjectComm((PetscObject)W), n, n, PETSC_DETERMINE, PETSC_DETERMINE, 0, dnz, 0, onz, Wnn));
+  PetscCall(PetscCalloc2(n + 1, &dnz, n + 1, &onz));
+  PetscCall(MatGetRowUpperTriangular(ops->W)); /* MatGetRow on SBAIJ: the stored (upper) part of each row */
+  PetscCall(NormalEntries(ops->W, nc, NULL, dnz, onz));
+  PetscCall(MatCreate(PetscObjectComm((PetscObject)ops->W), Wnn));
+  PetscCall(MatSetSizes(*Wnn, n, n, PETSC_DETERMINE, PETSC_DETERMINE));
+  PetscCall(MatSetType(*Wnn, upper ? MATSBAIJ : MATAIJ));
+  PetscCall(MatXAIJSetPreallocation(*Wnn, 1, dnz, onz, dnz, onz));
   PetscCall(MatSetOption(*Wnn, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
-  PetscCall(SetNormalEntries(*Wnn, Ad, nc, rstart, rstart, NULL));
-  if (Ao) PetscCall(SetNormalEntries(*Wnn, Ao, nc, rstart, 0, garray));
+  PetscCall(NormalEntries(ops->W, nc, *Wnn, NULL, NULL));
+  PetscCall(MatRestoreRowUpperTriangular(ops->W));
   PetscCall(MatAssemblyBegin(*Wnn, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*Wnn, MAT_FINAL_ASSEMBLY));
   PetscCall(PetscFree2(dnz, onz));
   PetscFunctionReturn(0);
 }
 
-/* W_nn, the normal components' sub-block: from the blocks of a BAIJ W, or MatCreateSubMatrix of an AIJ W. */
-static PetscErrorCode NormalSubmatrix(KergsPredictor p, KergsContacts contacts, KergsOperators ops, Mat *Wnn)
-{
-  PetscInt *rows;
-  IS        is;
-  PetscBool blocked;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscObjectTypeCompareAny((PetscObject)ops->W, &blocked, MATSEQBAIJ, MATMPIBAIJ, ""));
-  if (blocked) {
-    PetscCall(NormalFromBlocks(ops->W, ops->ncomp, Wnn));
-    PetscFunctionReturn(0);
-  }
-  PetscCall(PetscMalloc1(contacts->n, &rows));
-  for (PetscInt k = 0; k < contacts->n; k++) rows[k] = (contacts->start + k) * ops->ncomp;
-  PetscCall(ISCreateGeneral(p->comm, contacts->n, rows, PETSC_OWN_POINTER, &is));
-  PetscCall(MatCreateSubMatrix(ops->W, is, is, MAT_INITIAL_MATRIX, Wnn));
-  PetscCall(ISDestroy(&is));
-  PetscFunctionReturn(0);
-}
-
 /* W_nn, v^d_n and a warm start r_n (the contacts' normal impulses, >= 0, zero when inactive). With one
    component per contact they are W, v^d and rtilde themselves; otherwise the normal sub-block is extracted. */
-static PetscErrorCode NormalProblem(KergsPredictor p, KergsContacts contacts, KergsOperators ops, const PetscBool *active, Vec rtilde,
+static PetscErrorCode NormalProblem(KergsContacts contacts, KergsOperators ops, const PetscBool *active, Vec rtilde,
                                     Mat *Wnn, Vec *vdn, Vec *rn)
 {
   PetscScalar       *r;
@@ -140,7 +104,7 @@ static PetscErrorCode NormalProblem(KergsPredictor p, KergsContacts contacts, Ke
     *vdn = ops->vd;
     *rn  = rtilde;
   } else {
-    PetscCall(NormalSubmatrix(p, contacts, ops, Wnn));
+    PetscCall(NormalSubmatrix(ops, Wnn));
     PetscCall(MatCreateVecs(*Wnn, rn, vdn));
     PetscCall(VecGetArray(*vdn, &r));
     PetscCall(VecGetArrayRead(ops->vd, &vd));
@@ -164,7 +128,7 @@ static PetscErrorCode KergsPredictorPredict_Unilateral(KergsPredictor p, KergsSc
 
   PetscFunctionBeginUser;
   (void)scene;
-  PetscCall(NormalProblem(p, contacts, ops, active, rtilde, &Wnn, &vdn, &rn));
+  PetscCall(NormalProblem(contacts, ops, active, rtilde, &Wnn, &vdn, &rn));
   PetscCall(KergsSweepSetUp(u->sweep, Wnn, 1, NULL, active));
   p->converged = PETSC_FALSE;
   for (p->sweeps = 1; p->sweeps <= u->max_it; p->sweeps++) {

@@ -44,7 +44,12 @@ static PetscErrorCode KergsSolverSetUp_NLKerGS(KergsSolver s, KergsScene scene, 
   /* explicit Z stored like W, by ncomp x ncomp blocks (Z carries W's block size), so that W~ = Z + W is one
      block row per contact for the sweep */
   PetscCall(MatComputeOperator(Z, ops->ncomp > 1 ? MATBAIJ : MATAIJ, &nk->Wt));
-  PetscCall(MatAXPY(nk->Wt, 1.0, ops->W, DIFFERENT_NONZERO_PATTERN));
+  {
+    Mat Wfull; /* W is stored by its upper triangle: Z + W needs both */
+    PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
+    PetscCall(MatAXPY(nk->Wt, 1.0, Wfull, DIFFERENT_NONZERO_PATTERN));
+    PetscCall(MatDestroy(&Wfull));
+  }
   PetscCall(MatGetInfo(nk->Wt, MAT_GLOBAL_SUM, &info));
   nk->nnz_Wt = (PetscInt)info.nz_used;
   PetscCall(KergsSweepSetUp(nk->sweep, nk->Wt, ops->ncomp, s->mu, s->active));
