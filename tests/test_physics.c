@@ -353,8 +353,20 @@ static PetscErrorCode TestDelassusAssembly(void)
   PetscCall(MatTranspose(ops->HfT, MAT_INITIAL_MATRIX, &MinvHf));
   PetscCall(MatDiagonalScale(MinvHf, ops->Minv, NULL));
   PetscCall(MatMatMult(ops->HfT, MinvHf, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Wref));
+  /* W is stored by its upper block triangle (SBAIJ): the conversion writes both triangles */
   PetscCall(MatConvert(ops->W, MATAIJ, MAT_INITIAL_MATRIX, &Waij));
   PetscCall(MatGetInfo(Waij, MAT_GLOBAL_SUM, &iw));
+  {
+    MatInfo   is;
+    PetscInt  N, bs;
+    PetscBool upper;
+    PetscCall(MatGetInfo(ops->W, MAT_GLOBAL_SUM, &is));
+    PetscCall(MatGetSize(ops->W, &N, NULL));
+    PetscCall(MatGetBlockSize(ops->W, &bs));
+    PetscCall(PetscObjectTypeCompareAny((PetscObject)ops->W, &upper, MATSEQSBAIJ, MATMPISBAIJ, ""));
+    PetscCall(Check((PetscBool)(upper && 2 * is.nz_used - N * bs == iw.nz_used), "W by bodies: upper block triangle stored (2 stored - diagonal blocks = whole)",
+                    2 * is.nz_used - N * bs, iw.nz_used));
+  }
   PetscCall(MatGetInfo(Wref, MAT_GLOBAL_SUM, &ir));
   PetscCall(MatNorm(Wref, NORM_FROBENIUS, &nref));
   PetscCall(MatAXPY(Wref, -1.0, Waij, DIFFERENT_NONZERO_PATTERN));
