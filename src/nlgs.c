@@ -193,8 +193,8 @@ static PetscErrorCode CopyOffProcessRow(KergsSweep s, PetscInt row, PetscInt a, 
   for (k = 0; k < ncols && cols[k] < cend; k++) { }
   PetscCheck((ncols - k) == nc * (s->ubi[a + 1] - s->ubi[a]), PETSC_COMM_SELF, PETSC_ERR_PLIB, "KergsSweepSetUp: W's row %" PetscInt_FMT " is not made of whole blocks", row);
   for (j = 0; k < ncols; k++, j++) {
-    pos                                     = s->ubi[a] + j / nc;
-    s->ubj[pos]                             = cols[k] / nc;
+    pos         = s->ubi[a] + j / nc;
+    s->ubj[pos] = cols[k] / nc;
     s->uba[pos * nc * nc + (cols[k] % nc) * nc + c] = vals[k];
   }
   PetscCall(MatRestoreRow(s->W, row, &ncols, &cols, &vals));
