@@ -80,6 +80,8 @@ PetscErrorCode KergsSweepReset(KergsSweep s)
   PetscCall(PetscFree(s->uba));
   PetscCall(PetscFree(s->acc));
   PetscCall(VecDestroy(&s->blower));
+  PetscCall(VecDestroy(&s->ylower));
+  PetscCall(VecScatterDestroy(&s->lower_scatter));
   s->ai = s->aj = s->bi = s->bj = NULL;
   s->aa = s->ba = NULL;
   s->Ad = s->Ao = NULL;
@@ -144,7 +146,11 @@ static PetscErrorCode CreateGhostScatter(KergsSweep s, PetscInt nghost, const Pe
   PetscCall(ISCreateBlock(PETSC_COMM_SELF, s->ncomp, nghost, colmap, PETSC_COPY_VALUES, &is));
   PetscCall(MatCreateVecs(s->W, &x, NULL));
   PetscCall(VecScatterCreate(x, is, s->rghost, NULL, &s->ghost_scatter));
-  if (s->upper) PetscCall(VecDuplicate(x, &s->blower));
+  if (s->upper) {
+    PetscCall(VecDuplicate(x, &s->blower));
+    PetscCall(VecDuplicate(s->rghost, &s->ylower));
+    PetscCall(VecScatterCopy(s->ghost_scatter, &s->lower_scatter)); /* one scatter holds one message in flight */
+  }
   PetscCall(VecDestroy(&x));
   PetscCall(ISDestroy(&is));
   PetscFunctionReturn(0);
@@ -422,30 +428,35 @@ static void MeasuresFromSums(const SweepSums *g, KergsSweepMeasures *m)
   m->maxm = mean > 0 ? PetscSqrtReal(g->maxd) / mean : (g->maxd > 0 ? 1.0 : 0.0);
 }
 
-/* Upper storage: the lower ranks' share of boff, (B^T r) computed on each of them and added back through the ghost
-   scatter reversed (r is the impulse at the start of the sweep, as for the forward part: Jacobi across ranks). */
-static PetscErrorCode AddLowerRanksCoupling(KergsSweep s, Vec r)
+/* Upper storage: the lower ranks' share of boff is (B^T r) computed on each of them and added back through the ghost
+   scatter reversed (r is the impulse at the start of the sweep, as for the forward part: Jacobi across ranks).
+   Started before the forward scatter so that both messages are in flight together. */
+static PetscErrorCode BeginLowerRanksCoupling(KergsSweep s, Vec r)
 {
-  const PetscInt     nc = s->ncomp;
-  const PetscScalar *rl, *bl;
+  const PetscScalar *rl;
   PetscScalar       *y;
-  PetscInt           i;
 
   PetscFunctionBeginUser;
-  PetscCall(VecSet(s->rghost, 0.0));
+  PetscCall(VecSet(s->ylower, 0.0));
   PetscCall(VecGetArrayRead(r, &rl));
-  PetscCall(VecGetArray(s->rghost, &y));
-  if (nc == 2) OffProcessTransposeProduct(2, s->n, s->bi, s->bj, s->ba, rl, y);
+  PetscCall(VecGetArray(s->ylower, &y));
+  if (s->ncomp == 2) OffProcessTransposeProduct(2, s->n, s->bi, s->bj, s->ba, rl, y);
   else OffProcessTransposeProduct(1, s->n, s->bi, s->bj, s->ba, rl, y);
-  PetscCall(VecRestoreArray(s->rghost, &y));
+  PetscCall(VecRestoreArray(s->ylower, &y));
   PetscCall(VecRestoreArrayRead(r, &rl));
   PetscCall(VecSet(s->blower, 0.0));
-  PetscCall(PetscLogEventBegin(KERGS_Exchange, 0, 0, 0, 0));
-  PetscCall(VecScatterBegin(s->ghost_scatter, s->rghost, s->blower, ADD_VALUES, SCATTER_REVERSE));
-  PetscCall(VecScatterEnd(s->ghost_scatter, s->rghost, s->blower, ADD_VALUES, SCATTER_REVERSE));
-  PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
+  PetscCall(VecScatterBegin(s->lower_scatter, s->ylower, s->blower, ADD_VALUES, SCATTER_REVERSE));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode EndLowerRanksCoupling(KergsSweep s)
+{
+  const PetscScalar *bl;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecScatterEnd(s->lower_scatter, s->ylower, s->blower, ADD_VALUES, SCATTER_REVERSE));
   PetscCall(VecGetArrayRead(s->blower, &bl));
-  for (i = 0; i < s->n * nc; i++) s->boff[i] += PetscRealPart(bl[i]);
+  for (PetscInt i = 0; i < s->n * s->ncomp; i++) s->boff[i] += PetscRealPart(bl[i]);
   PetscCall(VecRestoreArrayRead(s->blower, &bl));
   PetscFunctionReturn(0);
 }
@@ -467,6 +478,7 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   PetscCall(PetscLogEventBegin(KERGS_Sweep, 0, 0, 0, 0));
   if (s->ghost_scatter) {
     PetscCall(PetscLogEventBegin(KERGS_Exchange, 0, 0, 0, 0));
+    if (s->upper) PetscCall(BeginLowerRanksCoupling(s, r));
     PetscCall(VecScatterBegin(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
     PetscCall(VecScatterEnd(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
     PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
@@ -474,7 +486,7 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
     if (nc == 2) OffProcessProduct(2, s->n, s->bi, s->bj, s->ba, rg, s->boff);
     else OffProcessProduct(1, s->n, s->bi, s->bj, s->ba, rg, s->boff);
     PetscCall(VecRestoreArrayRead(s->rghost, &rg));
-    if (s->upper) PetscCall(AddLowerRanksCoupling(s, r));
+    if (s->upper) PetscCall(EndLowerRanksCoupling(s));
   }
   if (s->acc) PetscCall(PetscArrayzero(s->acc, m));
   PetscCall(VecGetArray(r, &rl));

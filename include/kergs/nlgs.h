@@ -29,6 +29,8 @@ struct _p_KergsSweep {
   /* upper storage only */
   PetscReal   *acc;           /* per local component: sum_{beta < alpha local} W_beta,alpha^T r_beta (new), within a sweep */
   Vec          blower;        /* W's layout: the lower ranks' coupling B^T r, scattered back (added) from them */
+  Vec          ylower;        /* like rghost: this rank's B^T r, sent to the higher ranks */
+  VecScatter   lower_scatter; /* a copy of ghost_scatter, used reversed, in flight together with it */
   PetscInt    *ubi, *ubj;     /* the copy of the off-process part (upper: columns right of this rank), owned */
   PetscScalar *uba;
 };
