@@ -293,7 +293,7 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   if (ismpi) PetscCall(SetUpParts(s));
   else s->Ad = W;
   PetscCall(GetBlockCSR(s->Ad, blocked, upper, &s->ai, &s->aj, &s->aa));
-  PetscCall(PetscCalloc1(m, &s->boff));
+  if (s->ghost_scatter) PetscCall(PetscCalloc1(m, &s->boff)); /* none on one rank: no off-process part */
   if (upper) PetscCall(PetscMalloc1(m + 1, &s->acc));
   PetscCall(ExtractDiagonalBlocks(s));
   PetscFunctionReturn(0);
@@ -388,7 +388,7 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
       BlocksTimesX(nc, aj, aa, ds[2 * a + 1], ai[a + 1], r, t);
       for (c = 0; c < nc; c++) {
         i    = a * nc + c;
-        b[c] = PetscRealPart(vd[i]) + boff[i] + t[c];
+        b[c] = PetscRealPart(vd[i]) + (boff ? boff[i] : 0.0) + t[c];
         if (extra) b[c] += extra[i];
       }
     }

@@ -24,7 +24,7 @@ struct _p_KergsSweep {
   PetscBool *active;          /* per contact: predicted gap <= 0 (the caller's array; NULL: all active) */
   Vec        rghost;          /* off-process impulses, ordered as Ao's (block) columns */
   VecScatter ghost_scatter;
-  PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep) */
+  PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep); NULL on one rank */
   PetscInt  *dsplit;          /* per local contact a: [start, end) of its own block W_aa in aj (skipped by the sweep) */
   /* upper storage only */
   PetscReal   *acc;           /* per local component: sum_{beta < alpha local} W_beta,alpha^T r_beta (new), within a sweep */
