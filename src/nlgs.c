@@ -119,6 +119,15 @@ static PetscErrorCode ExtractDiagonalBlocks(KergsSweep s)
 
   PetscFunctionBeginUser;
   PetscCall(PetscCalloc1(s->n * bs2, &s->Wdiag));
+  if (s->upper) { /* row a starts with W_aa: no split to keep */
+    for (a = 0; a < s->n; a++) {
+      j = s->ai[a];
+      PetscCheck(j < s->ai[a + 1] && s->aj[j] == a, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "KergsSweepSetUp: W's diagonal block of local contact %" PetscInt_FMT " is not stored", a);
+      for (c = 0; c < nc; c++)
+        for (e = 0; e < nc; e++) s->Wdiag[a * bs2 + c * nc + e] = PetscRealPart(s->aa[j * bs2 + e * nc + c]);
+    }
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscMalloc1(2 * s->n, &s->dsplit));
   for (a = 0; a < s->n; a++) {
     for (j = s->ai[a]; j < s->ai[a + 1] && s->aj[j] < a; j++) { }
@@ -365,7 +374,7 @@ typedef struct {
      b_a = vd_a + extra_a + boff_a + sum_{local beta != a} W_a,beta r_beta   (latest r),
    then the exact law with the block Wlaw_a, r_a updated in place. Block row a of W is contact a: its blocks
    before and after the own block, [ai[a], ds[2a]) and [ds[2a+1], ai[a+1]), give the sum. With upper storage
-   (acc not NULL, zero on entry) the row holds beta > a only (r_beta not yet updated: the old values, as
+   (acc not NULL, zero on entry; ds not used) the row holds W_aa first, then beta > a only (r_beta not yet updated: the old values, as
    Gauss-Seidel wants), and acc_a = sum_{beta < a} W_beta,a^T r_beta(new) = sum_{beta < a} W_a,beta r_beta(new)
    completes the sum; once r_a(new) is known the same row adds W_a,beta^T r_a(new) to acc_beta. nc is 1 or 2; the
    function is inlined with a constant nc so that the small loops over components unroll. */
@@ -379,13 +388,14 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
   for (a = 0; a < n; a++) {
     const PetscBool act = active ? active[a] : PETSC_TRUE;
     const PetscReal *w  = Wd + a * nc * nc;
+    const PetscInt   jlow = acc ? ai[a] : ds[2 * a], jup = acc ? ai[a] + 1 : ds[2 * a + 1]; /* upper: W_aa first */
 
     if (act) {
       PetscReal t[KERGS_MAXCOMP] = {0.0};
       if (acc) /* upper storage: the blocks before the own one, summed in the same order as whole storage does */
         for (c = 0; c < nc; c++) t[c] = acc[a * nc + c];
-      BlocksTimesX(nc, aj, aa, ai[a], ds[2 * a], r, t);
-      BlocksTimesX(nc, aj, aa, ds[2 * a + 1], ai[a + 1], r, t);
+      BlocksTimesX(nc, aj, aa, ai[a], jlow, r, t);
+      BlocksTimesX(nc, aj, aa, jup, ai[a + 1], r, t);
       for (c = 0; c < nc; c++) {
         i    = a * nc + c;
         b[c] = PetscRealPart(vd[i]) + (boff ? boff[i] : 0.0) + t[c];
@@ -407,7 +417,7 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
     if (acc) {
       PetscBool zero = PETSC_TRUE;
       for (c = 0; c < nc; c++) zero = (PetscBool)(zero && rnew[c] == 0.0);
-      if (!zero) BlocksTransposeTimesX(nc, aj, aa, ds[2 * a + 1], ai[a + 1], rnew, acc);
+      if (!zero) BlocksTransposeTimesX(nc, aj, aa, jup, ai[a + 1], rnew, acc);
     }
     rWr = PetscMax(rWr, 0.0);
     sums->dWd += dWd;

@@ -25,7 +25,8 @@ struct _p_KergsSweep {
   Vec        rghost;          /* off-process impulses, ordered as Ao's (block) columns */
   VecScatter ghost_scatter;
   PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep); NULL on one rank */
-  PetscInt  *dsplit;          /* per local contact a: [start, end) of its own block W_aa in aj (skipped by the sweep) */
+  PetscInt  *dsplit;          /* per local contact a: [start, end) of its own block W_aa in aj (skipped by the sweep); NULL with
+                                 upper storage, where W_aa is the first block of row a */
   /* upper storage only */
   PetscReal   *acc;           /* per local component: sum_{beta < alpha local} W_beta,alpha^T r_beta (new), within a sweep */
   Vec          blower;        /* W's layout: the lower ranks' coupling B^T r, scattered back (added) from them */
