@@ -428,40 +428,28 @@ static int CompareForeignKeys(const void *x, const void *y)
    pair from the same bits, so the lists must agree exactly; a mismatch is an error, not a silent loss. */
 static PetscErrorCode NumberForeignContacts(KergsContacts ct, KergsScene scene)
 {
-  PetscMPIInt size, *scount, *sdispl, *rcount, *rdispl;
+  PetscMPIInt size, *scount, *fill;
   ForeignKey *send, *recv, *mine;
-  PetscInt    nsend = 0, nrecv = 0, *fill;
+  PetscInt    nsend = 0, nrecv;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(ct->comm, &size));
   if (size == 1) PetscFunctionReturn(0);
-  PetscCall(PetscCalloc4(size, &scount, size, &sdispl, size, &rcount, size, &rdispl));
+  PetscCall(PetscCalloc2(size, &scount, size, &fill));
   for (PetscInt k = 0; k < ct->n; k++)
     if (ct->c[k].kind == KERGS_CONTACT_DISK_DISK && ct->c[k].b >= scene->nowned) {
       scount[scene->ghost_owner[ct->c[k].b - scene->nowned]]++;
       nsend++;
     }
-  PetscCall(PetscMalloc2(nsend + 1, &send, size, &fill));
-  for (PetscMPIInt q = 1; q < size; q++) sdispl[q] = sdispl[q - 1] + scount[q - 1];
-  for (PetscMPIInt q = 0; q < size; q++) fill[q] = sdispl[q];
+  PetscCall(PetscMalloc1(nsend + 1, &send));
+  for (PetscMPIInt q = 1; q < size; q++) fill[q] = fill[q - 1] + scount[q - 1];
   for (PetscInt k = 0; k < ct->n; k++) {
     const KergsContact *c = &ct->c[k];
     if (c->kind != KERGS_CONTACT_DISK_DISK || c->b < scene->nowned) continue;
     send[fill[scene->ghost_owner[c->b - scene->nowned]]++] = (ForeignKey){scene->id[c->a], c->idb, ct->start + k};
   }
-  PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, ct->comm));
-  for (PetscMPIInt q = 0; q < size; q++) {
-    rdispl[q] = (PetscMPIInt)nrecv;
-    nrecv += rcount[q];
-  }
-  for (PetscMPIInt q = 0; q < size; q++) { /* in bytes */
-    scount[q] *= (PetscMPIInt)sizeof(ForeignKey);
-    sdispl[q] *= (PetscMPIInt)sizeof(ForeignKey);
-    rcount[q] *= (PetscMPIInt)sizeof(ForeignKey);
-    rdispl[q] *= (PetscMPIInt)sizeof(ForeignKey);
-  }
-  PetscCall(PetscMalloc2(nrecv + 1, &recv, ct->nforeign + 1, &mine));
-  PetscCallMPI(MPI_Alltoallv(send, scount, sdispl, MPI_BYTE, recv, rcount, rdispl, MPI_BYTE, ct->comm));
+  PetscCall(KergsExchangeRecords(ct->comm, sizeof(ForeignKey), scount, send, NULL, &recv, &nrecv));
+  PetscCall(PetscMalloc1(ct->nforeign + 1, &mine));
   PetscCheck(nrecv == ct->nforeign, PETSC_COMM_SELF, PETSC_ERR_PLIB,
              "Scene %s: %" PetscInt_FMT " contacts of other ranks touch this rank's disks, but %" PetscInt_FMT " were found here (ghost layer incomplete)",
              scene->name, nrecv, ct->nforeign);
@@ -474,9 +462,10 @@ static PetscErrorCode NumberForeignContacts(KergsContacts ct, KergsScene scene)
                recv[f].ida, recv[f].idb);
     ct->foreign_index[mine[f].index] = recv[f].index;
   }
-  PetscCall(PetscFree2(recv, mine));
-  PetscCall(PetscFree2(send, fill));
-  PetscCall(PetscFree4(scount, sdispl, rcount, rdispl));
+  PetscCall(PetscFree(recv));
+  PetscCall(PetscFree(mine));
+  PetscCall(PetscFree(send));
+  PetscCall(PetscFree2(scount, fill));
   PetscFunctionReturn(0);
 }
 

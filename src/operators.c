@@ -351,17 +351,16 @@ static void CountBlocks(const BodyContact *bc, PetscInt m, PetscInt row, PetscMP
 static PetscErrorCode CountRemoteRows(KergsOperators ops, KergsScene scene, KergsContacts ct, const PetscInt *start, const PetscInt *list,
                                       BodyContact *bc, PetscInt *dnz, PetscInt *onz)
 {
-  PetscMPIInt size, *scount, *sdispl, *rcount, *rdispl;
-  PetscInt   *send, *recv, nrecv = 0, *fill;
+  PetscMPIInt size, *scount, *fill;
+  PetscInt   *send, *recv, nrecv;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(ops->comm, &size));
   if (size == 1) PetscFunctionReturn(0);
-  PetscCall(PetscCalloc4(size, &scount, size, &sdispl, size, &rcount, size, &rdispl));
-  PetscCall(PetscMalloc2(3 * ct->nforeign + 1, &send, size, &fill));
-  for (PetscInt f = 0; f < ct->nforeign; f++) scount[scene->ghost_owner[ct->foreign[f].a - scene->nowned]] += 3;
-  for (PetscMPIInt p = 1; p < size; p++) sdispl[p] = sdispl[p - 1] + scount[p - 1];
-  for (PetscMPIInt p = 0; p < size; p++) fill[p] = sdispl[p];
+  PetscCall(PetscCalloc2(size, &scount, size, &fill));
+  PetscCall(PetscMalloc1(3 * ct->nforeign + 1, &send));
+  for (PetscInt f = 0; f < ct->nforeign; f++) scount[scene->ghost_owner[ct->foreign[f].a - scene->nowned]]++;
+  for (PetscMPIInt p = 1; p < size; p++) fill[p] = fill[p - 1] + scount[p - 1];
   for (PetscInt q = 0; q < scene->nowned; q++) {
     PetscInt m = -1;
     for (PetscInt j = start[q]; j < start[q + 1]; j++) {
@@ -371,20 +370,14 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, KergsScene scene, Kerg
       if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, bc);
       p = (PetscMPIInt)scene->ghost_owner[ct->foreign[f].a - scene->nowned];
       CountBlocks(bc, m, ct->foreign_index[f], p, PETSC_TRUE, &d, &o);
-      r    = &send[fill[p]];
+      r    = &send[3 * fill[p]++]; /* one record per foreign row: its index, then its counts */
       r[0] = ct->foreign_index[f];
       r[1] = d;
       r[2] = o;
-      fill[p] += 3;
     }
   }
-  PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, ops->comm));
-  for (PetscMPIInt p = 0; p < size; p++) {
-    rdispl[p] = (PetscMPIInt)nrecv;
-    nrecv += rcount[p];
-  }
-  PetscCall(PetscMalloc1(nrecv + 1, &recv));
-  PetscCallMPI(MPI_Alltoallv(send, scount, sdispl, MPIU_INT, recv, rcount, rdispl, MPIU_INT, ops->comm));
+  PetscCall(KergsExchangeRecords(ops->comm, 3 * sizeof(PetscInt), scount, send, NULL, &recv, &nrecv));
+  nrecv *= 3;
   for (PetscInt i = 0; i < nrecv; i += 3) {
     const PetscInt k = recv[i] - ct->start;
     PetscCheck(k >= 0 && k < ct->n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W pattern: contact %" PetscInt_FMT " is not owned here", recv[i]);
@@ -392,8 +385,8 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, KergsScene scene, Kerg
     onz[k] += recv[i + 2];
   }
   PetscCall(PetscFree(recv));
-  PetscCall(PetscFree2(send, fill));
-  PetscCall(PetscFree4(scount, sdispl, rcount, rdispl));
+  PetscCall(PetscFree(send));
+  PetscCall(PetscFree2(scount, fill));
   PetscFunctionReturn(0);
 }
 

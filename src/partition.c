@@ -134,22 +134,6 @@ static PetscErrorCode GetRanges(KergsScene sc, PetscInt **ranges)
   PetscFunctionReturn(0);
 }
 
-/* The rank owning disk i: the largest q with ranges[q] <= i (empty ranks have ranges[q] = ranges[q+1] and are
-   skipped because a later rank starts at the same index). */
-static inline PetscMPIInt OwnerOf(const PetscInt ranges[], PetscMPIInt size, PetscInt i)
-{
-  PetscMPIInt lo = 0, hi = size - 1;
-
-  while (lo < hi) {
-    PetscMPIInt mid = (lo + hi + 1) / 2;
-    if (ranges[mid] <= i)
-      lo = mid;
-    else
-      hi = mid - 1;
-  }
-  return lo;
-}
-
 /* ---------------------------------------------------------------------------------------------------------- */
 /* Measures                                                                                                   */
 
@@ -257,20 +241,18 @@ static int CompareContactKeys(const void *x, const void *y)
 static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[], const PetscInt newranges[], PetscMPIInt rank,
                                       PetscMPIInt size)
 {
-  PetscMPIInt   *scount, *sdispl, *rcount, *rdispl, *dest;
+  PetscMPIInt   *scount, *fill, *dest;
   MovingContact *sendbuf, *recvbuf;
-  MPI_Datatype   ctype;
-  PetscInt       nrecv = 0, *fill;
+  PetscInt       nrecv;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscCalloc4(size, &scount, size, &sdispl, size, &rcount, size, &rdispl));
-  PetscCall(PetscMalloc3(ct->n + 1, &dest, ct->n + 1, &sendbuf, size, &fill));
+  PetscCall(PetscCalloc2(size, &scount, size, &fill));
+  PetscCall(PetscMalloc2(ct->n + 1, &dest, ct->n + 1, &sendbuf));
   for (PetscInt k = 0; k < ct->n; k++) {
-    dest[k] = OwnerOf(newranges, size, newidx[ct->c[k].a]);
+    dest[k] = KergsRangeOwner(newranges, size, newidx[ct->c[k].a]);
     scount[dest[k]]++;
   }
-  for (PetscMPIInt q = 1; q < size; q++) sdispl[q] = sdispl[q - 1] + scount[q - 1];
-  for (PetscMPIInt q = 0; q < size; q++) fill[q] = sdispl[q];
+  for (PetscMPIInt q = 1; q < size; q++) fill[q] = fill[q - 1] + scount[q - 1];
   for (PetscInt k = 0; k < ct->n; k++) {
     MovingContact *m = &sendbuf[fill[dest[k]]++];
     m->a             = newidx[ct->c[k].a];
@@ -278,16 +260,7 @@ static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[],
     m->kind          = ct->c[k].kind;
     for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) m->r[j] = ct->c[k].r[j];
   }
-  PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, ct->comm));
-  for (PetscMPIInt q = 0; q < size; q++) {
-    rdispl[q] = (PetscMPIInt)nrecv;
-    nrecv += rcount[q];
-  }
-  PetscCall(PetscMalloc1(nrecv + 1, &recvbuf));
-  PetscCallMPI(MPI_Type_contiguous((PetscMPIInt)sizeof(MovingContact), MPI_BYTE, &ctype));
-  PetscCallMPI(MPI_Type_commit(&ctype));
-  PetscCallMPI(MPI_Alltoallv(sendbuf, scount, sdispl, ctype, recvbuf, rcount, rdispl, ctype, ct->comm));
-  PetscCallMPI(MPI_Type_free(&ctype));
+  PetscCall(KergsExchangeRecords(ct->comm, sizeof(MovingContact), scount, sendbuf, NULL, &recvbuf, &nrecv));
   if (nrecv > ct->nalloc) {
     PetscCall(PetscFree(ct->c));
     PetscCall(PetscMalloc1(nrecv, &ct->c));
@@ -309,8 +282,8 @@ static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[],
   PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));
   if (rank == 0) ct->start = 0; /* MPI_Exscan leaves rank 0's result undefined */
   PetscCall(PetscFree(recvbuf));
-  PetscCall(PetscFree4(scount, sdispl, rcount, rdispl));
-  PetscCall(PetscFree3(dest, sendbuf, fill));
+  PetscCall(PetscFree2(scount, fill));
+  PetscCall(PetscFree2(dest, sendbuf));
   PetscFunctionReturn(0);
 }
 
@@ -351,7 +324,7 @@ static PetscErrorCode MigrateOwned(KergsScene sc, KergsContacts ct, const PetscI
   PetscCall(PetscMalloc1(size + 1, &newranges));
   newranges[0] = 0;
   for (PetscMPIInt q = 0; q < size; q++) newranges[q + 1] = newranges[q] + counts[q];
-  for (PetscInt i = 0; i < sc->nowned; i++) moved += OwnerOf(newranges, size, newidx[i]) != rank;
+  for (PetscInt i = 0; i < sc->nowned; i++) moved += KergsRangeOwner(newranges, size, newidx[i]) != rank;
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &moved, 1, MPIU_INT, MPI_SUM, sc->comm));
   if (ct) PetscCall(MigrateContacts(ct, newidx, newranges, rank, size)); /* reads the owned disks before they move */
   PetscCall(KergsSceneMigrate(sc, newidx, counts));
@@ -687,7 +660,7 @@ static PetscErrorCode RelabelParts(PetscInt n, PetscInt nparts, const PetscInt o
   PetscCall(PetscMalloc3(n + 1, &o, nparts, &map, nparts, &taken));
   for (PetscInt i = 0; i < n; i++) {
     o[i].label   = part[i];
-    o[i].rank    = OwnerOf(oldranges, (PetscMPIInt)nparts, i);
+    o[i].rank    = KergsRangeOwner(oldranges, (PetscMPIInt)nparts, i);
     o[i].overlap = 1;
   }
   qsort(o, (size_t)n, sizeof(LabelOverlap), CompareLabelRank);

@@ -14,7 +14,7 @@
    Refresh: between rebuilds, the ghosts' positions, orientations and velocities are copied from their owners
    through a PetscSF (roots: owned disks; leaves: ghosts), one neighbour exchange per step. The layer is rebuilt
    when a disk moved more than skin / 2 since the last build (one max-reduction per step decides) and after a
-   migration. Migration moves whole disk records with MPI_Alltoallv. Disk records travel as bytes: the ranks of
+   migration. Migration moves whole disk records (KergsExchangeRecords). Disk records travel as bytes: the ranks of
    a run share one binary representation. */
 #include <kergs/scene.h>
 
@@ -61,33 +61,6 @@ static void UnpackDisk(KergsScene sc, PetscInt i, const DiskRecord *r)
     sc->rot[KERGS_NROT * i + d]   = r->rot[d];
     sc->omega[KERGS_NROT * i + d] = r->omega[d];
   }
-}
-
-/* Personalised exchange of disk records: send[] holds sendcount[q] records for rank q, in rank order. On return
-   *recv (PetscFree) holds the records received, in the order of their source ranks, and recvcount[q] how many
-   came from q. */
-static PetscErrorCode ExchangeDisks(MPI_Comm comm, const PetscMPIInt sendcount[], const DiskRecord send[], PetscMPIInt recvcount[],
-                                    DiskRecord **recv, PetscInt *nrecv)
-{
-  PetscMPIInt size, *sc, *sd, *rc, *rd;
-
-  PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_size(comm, &size));
-  PetscCallMPI(MPI_Alltoall((void *)sendcount, 1, MPI_INT, recvcount, 1, MPI_INT, comm));
-  PetscCall(PetscMalloc4(size, &sc, size, &sd, size, &rc, size, &rd));
-  *nrecv = 0;
-  for (PetscMPIInt q = 0, soff = 0; q < size; q++) {
-    sc[q] = sendcount[q] * (PetscMPIInt)sizeof(DiskRecord);
-    sd[q] = soff;
-    soff += sc[q];
-    rc[q] = recvcount[q] * (PetscMPIInt)sizeof(DiskRecord);
-    rd[q] = (PetscMPIInt)(*nrecv * (PetscInt)sizeof(DiskRecord));
-    *nrecv += recvcount[q];
-  }
-  PetscCall(PetscMalloc1(*nrecv + 1, recv));
-  PetscCallMPI(MPI_Alltoallv((void *)send, sc, sd, MPI_BYTE, *recv, rc, rd, MPI_BYTE, comm));
-  PetscCall(PetscFree4(sc, sd, rc, rd));
-  PetscFunctionReturn(0);
 }
 
 /* ------------------------------------------------------------------------------------------------ */
@@ -196,7 +169,7 @@ static PetscErrorCode RebuildGhosts(KergsScene sc)
   PetscCall(GatherBoxes(sc, &boxes, &rmax));
   PetscCall(PetscMalloc2(size, &sendcount, size, &recvcount));
   PetscCall(SelectGhostsToSend(sc, boxes, 2.0 * rmax + sc->alert + GhostSkin(sc, rmax), sendcount, &send));
-  PetscCall(ExchangeDisks(sc->comm, sendcount, send, recvcount, &recv, &nrecv));
+  PetscCall(KergsExchangeRecords(sc->comm, sizeof(DiskRecord), sendcount, send, recvcount, &recv, &nrecv));
   PetscCall(KergsSceneReserve(sc, sc->nowned + nrecv));
   PetscCall(PetscFree(sc->ghost_owner));
   PetscCall(PetscMalloc1(nrecv + 1, &sc->ghost_owner));
@@ -315,18 +288,6 @@ PetscErrorCode KergsSceneRefreshGhosts(KergsScene sc)
 /* ------------------------------------------------------------------------------------------------ */
 /* Migration                                                                                        */
 
-static PetscMPIInt OwnerOfIndex(const PetscInt ranges[], PetscMPIInt size, PetscInt g)
-{
-  PetscMPIInt lo = 0, hi = size - 1;
-
-  while (lo < hi) { /* the last rank q with ranges[q] <= g (empty ranks skipped) */
-    PetscMPIInt mid = (lo + hi + 1) / 2;
-    if (ranges[mid] <= g) lo = mid;
-    else hi = mid - 1;
-  }
-  return lo;
-}
-
 PetscErrorCode KergsSceneMigrate(KergsScene sc, const PetscInt newidx[], const PetscInt counts[])
 {
   PetscMPIInt size, rank, *sendcount, *recvcount;
@@ -347,17 +308,17 @@ PetscErrorCode KergsSceneMigrate(KergsScene sc, const PetscInt newidx[], const P
     PetscCheck(newidx[i] >= 0 && newidx[i] < sc->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
                "Migration of scene %s: disk %" PetscInt_FMT " gets global index %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")", sc->name,
                sc->dstart + i, newidx[i], sc->ndisks);
-    sendcount[OwnerOfIndex(ranges, size, newidx[i])]++;
+    sendcount[KergsRangeOwner(ranges, size, newidx[i])]++;
   }
   offset[0] = 0;
   for (PetscMPIInt q = 0; q < size; q++) offset[q + 1] = offset[q] + sendcount[q];
   PetscCall(PetscMalloc1(sc->nowned + 1, &send));
   for (PetscInt i = 0; i < sc->nowned; i++) {
-    DiskRecord *r = &send[offset[OwnerOfIndex(ranges, size, newidx[i])]++];
+    DiskRecord *r = &send[offset[KergsRangeOwner(ranges, size, newidx[i])]++];
     PackDisk(sc, i, r);
     r->gidx = newidx[i];
   }
-  PetscCall(ExchangeDisks(sc->comm, sendcount, send, recvcount, &recv, &nrecv));
+  PetscCall(KergsExchangeRecords(sc->comm, sizeof(DiskRecord), sendcount, send, recvcount, &recv, &nrecv));
   PetscCheck(nrecv == counts[rank], PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
              "Migration of scene %s: rank %d received %" PetscInt_FMT " disks, expected %" PetscInt_FMT " (newidx is not a permutation)", sc->name,
              rank, nrecv, counts[rank]);

@@ -20,4 +20,24 @@ PETSC_EXTERN PetscLogEvent KERGS_Exchange;
 PETSC_EXTERN PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
 PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
 
+/* Collective: personalised exchange of records of `size` bytes. send[] holds sendcount[q] records for rank q, grouped
+   by destination in rank order. On return *(void **)recv (PetscFree) holds the records received, grouped by source
+   in rank order, *nrecv their number, and recvcount[q] (may be NULL) how many came from rank q. The ranks of a run
+   share one binary representation. */
+PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const PetscMPIInt sendcount[], const void *send, PetscMPIInt recvcount[],
+                                                 void *recv, PetscInt *nrecv);
+/* The rank owning global index i when rank q owns [ranges[q], ranges[q+1]) (size + 1 entries, non-decreasing; an
+   empty rank is skipped: a later rank starts at the same index). */
+static inline PetscMPIInt KergsRangeOwner(const PetscInt ranges[], PetscMPIInt size, PetscInt i)
+{
+  PetscMPIInt lo = 0, hi = size - 1;
+
+  while (lo < hi) { /* the last rank q with ranges[q] <= i */
+    PetscMPIInt mid = (lo + hi + 1) / 2;
+    if (ranges[mid] <= i) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
+}
+
 #endif
