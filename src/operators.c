@@ -282,9 +282,10 @@ static PetscErrorCode DiskIncidence(KergsScene scene, KergsContacts ct, PetscInt
   PetscFunctionReturn(0);
 }
 
-/* The contacts at owned disk q with their rows on q's DOFs, into bc[0 .. m). */
+/* The contacts at owned disk q, into bc[0 .. m): index and owner, and with rows their rows on q's DOFs (the pattern
+   counts need no rows). */
 static PetscInt DiskContacts(KergsOperators ops, KergsScene scene, KergsContacts ct, const PetscInt *start, const PetscInt *list, PetscInt q,
-                             BodyContact *bc)
+                             PetscBool rows, BodyContact *bc)
 {
   const PetscInt nd = ops->ndof_disk, dof = KergsOperatorsDiskDof(ops, scene->gidx[q]);
   PetscMPIInt    rank;
@@ -296,7 +297,7 @@ static PetscInt DiskContacts(KergsOperators ops, KergsScene scene, KergsContacts
     const KergsContact *c  = e < ct->n ? &ct->c[e] : &ct->foreign[e - ct->n];
     bc[m].index            = e < ct->n ? ct->start + e : ct->foreign_index[e - ct->n];
     bc[m].owner            = e < ct->n ? rank : (PetscMPIInt)scene->ghost_owner[c->a - scene->nowned];
-    RestrictToBody(ops, scene, c, dof, nd, bc[m].h);
+    if (rows) RestrictToBody(ops, scene, c, dof, nd, bc[m].h);
   }
   return m;
 }
@@ -367,7 +368,7 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, KergsScene scene, Kerg
       PetscInt    f = list[j] - ct->n, d = 0, o = 0, *r;
       PetscMPIInt p;
       if (f < 0) continue;
-      if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, bc);
+      if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, PETSC_FALSE, bc);
       p = (PetscMPIInt)scene->ghost_owner[ct->foreign[f].a - scene->nowned];
       CountBlocks(bc, m, ct->foreign_index[f], p, PETSC_TRUE, &d, &o);
       r    = &send[3 * fill[p]++]; /* one record per foreign row: its index, then its counts */
@@ -460,7 +461,7 @@ static PetscErrorCode CountPattern(KergsOperators ops, KergsScene scene, KergsCo
     for (PetscInt j = start[q]; j < start[q + 1]; j++) {
       const PetscInt k = list[j];
       if (k >= ct->n) continue; /* a foreign row: counted by its owner, from CountRemoteRows */
-      if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, bc);
+      if (m < 0) m = DiskContacts(ops, scene, ct, start, list, q, PETSC_FALSE, bc);
       CountBlocks(bc, m, ct->start + k, rank, (PetscBool)(q != ct->c[k].a), &dnz[k], &onz[k]); /* at b: alpha is counted already */
     }
   }
@@ -491,7 +492,7 @@ static PetscErrorCode ComputeDelassus(KergsOperators ops, KergsScene scene, Kerg
   PetscCall(MatSetOption(ops->W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
   PetscCall(VecGetArrayRead(ops->Minv, &minv));
   for (PetscInt q = 0; q < scene->nowned; q++) {
-    const PetscInt m = DiskContacts(ops, scene, ct, start, list, q, bc);
+    const PetscInt m = DiskContacts(ops, scene, ct, start, list, q, PETSC_TRUE, bc);
     PetscCall(AddBodyBlocks(ops->W, nc, nd, &minv[q * nd], bc, m, NULL, m, cols, vals));
   }
   PetscCall(VecRestoreArrayRead(ops->Minv, &minv));
