@@ -109,25 +109,46 @@ PetscErrorCode KergsSweepDestroy(KergsSweep *sweep)
   PetscFunctionReturn(0);
 }
 
-/* Copy the diagonal blocks W_aa (row-major, as the law takes them; BAIJ stores a block column by column:
-   entry (c, e) at c + e*nc) and locate them in each sorted block row: the sweep skips the blocks
-   [dsplit[2a], dsplit[2a+1]) of row a, the own block (none if W_aa is not stored). */
-static PetscErrorCode ExtractDiagonalBlocks(KergsSweep s)
+/* W_aa of local contact a, row-major as the law takes it, into w (ncomp*ncomp). With upper storage W_aa is the first
+   block of row a (checked at set-up) and is read there, stored column by column (entry (c, e) at c + e*nc); with whole
+   storage from the copy Wdiag made at set-up. Inlined with a constant nc. */
+static inline KERGS_ALWAYS_INLINE void DiagonalBlock(const PetscInt nc, PetscInt a, const PetscInt *ai, const PetscScalar *aa, const PetscReal *Wdiag, PetscReal *w)
+{
+  PetscInt c, e;
+
+  if (Wdiag)
+    for (c = 0; c < nc * nc; c++) w[c] = Wdiag[a * nc * nc + c];
+  else
+    for (c = 0; c < nc; c++)
+      for (e = 0; e < nc; e++) w[c * nc + e] = PetscRealPart(aa[ai[a] * nc * nc + e * nc + c]);
+}
+
+PetscErrorCode KergsSweepGetDiagonalBlocks(KergsSweep s, PetscReal *blocks)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(s->W, s->comm, PETSC_ERR_ORDER, "KergsSweepGetDiagonalBlocks: call KergsSweepSetUp first");
+  for (PetscInt a = 0; a < s->n; a++) DiagonalBlock(s->ncomp, a, s->ai, s->aa, s->Wdiag, blocks + a * s->ncomp * s->ncomp);
+  PetscFunctionReturn(0);
+}
+
+/* Locate the own block W_aa in each sorted block row. Upper storage: it must be the first block of its row, where
+   the sweep reads it. Whole storage: the sweep skips the blocks [dsplit[2a], dsplit[2a+1]) of row a (none if W_aa
+   is not stored), and W_aa is copied row-major into Wdiag (BAIJ stores a block column by column: entry (c, e) at
+   c + e*nc). */
+static PetscErrorCode LocateDiagonalBlocks(KergsSweep s)
 {
   const PetscInt nc = s->ncomp, bs2 = nc * nc;
   PetscInt       a, c, e, j;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscCalloc1(s->n * bs2, &s->Wdiag));
-  if (s->upper) { /* row a starts with W_aa: no split to keep */
+  if (s->upper) {
     for (a = 0; a < s->n; a++) {
       j = s->ai[a];
       PetscCheck(j < s->ai[a + 1] && s->aj[j] == a, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "KergsSweepSetUp: W's diagonal block of local contact %" PetscInt_FMT " is not stored", a);
-      for (c = 0; c < nc; c++)
-        for (e = 0; e < nc; e++) s->Wdiag[a * bs2 + c * nc + e] = PetscRealPart(s->aa[j * bs2 + e * nc + c]);
     }
     PetscFunctionReturn(0);
   }
+  PetscCall(PetscCalloc1(s->n * bs2, &s->Wdiag));
   PetscCall(PetscMalloc1(2 * s->n, &s->dsplit));
   for (a = 0; a < s->n; a++) {
     for (j = s->ai[a]; j < s->ai[a + 1] && s->aj[j] < a; j++) { }
@@ -304,7 +325,7 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   PetscCall(GetBlockCSR(s->Ad, blocked, upper, &s->ai, &s->aj, &s->aa));
   if (s->ghost_scatter) PetscCall(PetscCalloc1(m, &s->boff)); /* none on one rank: no off-process part */
   if (upper) PetscCall(PetscMalloc1(m + 1, &s->acc));
-  PetscCall(ExtractDiagonalBlocks(s));
+  PetscCall(LocateDiagonalBlocks(s));
   PetscFunctionReturn(0);
 }
 
@@ -379,15 +400,14 @@ typedef struct {
    completes the sum; once r_a(new) is known the same row adds W_a,beta^T r_a(new) to acc_beta. nc is 1 or 2; the
    function is inlined with a constant nc so that the small loops over components unroll. */
 static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscInt *ds,
-                                 const PetscScalar *vd, const PetscReal *boff, const PetscReal *extra, const PetscReal *Wlaw, const PetscReal *Wd,
+                                 const PetscScalar *vd, const PetscReal *boff, const PetscReal *extra, const PetscReal *Wlaw, const PetscReal *Wdiag,
                                  const PetscReal *mu, const PetscBool *active, PetscScalar *r, PetscReal *acc, SweepSums *sums)
 {
-  PetscReal b[KERGS_MAXCOMP], rnew[KERGS_MAXCOMP], dr[KERGS_MAXCOMP], dWd, rWr;
+  PetscReal b[KERGS_MAXCOMP], rnew[KERGS_MAXCOMP], dr[KERGS_MAXCOMP], w[KERGS_MAXCOMP * KERGS_MAXCOMP], dWd, rWr;
   PetscInt  a, c, e, i;
 
   for (a = 0; a < n; a++) {
     const PetscBool act = active ? active[a] : PETSC_TRUE;
-    const PetscReal *w  = Wd + a * nc * nc;
     const PetscInt   jlow = acc ? ai[a] : ds[2 * a], jup = acc ? ai[a] + 1 : ds[2 * a + 1]; /* upper: W_aa first */
 
     if (act) {
@@ -402,7 +422,8 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
         if (extra) b[c] += extra[i];
       }
     }
-    KergsLawSolve(nc, Wlaw + a * nc * nc, b, mu ? mu[a] : 0.0, act, rnew);
+    DiagonalBlock(nc, a, ai, aa, Wdiag, w);
+    KergsLawSolve(nc, Wlaw ? Wlaw + a * nc * nc : w, b, mu ? mu[a] : 0.0, act, rnew);
     /* W_aa-weighted measures of the change (nlgs.h) */
     dWd = rWr = 0.0;
     for (c = 0; c < nc; c++) {
@@ -502,8 +523,8 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   PetscCall(VecGetArray(r, &rl));
   PetscCall(VecGetArrayRead(vd, &vdl));
   if (nc == 2)
-    SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override ? Wdiag_override : s->Wdiag, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
-  else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override ? Wdiag_override : s->Wdiag, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
+    SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
+  else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
   PetscCall(VecRestoreArrayRead(vd, &vdl));
   PetscCall(VecRestoreArray(r, &rl));
   /* upper storage: each stored off-diagonal block is applied twice (as itself and transposed) */
@@ -538,8 +559,10 @@ PetscErrorCode KergsSweepNaturalResidual(KergsSweep s, Vec r, Vec vd, Vec v, Pet
   PetscCall(VecGetArrayRead(r, &rl));
   PetscCall(VecGetArrayRead(v, &vl));
   for (a = 0; a < s->n; a++) {
+    PetscReal w[KERGS_MAXCOMP * KERGS_MAXCOMP];
     /* rho = 1 / W_aa,nn turns the velocity into an impulse (law.h) */
-    rho = s->Wdiag[a * nc * nc] > 0 ? 1.0 / s->Wdiag[a * nc * nc] : 1.0;
+    DiagonalBlock(nc, a, s->ai, s->aa, s->Wdiag, w);
+    rho = w[0] > 0 ? 1.0 / w[0] : 1.0;
     sums[0] += KergsLawNaturalResidual2(nc, rl + a * nc, vl + a * nc, s->mu ? s->mu[a] : 0.0, rho, s->active ? s->active[a] : PETSC_TRUE);
     for (c = 0; c < nc; c++) sums[1] += rl[a * nc + c] * rl[a * nc + c];
   }

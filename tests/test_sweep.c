@@ -410,7 +410,8 @@ static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
   PetscCall(VecGetArrayRead(rtilde, &rt));
   for (i = 0; i < n * ncomp; i++) extra[i] = -omega * rt[i];
   PetscCall(VecRestoreArrayRead(rtilde, &rt));
-  for (i = 0; i < n * ncomp * ncomp; i++) Wd[i] = sweep->Wdiag[i] + ((i % (ncomp * ncomp)) % (ncomp + 1) == 0 ? omega : 0.0);
+  PetscCall(KergsSweepGetDiagonalBlocks(sweep, Wd));
+  for (i = 0; i < n * ncomp * ncomp; i++) Wd[i] += (i % (ncomp * ncomp)) % (ncomp + 1) == 0 ? omega : 0.0;
   PetscCall(SolveBySweeps(sweep, r, vd, extra, Wd, 1e-12, 5000, &its, &quad0));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &resplain));
 

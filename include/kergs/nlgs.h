@@ -19,7 +19,8 @@ struct _p_KergsSweep {
   PetscBool upper;            /* W is (seq|mpi)sbaij: only the blocks W_alpha,beta with beta >= alpha are stored */
   const PetscInt    *ai, *aj, *bi, *bj; /* block CSR of Ad and Ao: block rows = local contacts */
   const PetscScalar *aa, *ba;           /* their values, ncomp*ncomp per block, each block column by column */
-  PetscReal *Wdiag;           /* n blocks of ncomp x ncomp: W_alpha,alpha */
+  PetscReal *Wdiag;           /* whole storage: n blocks of ncomp x ncomp, W_alpha,alpha row-major (NULL with upper storage, which
+                                 the sweep reads in place); see KergsSweepGetDiagonalBlocks */
   PetscReal *mu;              /* per contact (the caller's array; NULL: frictionless) */
   PetscBool *active;          /* per contact: predicted gap <= 0 (the caller's array; NULL: all active) */
   Vec        rghost;          /* off-process impulses, ordered as Ao's (block) columns */
@@ -49,8 +50,10 @@ PETSC_EXTERN PetscErrorCode KergsSweepCreate(MPI_Comm, KergsSweep *);
 /* Take W (assembled (seq|mpi)sbaij or (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when ncomp = 1, for the current contacts, row and column layouts
    equal, ncomp rows per local contact) and per-contact mu and activity. Keeps a reference to W and its CSR arrays, and the pointers mu and
    active (owned by the caller, read at every sweep). Calling it again resets first; if W's values change,
-   call it again (the diagonal blocks are copied). */
+   call it again. */
 PETSC_EXTERN PetscErrorCode KergsSweepSetUp(KergsSweep, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active);
+/* The diagonal blocks W_aa of the local contacts, n blocks of ncomp x ncomp row-major, into blocks (the caller's). */
+PETSC_EXTERN PetscErrorCode KergsSweepGetDiagonalBlocks(KergsSweep, PetscReal *blocks);
 /* One sweep: r (local array, updated in place) for v = W r + vd (+ extra). Collective.
    extra (optional): n*ncomp values added to each contact's right-hand side, fixed during the sweep.
    Wdiag_override (optional): n blocks of ncomp x ncomp used by the law instead of W_aa (NLGS-Jac: W_aa + Z_aa). */

@@ -22,7 +22,8 @@ static PetscErrorCode KergsSolverSetUp_NLGSJac(KergsSolver s, KergsScene scene, 
   PetscFunctionBeginUser;
   PetscCall(KergsRegularisedSetUp(s, reg, scene, contacts, ops));
   PetscCall(KergsKernelComputeDiagonalBlocks(reg->kernel));
-  for (PetscInt i = 0; i < contacts->n * nb; i++) reg->Wdiag[i] = s->sweep->Wdiag[i] + reg->kernel->Zdiag[i];
+  PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, reg->Wdiag));
+  for (PetscInt i = 0; i < contacts->n * nb; i++) reg->Wdiag[i] += reg->kernel->Zdiag[i];
   PetscFunctionReturn(0);
 }
 
