@@ -355,11 +355,8 @@ static int CompareHistoryQsort(const void *p, const void *q)
 static PetscErrorCode SaveHistory(KergsContacts ct)
 {
   PetscFunctionBeginUser;
-  if (ct->n > ct->nprevalloc) {
-    PetscCall(PetscFree(ct->prev));
-    ct->nprevalloc = PetscMax(ct->n, 2 * ct->nprevalloc);
-    PetscCall(PetscMalloc1(ct->nprevalloc, &ct->prev));
-  }
+  PetscCall(PetscFree(ct->prev));
+  PetscCall(PetscMalloc1(ct->n + 1, &ct->prev));
   ct->nprev = ct->n;
   for (PetscInt i = 0; i < ct->n; i++) {
     KergsContactHistory *h = &ct->prev[i];
@@ -490,6 +487,9 @@ static PetscErrorCode DetectContacts(KergsContacts ct, KergsScene scene)
   }
   PetscCall(PetscFree(frames));
   PetscCall(CarryOverImpulses(ct));
+  /* the history served its purpose: freed, so that it does not add to the step's peak memory (the solve) */
+  PetscCall(PetscFree(ct->prev));
+  ct->nprev = 0;
   PetscCall(SetGlobalNumbering(ct));
   PetscCall(NumberForeignContacts(ct, scene));
   for (PetscInt i = 0; i < ct->n; i++) npersistent += ct->c[i].persistent;

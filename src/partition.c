@@ -277,7 +277,6 @@ static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[],
   }
   qsort(ct->c, (size_t)nrecv, sizeof(KergsContact), CompareContactKeys);
   ct->n     = nrecv;
-  ct->nprev = 0; /* the history is in the old numbering: superseded by this list */
   ct->start = 0;
   PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));
   if (rank == 0) ct->start = 0; /* MPI_Exscan leaves rank 0's result undefined */

@@ -49,8 +49,8 @@ struct _p_KergsContacts {
   PetscInt      nforeign, nforeignalloc;
   KergsContact *foreign;
   PetscInt     *foreign_index;
-  /* previous detection, for persistence, sorted by (a, kind, idb) */
-  PetscInt             nprev, nprevalloc;
+  /* previous detection, for persistence, sorted by (a, kind, idb); exists only during a detection */
+  PetscInt             nprev;
   KergsContactHistory *prev;
   /* broad-phase workspace: cell list over the bounding box of the disk centres, rebuilt by every call.
      cellhead[cell] is the highest disk index in the cell (-1: empty), next[i] the next lower index in
