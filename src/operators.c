@@ -15,10 +15,8 @@ PetscErrorCode KergsOperatorsCreate(MPI_Comm comm, KergsOperators *ops)
 static PetscErrorCode DestroyStepObjects(KergsOperators ops)
 {
   PetscFunctionBeginUser;
-  PetscCall(MatDestroy(&ops->HfT));
-  PetscCall(MatDestroy(&ops->Hf));
-  PetscCall(MatDestroy(&ops->HgT));
-  PetscCall(MatDestroy(&ops->W));
+  PetscCall(KergsOperatorsReleaseH(ops));
+  PetscCall(KergsOperatorsReleaseW(ops));
   PetscCall(VecDestroy(&ops->vd));
   PetscCall(VecDestroy(&ops->vminus));
   PetscCall(VecDestroy(&ops->r));
@@ -34,7 +32,6 @@ PetscErrorCode KergsOperatorsDestroy(KergsOperators *ops)
   PetscCall(VecDestroy(&(*ops)->Minv));
   PetscCall(VecDestroy(&(*ops)->Vf));
   PetscCall(VecDestroy(&(*ops)->Rd));
-  PetscCall(VecDestroy(&(*ops)->R));
   PetscCall(VecDestroy(&(*ops)->Vg));
   PetscCall(PetscFree((*ops)->wall_dof));
   PetscCall(PetscFree(*ops));
@@ -77,12 +74,10 @@ static PetscErrorCode SetUpDofLayout(KergsOperators ops, KergsScene scene)
   PetscCall(VecDestroy(&ops->Vf));
   PetscCall(VecDestroy(&ops->Minv));
   PetscCall(VecDestroy(&ops->Rd));
-  PetscCall(VecDestroy(&ops->R));
   PetscCall(VecDestroy(&ops->Vg));
   PetscCall(VecCreateMPI(ops->comm, nfree_local, ops->nfree, &ops->Vf));
   PetscCall(VecDuplicate(ops->Vf, &ops->Minv));
   PetscCall(VecDuplicate(ops->Vf, &ops->Rd));
-  PetscCall(VecDuplicate(ops->Vf, &ops->R));
   if (ng) PetscCall(VecCreateMPI(ops->comm, ngiven_local, ops->ngiven, &ops->Vg));
   PetscFunctionReturn(0);
 }
@@ -525,22 +520,84 @@ static PetscErrorCode ComputeFreeVelocity(KergsOperators ops)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsOperatorsAssemble(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+PetscErrorCode KergsOperatorsBuildH(KergsOperators ops, KergsScene scene, KergsContacts contacts)
 {
+  MatInfo info;
+
   PetscFunctionBeginUser;
-  PetscCall(PetscLogEventBegin(KERGS_Assemble, 0, 0, 0, 0));
-  PetscCall(DestroyStepObjects(ops));
-  PetscCall(SetUpDofLayout(ops, scene));
-  PetscCall(SetDofVectors(ops, scene));
+  PetscCall(KergsOperatorsReleaseH(ops));
   PetscCall(CreateHt(ops, scene, contacts, PETSC_TRUE, ops->nfree_local, ops->nfree, &ops->HfT));
   if (ops->ndrivenwalls) {
     PetscInt nglocal;
     PetscCall(VecGetLocalSize(ops->Vg, &nglocal));
     PetscCall(CreateHt(ops, scene, contacts, PETSC_FALSE, nglocal, ops->ngiven, &ops->HgT));
   }
-  PetscCall(ComputeDelassus(ops, scene, contacts));
+  PetscCall(MatGetInfo(ops->HfT, MAT_GLOBAL_SUM, &info));
+  ops->nnz_Hf = info.nz_used;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsReleaseH(KergsOperators ops)
+{
+  PetscFunctionBeginUser;
+  PetscCall(MatDestroy(&ops->HfT));
+  PetscCall(MatDestroy(&ops->Hf));
+  PetscCall(MatDestroy(&ops->HgT));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsAssembleH(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(KERGS_Assemble, 0, 0, 0, 0));
+  PetscCall(DestroyStepObjects(ops));
+  PetscCall(SetUpDofLayout(ops, scene));
+  PetscCall(SetDofVectors(ops, scene));
+  PetscCall(KergsOperatorsBuildH(ops, scene, contacts));
   PetscCall(ComputeFreeVelocity(ops));
   PetscCall(PetscLogEventEnd(KERGS_Assemble, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* Scalar nonzeros of the whole W, as if stored in full: nz_used counts ncomp^2 per stored block, and an SBAIJ W
+   stores the upper block triangle only, so that full = 2 stored - (diagonal blocks: ncomp^2 per contact). */
+static PetscErrorCode FullNonzerosW(Mat W, PetscReal *nnz)
+{
+  MatInfo  info;
+  PetscInt N, bs;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetInfo(W, MAT_GLOBAL_SUM, &info));
+  PetscCall(MatGetSize(W, &N, NULL));
+  PetscCall(MatGetBlockSize(W, &bs));
+  *nnz = 2.0 * info.nz_used - (PetscReal)N * bs;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsAssembleW(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ops->Minv && ops->vd, ops->comm, PETSC_ERR_ORDER, "KergsOperatorsAssembleW: call KergsOperatorsAssembleH first");
+  PetscCall(PetscLogEventBegin(KERGS_Assemble, 0, 0, 0, 0));
+  PetscCall(KergsOperatorsReleaseW(ops));
+  PetscCall(ComputeDelassus(ops, scene, contacts));
+  PetscCall(FullNonzerosW(ops->W, &ops->nnz_W));
+  PetscCall(PetscLogEventEnd(KERGS_Assemble, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsReleaseW(KergsOperators ops)
+{
+  PetscFunctionBeginUser;
+  PetscCall(MatDestroy(&ops->W));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsAssemble(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsOperatorsAssembleH(ops, scene, contacts));
+  PetscCall(KergsOperatorsAssembleW(ops, scene, contacts));
   PetscFunctionReturn(0);
 }
 
@@ -591,13 +648,16 @@ PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene sce
   const PetscScalar *vf;
   PetscInt           nd = ops->ndof_disk, lo;
   PetscMPIInt        size;
+  Vec                R;
 
   PetscFunctionBeginUser;
+  PetscCheck(ops->HfT, ops->comm, PETSC_ERR_ORDER, "KergsOperatorsUpdateVelocities: H_f was released; call KergsOperatorsBuildH first");
   /* V_f^+ = V_f^- + M^-1 (H_f r + R^d) */
-  PetscCall(MatMultTranspose(ops->HfT, ops->r, ops->R));
-  PetscCall(VecAXPY(ops->R, 1.0, ops->Rd));
-  PetscCall(VecPointwiseMult(ops->R, ops->R, ops->Minv));
-  PetscCall(VecAXPY(ops->Vf, 1.0, ops->R));
+  PetscCall(VecDuplicate(ops->Vf, &R));
+  PetscCall(MatMultTransposeAdd(ops->HfT, ops->r, ops->Rd, R));
+  PetscCall(VecPointwiseMult(R, R, ops->Minv));
+  PetscCall(VecAXPY(ops->Vf, 1.0, R));
+  PetscCall(VecDestroy(&R));
   /* each rank's V_f holds its own disks' DOFs: copy them into the owned disks (ghosts follow in
      KergsSceneRefreshGhosts) */
   PetscCall(VecGetOwnershipRange(ops->Vf, &lo, NULL));

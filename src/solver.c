@@ -49,7 +49,8 @@ PetscErrorCode KergsSolverSetType(KergsSolver s, KergsSolverType type)
   PetscCheck(create, s->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "Unknown -solver_type %s (see -help for the registered types)", type);
   if (s->ops.destroy) PetscCall((*s->ops.destroy)(s));
   PetscCall(PetscMemzero(&s->ops, sizeof(s->ops)));
-  s->data = NULL;
+  s->data    = NULL;
+  s->needs_H = PETSC_FALSE;
   PetscCall(PetscStrncpy(s->type, type, sizeof(s->type)));
   PetscCall((*create)(s));
   PetscFunctionReturn(0);
@@ -164,33 +165,11 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscFunctionReturn(0);
 }
 
-/* Scalar nonzeros of the whole W, as if stored in full: nz_used counts ncomp^2 per stored block, and an SBAIJ W
-   stores the upper block triangle only, so that full = 2 stored - (diagonal blocks: ncomp^2 per contact). */
-static PetscErrorCode FullNonzerosW(Mat W, PetscReal *nnz)
-{
-  MatInfo   info;
-  PetscBool upper;
-  PetscInt  N, bs;
-
-  PetscFunctionBeginUser;
-  PetscCall(MatGetInfo(W, MAT_GLOBAL_SUM, &info));
-  PetscCall(PetscObjectTypeCompareAny((PetscObject)W, &upper, MATSEQSBAIJ, MATMPISBAIJ, ""));
-  PetscCall(MatGetSize(W, &N, NULL));
-  PetscCall(MatGetBlockSize(W, &bs));
-  *nnz = upper ? 2.0 * info.nz_used - (PetscReal)N * bs : info.nz_used;
-  PetscFunctionReturn(0);
-}
-
 PetscErrorCode KergsSolverRecordStats(KergsSolver s, KergsOperators ops, KergsResults res)
 {
-  MatInfo   info;
-  PetscReal nnzW = 0.0;
-
   PetscFunctionBeginUser;
-  PetscCall(MatGetInfo(ops->HfT, MAT_GLOBAL_SUM, &info));
-  PetscCall(KergsResultsRecord(res, "nnz_Hf", info.nz_used));
-  PetscCall(FullNonzerosW(ops->W, &nnzW));
-  PetscCall(KergsResultsRecord(res, "nnz_W", nnzW));
+  PetscCall(KergsResultsRecord(res, "nnz_Hf", ops->nnz_Hf));
+  PetscCall(KergsResultsRecord(res, "nnz_W", ops->nnz_W));
   if (s->ops.record) PetscCall((*s->ops.record)(s, res));
   PetscFunctionReturn(0);
 }

@@ -54,6 +54,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path), NULL));
   PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair", "", st->overlap_tol, &st->overlap_tol, NULL));
   PetscCall(PetscOptionsBool("-quiet", "Do not print a summary line per step", "", st->quiet, &st->quiet, NULL));
+  PetscCall(PetscOptionsBool("-keep_H", "Keep H_f and H_g through the solve, next to W (default: freed before W is assembled and H_f assembled again for the velocity update, so that the peak memory is the larger of H and W, not their sum; solvers that use H keep it anyway)", "", st->keep_H, &st->keep_H, NULL));
   PetscOptionsEnd();
   PetscCheck(st->rest_speed >= 0 && !PetscIsInfOrNanReal(st->rest_speed), st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-stop_at_rest %g must be a non-negative speed", (double)st->rest_speed);
   PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative", (double)st->overlap_tol);
@@ -207,7 +208,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   KergsSolveStats ss;
   PetscLogDouble  t0, t1, t2;
   PetscReal      *vold, *wold, *wvold;
-  PetscBool       due;
+  PetscBool       due, keepH;
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&st->step_start));
@@ -219,13 +220,21 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(KergsContactsDetect(st->contacts, sc));
   if (sc->step == 0) PetscCall(CheckInitialOverlaps(st));
   PetscCall(PetscTime(&t1));
-  PetscCall(KergsOperatorsAssemble(st->ops, sc, st->contacts));
+  /* H and v^d, then W; unless kept, H is freed before W exists and built again for the update, after W is freed */
+  keepH = (PetscBool)(st->keep_H || st->solver->needs_H);
+  PetscCall(KergsOperatorsAssembleH(st->ops, sc, st->contacts));
+  if (!keepH) PetscCall(KergsOperatorsReleaseH(st->ops));
+  PetscCall(KergsOperatorsAssembleW(st->ops, sc, st->contacts));
   PetscCall(KergsOperatorsGetImpulses(st->ops, st->contacts)); /* warm start */
   PetscCall(PetscTime(&t2));
   PetscCall(KergsSolverSolve(st->solver, sc, st->contacts, st->ops, &ss));
   PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
   if (sc->step == st->fclib_step) PetscCall(KergsFCLibExport(sc, st->contacts, st->ops, st->solver->active, st->fclib_path));
   PetscCall(PetscLogEventBegin(KERGS_Update, 0, 0, 0, 0));
+  if (!keepH) {
+    PetscCall(KergsOperatorsReleaseW(st->ops));
+    PetscCall(KergsOperatorsBuildH(st->ops, sc, st->contacts));
+  }
   PetscCall(SaveVelocities(sc, &vold, &wold, &wvold));
   PetscCall(KergsOperatorsUpdateVelocities(st->ops, sc));
   PetscCall(UpdatePositions(sc, vold, wold, wvold));

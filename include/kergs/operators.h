@@ -32,14 +32,23 @@ struct _p_KergsOperators {
   Vec vd;             /* free local velocity v^d */
   Vec vminus;         /* local velocity at the start of the step, H_f^T V_f^- + H_g^T V_g (for the LMGC90 gap rule) */
   Vec r, v;           /* contact impulses and local velocities */
-  Vec R;              /* H_f r */
   PetscInt   nfree, nfree_local, ngiven; /* free DOFs (global, local), given DOFs */
   PetscInt   dstart;                      /* first disk of this rank when the DOF vectors were built */
+  PetscReal  nnz_Hf, nnz_W;               /* global nonzeros of H_f and of the whole W (both triangles) when built */
 };
 
 PETSC_EXTERN PetscErrorCode KergsOperatorsCreate(MPI_Comm, KergsOperators *);
-/* Build H_f^T, H_g^T, M^-1, W, V_f^-, V_g^+, R^d, v^d for the current scene and contact set. */
+/* Build H_f^T, H_g^T, M^-1, W, V_f^-, V_g^+, R^d, v^d for the current scene and contact set: AssembleH then AssembleW. */
 PETSC_EXTERN PetscErrorCode KergsOperatorsAssemble(KergsOperators, KergsScene, KergsContacts);
+/* The two halves, for a caller that frees H before W exists (the time step, so that its peak memory is the larger of
+   H and W, not their sum). AssembleH: the DOF vectors, H_f^T, H_g^T, v^d, v^-, and r, v (the step's other objects are
+   destroyed). AssembleW: W, from the contacts and M^-1 (no H needed). BuildH: H_f^T and H_g^T again (after
+   ReleaseH, for the velocity update). Release*: destroy them. */
+PETSC_EXTERN PetscErrorCode KergsOperatorsAssembleH(KergsOperators, KergsScene, KergsContacts);
+PETSC_EXTERN PetscErrorCode KergsOperatorsAssembleW(KergsOperators, KergsScene, KergsContacts);
+PETSC_EXTERN PetscErrorCode KergsOperatorsBuildH(KergsOperators, KergsScene, KergsContacts);
+PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseH(KergsOperators);
+PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseW(KergsOperators);
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetHf(KergsOperators, Mat *);
 /* W with both triangles stored, (MPI)BAIJ with block size ncomp ((MPI)AIJ when ncomp = 1), for the users that need
    whole rows (a new matrix: MatDestroy it) */
@@ -47,7 +56,7 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsGetFullW(KergsOperators, Mat *);
 /* r <- impulses stored in the contacts; contacts <- r (after a solve; the local velocities stay in ops->v) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetImpulses(KergsOperators, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsSetImpulses(KergsOperators, KergsContacts);
-/* V_f^+ = V_f^- + M^-1 (H_f r + R^d), then copy the new velocities into the owned disks (velocities, angular
+/* V_f^+ = V_f^- + M^-1 (H_f r + R^d) (needs H_f), then copy the new velocities into the owned disks (velocities, angular
    velocities when the scene rotates) and the free walls (broadcast from their owner, the last rank) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators, KergsScene);
 /* Global free DOF index of the first DOF of the disk of global index i (scene->gidx[local index]) */

@@ -22,6 +22,7 @@ struct _p_KergsStepper {
   PetscInt       fclib_step;     /* -fclib_step: export this step's problem (-1: none) */
   char           fclib_path[PETSC_MAX_PATH_LEN];
   PetscBool      quiet;          /* -quiet: no per-step summary line */
+  PetscBool      keep_H;         /* -keep_H: H_f, H_g live through the solve next to W (otherwise freed before W is built) */
   PetscReal      overlap_tol;    /* -initial_overlap_tol: initial interpenetration allowed, relative to the smaller radius */
   PetscInt       nonconverged;   /* steps whose solve hit max_it */
   PetscReal      max_violation;  /* largest interpenetration seen over the run */

@@ -97,6 +97,7 @@ PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver s)
 
   PetscFunctionBeginUser;
   PetscCall(KergsRegularisedCreate(s->comm, &reg));
+  s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */
   s->data               = reg;
   s->ops.setfromoptions = KergsSolverSetFromOptions_NLGSJac;
   s->ops.setup          = KergsSolverSetUp_NLGSJac;

@@ -116,6 +116,7 @@ PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver s)
   nk->max_size = 6000;
   PetscCall(KergsRegularisedCreate(s->comm, &nk->reg));
   PetscCall(KergsSweepCreate(s->comm, &nk->sweep));
+  s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */
   s->data               = nk;
   s->ops.setfromoptions = KergsSolverSetFromOptions_NLKerGS;
   s->ops.setup          = KergsSolverSetUp_NLKerGS;
