@@ -54,6 +54,7 @@ int main(int argc, char **argv)
   KergsStepper stepper;
   PetscBool    want_help = PETSC_FALSE;
 
+  KergsReturnFreedMemory(); /* peak resident memory = peak of live data (base.h) */
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
   PetscCall(KergsInitializePackage());
   PetscCall(PetscOptionsHasHelp(NULL, &want_help));

@@ -26,6 +26,9 @@ PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
    share one binary representation. */
 PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const PetscMPIInt sendcount[], const void *send, PetscMPIInt recvcount[],
                                                  void *recv, PetscInt *nrecv);
+/* Let the C library return freed blocks to the system (glibc: large blocks mapped on their own, heap tops trimmed),
+   undoing a process-wide setting of a library PETSc loads; no-op elsewhere. Call it once, first thing in main. */
+PETSC_EXTERN void KergsReturnFreedMemory(void);
 /* The rank owning global index i when rank q owns [ranges[q], ranges[q+1]) (size + 1 entries, non-decreasing; an
    empty rank is skipped: a later rank starts at the same index). */
 static inline PetscMPIInt KergsRangeOwner(const PetscInt ranges[], PetscMPIInt size, PetscInt i)
