@@ -513,3 +513,17 @@ PetscErrorCode KergsContactsDetect(KergsContacts ct, KergsScene scene)
   PetscCall(ierr);
   PetscFunctionReturn(0);
 }
+
+PetscBool KergsContactIsActive(KergsScene scene, const KergsContact *c)
+{
+  PetscReal g = c->gap;
+
+  if (scene->gaprule == KERGS_GAP_LMGC90) {
+    const PetscReal *va = &scene->v[KERGS_DIM * c->a];
+    const PetscReal *vb = c->kind == KERGS_CONTACT_DISK_DISK ? &scene->v[KERGS_DIM * c->b] : scene->walls[c->b].v;
+    PetscReal        vn = 0.0; /* the normal row of H^T has no rotation term */
+    for (PetscInt d = 0; d < KERGS_DIM; d++) vn += c->n[d] * (va[d] - vb[d]);
+    g += (1.0 - scene->theta) * scene->dt * vn;
+  }
+  return (PetscBool)(g <= 0.0);
+}

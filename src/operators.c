@@ -18,7 +18,6 @@ static PetscErrorCode DestroyStepObjects(KergsOperators ops)
   PetscCall(KergsOperatorsReleaseH(ops));
   PetscCall(KergsOperatorsReleaseW(ops));
   PetscCall(VecDestroy(&ops->vd));
-  PetscCall(VecDestroy(&ops->vminus));
   PetscCall(VecDestroy(&ops->r));
   PetscCall(VecDestroy(&ops->v));
   PetscFunctionReturn(0);
@@ -230,12 +229,20 @@ static PetscErrorCode CreateHt(KergsOperators ops, KergsScene scene, KergsContac
    computed and counted. Nothing of the size of W or H_f is built on the side.
 */
 
-/* A contact at one body: global index, owning rank, and its rows of H_f^T on the body's DOFs (h[c * nd + j]). */
+/* A contact at one body: global index, owning rank, whether it is coupled to the others (active, or W over all
+   pairs), and its rows of H_f^T on the body's DOFs (h[c * nd + j]). */
 typedef struct {
   PetscInt    index;
   PetscMPIInt owner;
+  PetscBool   coupled;
   PetscReal   h[KERGS_MAXCOMP * (KERGS_DIM + KERGS_NROT)];
 } BodyContact;
+
+/* Whether W stores the block W_alpha,beta: the own block always; another only between coupled contacts. */
+static inline PetscBool StoredBlock(const BodyContact *alpha, const BodyContact *beta)
+{
+  return (PetscBool)(alpha->index == beta->index || (alpha->coupled && beta->coupled));
+}
 
 /* The rows of contact ct restricted to the DOFs [dof, dof + nd) of one of its bodies. */
 static void RestrictToBody(KergsOperators ops, KergsScene scene, const KergsContact *ct, PetscInt dof, PetscInt nd, PetscReal *h)
@@ -292,6 +299,7 @@ static PetscInt DiskContacts(KergsOperators ops, KergsScene scene, KergsContacts
     const KergsContact *c  = e < ct->n ? &ct->c[e] : &ct->foreign[e - ct->n];
     bc[m].index            = e < ct->n ? ct->start + e : ct->foreign_index[e - ct->n];
     bc[m].owner            = e < ct->n ? rank : (PetscMPIInt)scene->ghost_owner[c->a - scene->nowned];
+    bc[m].coupled          = ops->W_active_only ? KergsContactIsActive(scene, c) : PETSC_TRUE;
     if (rows) RestrictToBody(ops, scene, c, dof, nd, bc[m].h);
   }
   return m;
@@ -313,6 +321,7 @@ static PetscErrorCode WallContacts(KergsOperators ops, KergsScene scene, KergsCo
     if (ct->c[k].kind == KERGS_CONTACT_DISK_WALL && ct->c[k].b == w) {
       mine[i].index = ct->start + k;
       mine[i].owner = rank;
+      mine[i].coupled = ops->W_active_only ? KergsContactIsActive(scene, &ct->c[k]) : PETSC_TRUE;
       RestrictToBody(ops, scene, &ct->c[k], ops->wall_dof[w], KERGS_DIM, mine[i++].h);
     }
   PetscCall(PetscMalloc2(size, &counts, size, &displs));
@@ -331,12 +340,16 @@ static PetscErrorCode WallContacts(KergsOperators ops, KergsScene scene, KergsCo
 }
 
 /* Upper block pattern counts of row alpha (global contact index `row`) from the contacts bc[0 .. m) at one of its
-   bodies: only the blocks W_alpha,beta with beta >= alpha are stored. Alpha is among them; when it is counted
-   twice (dup) it is taken off once. The diagonal part holds those of rank `owner`. */
+   bodies: only the blocks W_alpha,beta with beta >= alpha are stored (and StoredBlock). Alpha is among them; when it
+   is counted twice (dup) it is taken off once. The diagonal part holds those of rank `owner`. */
 static void CountBlocks(const BodyContact *bc, PetscInt m, PetscInt row, PetscMPIInt owner, PetscBool dup, PetscInt *d, PetscInt *o)
 {
+  const BodyContact *alpha = NULL;
+
+  for (PetscInt j = 0; j < m && !alpha; j++)
+    if (bc[j].index == row) alpha = &bc[j];
   for (PetscInt j = 0; j < m; j++) {
-    if (bc[j].index < row) continue;
+    if (bc[j].index < row || !StoredBlock(alpha, &bc[j])) continue;
     if (bc[j].owner == owner) (*d)++;
     else (*o)++;
   }
@@ -397,7 +410,7 @@ static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const Petsc
     const BodyContact *a = &bc[rows ? rows[i] : i];
     PetscInt           n = 0;
     for (PetscInt j = 0; j < m; j++)
-      if (bc[j].index >= a->index) cols[n++] = j;
+      if (bc[j].index >= a->index && StoredBlock(a, &bc[j])) cols[n++] = j;
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt c = 0; c < nc; c++)
         for (PetscInt e = 0; e < nc; e++) {
@@ -500,38 +513,27 @@ static PetscErrorCode ComputeDelassus(KergsOperators ops, KergsScene scene, Kerg
   PetscFunctionReturn(0);
 }
 
-/* v^d = H_f^T (V_f^- + M^-1 R^d) + H_g^T V_g^+, and v^- = H_f^T V_f^- + H_g^T V_g^+. */
-static PetscErrorCode ComputeFreeVelocity(KergsOperators ops)
+/* H_g^T: the given part of each contact's rows (NULL without driven walls). */
+static PetscErrorCode BuildHg(KergsOperators ops, KergsScene scene, KergsContacts contacts)
 {
-  Vec tmp;
+  PetscInt nglocal;
 
   PetscFunctionBeginUser;
-  PetscCall(MatCreateVecs(ops->HfT, NULL, &ops->vd));
-  PetscCall(VecDuplicate(ops->vd, &ops->vminus));
-  PetscCall(VecDuplicate(ops->vd, &ops->r));
-  PetscCall(VecDuplicate(ops->vd, &ops->v));
-  PetscCall(MatMult(ops->HfT, ops->Vf, ops->vminus));
-  if (ops->HgT) PetscCall(MatMultAdd(ops->HgT, ops->Vg, ops->vminus, ops->vminus));
-  PetscCall(VecDuplicate(ops->Vf, &tmp));
-  PetscCall(VecPointwiseMult(tmp, ops->Minv, ops->Rd));
-  PetscCall(MatMult(ops->HfT, tmp, ops->vd));
-  PetscCall(VecAXPY(ops->vd, 1.0, ops->vminus));
-  PetscCall(VecDestroy(&tmp));
+  PetscCall(MatDestroy(&ops->HgT));
+  if (!ops->ndrivenwalls) PetscFunctionReturn(0);
+  PetscCall(VecGetLocalSize(ops->Vg, &nglocal));
+  PetscCall(CreateHt(ops, scene, contacts, PETSC_FALSE, nglocal, ops->ngiven, &ops->HgT));
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsOperatorsBuildH(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+PetscErrorCode KergsOperatorsBuildHf(KergsOperators ops, KergsScene scene, KergsContacts contacts)
 {
   MatInfo info;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsOperatorsReleaseH(ops));
+  PetscCall(MatDestroy(&ops->HfT));
+  PetscCall(MatDestroy(&ops->Hf));
   PetscCall(CreateHt(ops, scene, contacts, PETSC_TRUE, ops->nfree_local, ops->nfree, &ops->HfT));
-  if (ops->ndrivenwalls) {
-    PetscInt nglocal;
-    PetscCall(VecGetLocalSize(ops->Vg, &nglocal));
-    PetscCall(CreateHt(ops, scene, contacts, PETSC_FALSE, nglocal, ops->ngiven, &ops->HgT));
-  }
   PetscCall(MatGetInfo(ops->HfT, MAT_GLOBAL_SUM, &info));
   ops->nnz_Hf = info.nz_used;
   PetscFunctionReturn(0);
@@ -546,15 +548,31 @@ PetscErrorCode KergsOperatorsReleaseH(KergsOperators ops)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsOperatorsAssembleH(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+/* v^d = H_g^T V_g^+ + H_f^T (V_f^- + M^-1 R^d), with r and v of the same layout. H_g^T comes and, unless kept, goes
+   before H_f^T is built, so that the two coexist only when kept. */
+PetscErrorCode KergsOperatorsAssembleH(KergsOperators ops, KergsScene scene, KergsContacts contacts, PetscBool keep)
 {
+  Vec tmp;
+
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(KERGS_Assemble, 0, 0, 0, 0));
   PetscCall(DestroyStepObjects(ops));
   PetscCall(SetUpDofLayout(ops, scene));
   PetscCall(SetDofVectors(ops, scene));
-  PetscCall(KergsOperatorsBuildH(ops, scene, contacts));
-  PetscCall(ComputeFreeVelocity(ops));
+  PetscCall(VecCreateMPI(ops->comm, contacts->n * ops->ncomp, PETSC_DETERMINE, &ops->vd));
+  PetscCall(VecDuplicate(ops->vd, &ops->r));
+  PetscCall(VecDuplicate(ops->vd, &ops->v));
+  PetscCall(BuildHg(ops, scene, contacts));
+  if (ops->HgT) PetscCall(MatMult(ops->HgT, ops->Vg, ops->vd));
+  else PetscCall(VecZeroEntries(ops->vd));
+  if (!keep) PetscCall(MatDestroy(&ops->HgT));
+  PetscCall(KergsOperatorsBuildHf(ops, scene, contacts));
+  PetscCall(VecDuplicate(ops->Vf, &tmp));
+  PetscCall(VecPointwiseMult(tmp, ops->Minv, ops->Rd));
+  PetscCall(VecAXPY(tmp, 1.0, ops->Vf));
+  PetscCall(MatMultAdd(ops->HfT, tmp, ops->vd, ops->vd));
+  PetscCall(VecDestroy(&tmp));
+  if (!keep) PetscCall(KergsOperatorsReleaseH(ops));
   PetscCall(PetscLogEventEnd(KERGS_Assemble, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -574,12 +592,13 @@ static PetscErrorCode FullNonzerosW(Mat W, PetscReal *nnz)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsOperatorsAssembleW(KergsOperators ops, KergsScene scene, KergsContacts contacts)
+PetscErrorCode KergsOperatorsAssembleW(KergsOperators ops, KergsScene scene, KergsContacts contacts, PetscBool activeonly)
 {
   PetscFunctionBeginUser;
   PetscCheck(ops->Minv && ops->vd, ops->comm, PETSC_ERR_ORDER, "KergsOperatorsAssembleW: call KergsOperatorsAssembleH first");
   PetscCall(PetscLogEventBegin(KERGS_Assemble, 0, 0, 0, 0));
   PetscCall(KergsOperatorsReleaseW(ops));
+  ops->W_active_only = activeonly;
   PetscCall(ComputeDelassus(ops, scene, contacts));
   PetscCall(FullNonzerosW(ops->W, &ops->nnz_W));
   PetscCall(PetscLogEventEnd(KERGS_Assemble, 0, 0, 0, 0));
@@ -596,8 +615,8 @@ PetscErrorCode KergsOperatorsReleaseW(KergsOperators ops)
 PetscErrorCode KergsOperatorsAssemble(KergsOperators ops, KergsScene scene, KergsContacts contacts)
 {
   PetscFunctionBeginUser;
-  PetscCall(KergsOperatorsAssembleH(ops, scene, contacts));
-  PetscCall(KergsOperatorsAssembleW(ops, scene, contacts));
+  PetscCall(KergsOperatorsAssembleH(ops, scene, contacts, PETSC_TRUE));
+  PetscCall(KergsOperatorsAssembleW(ops, scene, contacts, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
 
@@ -651,7 +670,7 @@ PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene sce
   Vec                R;
 
   PetscFunctionBeginUser;
-  PetscCheck(ops->HfT, ops->comm, PETSC_ERR_ORDER, "KergsOperatorsUpdateVelocities: H_f was released; call KergsOperatorsBuildH first");
+  PetscCheck(ops->HfT, ops->comm, PETSC_ERR_ORDER, "KergsOperatorsUpdateVelocities: H_f was released; call KergsOperatorsBuildHf first");
   /* V_f^+ = V_f^- + M^-1 (H_f r + R^d) */
   PetscCall(VecDuplicate(ops->Vf, &R));
   PetscCall(MatMultTransposeAdd(ops->HfT, ops->r, ops->Rd, R));

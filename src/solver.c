@@ -76,11 +76,12 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Active contacts (eq. 2): the law applies when the predicted gap g~ <= 0, otherwise r = 0.
-   paper: g~ = g^-; lmgc90: g~ = g^- + (1 - theta) dt v_n^-. */
+/* Active contacts (eq. 2, KergsContactIsActive: the same decision as the assembly of W over active pairs). An
+   inactive contact's impulse is 0 at the solution: its warm start is set to 0 too, so that the first sweep does not
+   feel an impulse the law is about to cancel (and W over active pairs gives the same iterates as the whole W). */
 PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
-  const PetscScalar *vminus;
+  PetscScalar *r;
 
   PetscFunctionBeginUser;
   if (contacts->n > s->nalloc) {
@@ -88,14 +89,14 @@ PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsConta
     s->nalloc = PetscMax(contacts->n, 2 * s->nalloc);
     PetscCall(PetscMalloc2(s->nalloc, &s->mu, s->nalloc, &s->active));
   }
-  PetscCall(VecGetArrayRead(ops->vminus, &vminus));
+  PetscCall(VecGetArray(ops->r, &r));
   for (PetscInt k = 0; k < contacts->n; k++) {
-    PetscReal g = contacts->c[k].gap;
-    if (scene->gaprule == KERGS_GAP_LMGC90) g += (1.0 - scene->theta) * scene->dt * vminus[k * ops->ncomp];
-    s->active[k] = (PetscBool)(g <= 0.0);
+    s->active[k] = KergsContactIsActive(scene, &contacts->c[k]);
     s->mu[k]     = contacts->c[k].mu;
+    if (!s->active[k])
+      for (PetscInt c = 0; c < ops->ncomp; c++) r[k * ops->ncomp + c] = 0.0;
   }
-  PetscCall(VecRestoreArrayRead(ops->vminus, &vminus));
+  PetscCall(VecRestoreArray(ops->r, &r));
   PetscCall(KergsSweepSetUp(s->sweep, ops->W, ops->ncomp, s->mu, s->active));
   PetscFunctionReturn(0);
 }

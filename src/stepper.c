@@ -220,11 +220,11 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(KergsContactsDetect(st->contacts, sc));
   if (sc->step == 0) PetscCall(CheckInitialOverlaps(st));
   PetscCall(PetscTime(&t1));
-  /* H and v^d, then W; unless kept, H is freed before W exists and built again for the update, after W is freed */
+  /* v^d, then W: unless kept, H is freed before W exists, built again for the update once W is freed, and freed after
+     it. W couples the active contacts only, unless the solver works on the whole W (the kernel-regularised types). */
   keepH = (PetscBool)(st->keep_H || st->solver->needs_H);
-  PetscCall(KergsOperatorsAssembleH(st->ops, sc, st->contacts));
-  if (!keepH) PetscCall(KergsOperatorsReleaseH(st->ops));
-  PetscCall(KergsOperatorsAssembleW(st->ops, sc, st->contacts));
+  PetscCall(KergsOperatorsAssembleH(st->ops, sc, st->contacts, keepH));
+  PetscCall(KergsOperatorsAssembleW(st->ops, sc, st->contacts, (PetscBool)!st->solver->needs_H));
   PetscCall(KergsOperatorsGetImpulses(st->ops, st->contacts)); /* warm start */
   PetscCall(PetscTime(&t2));
   PetscCall(KergsSolverSolve(st->solver, sc, st->contacts, st->ops, &ss));
@@ -233,10 +233,11 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(PetscLogEventBegin(KERGS_Update, 0, 0, 0, 0));
   if (!keepH) {
     PetscCall(KergsOperatorsReleaseW(st->ops));
-    PetscCall(KergsOperatorsBuildH(st->ops, sc, st->contacts));
+    PetscCall(KergsOperatorsBuildHf(st->ops, sc, st->contacts));
   }
   PetscCall(SaveVelocities(sc, &vold, &wold, &wvold));
   PetscCall(KergsOperatorsUpdateVelocities(st->ops, sc));
+  if (!keepH) PetscCall(KergsOperatorsReleaseH(st->ops));
   PetscCall(UpdatePositions(sc, vold, wold, wvold));
   PetscCall(PetscFree3(vold, wold, wvold));
   /* the ghosts' new state, for the measures and the next detection (which rebuilds the layer after a migration or

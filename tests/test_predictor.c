@@ -83,7 +83,7 @@ static PetscErrorCode DefiningResiduals(KergsStepper st, KergsPredictor p, const
                                         PetscReal *mom, PetscReal *law)
 {
   KergsOperators     ops = st->ops;
-  Vec                a, b, vt, vg;
+  Vec                a, b, vt, vg, vminus;
   const PetscScalar *ra, *va, *vm;
   PetscReal          dt = st->scene->dt, th = st->scene->theta, res[2] = {0, 0}, n[4], normH, nV, ngv = 0, mscale, terms, coef;
   const PetscInt     nc = ops->ncomp;
@@ -115,14 +115,16 @@ static PetscErrorCode DefiningResiduals(KergsStepper st, KergsPredictor p, const
     PetscCall(VecZeroEntries(vg));
   PetscCall(VecNorm(vg, NORM_INFINITY, &ngv));
   PetscCall(VecAXPY(vt, 1.0, vg));
+  PetscCall(VecDuplicate(vg, &vminus));
+  PetscCall(MatMultAdd(ops->HfT, ops->Vf, vg, vminus)); /* v^- = H_f^T V_f^- + H_g^T V_g^+ */
   PetscCall(MatNorm(ops->HfT, NORM_INFINITY, &normH));
   PetscCall(VecNorm(p->Vtilde, NORM_INFINITY, &nV));
   PetscCall(VecNorm(r, NORM_INFINITY, &n[0]));
-  PetscCall(VecNorm(ops->vminus, NORM_INFINITY, &n[1]));
+  PetscCall(VecNorm(vminus, NORM_INFINITY, &n[1]));
   n[2] = 0; /* largest |g^-| over active contacts */
   PetscCall(VecGetArrayRead(r, &ra));
   PetscCall(VecGetArrayRead(vt, &va));
-  PetscCall(VecGetArrayRead(ops->vminus, &vm));
+  PetscCall(VecGetArrayRead(vminus, &vm));
   for (PetscInt k = 0; k < st->contacts->n; k++) {
     PetscReal g = st->contacts->c[k].gap, rk = PetscRealPart(ra[k * nc]), v = PetscRealPart(va[k * nc]), vmk = PetscRealPart(vm[k * nc]), e;
     if (!active[k]) continue;
@@ -133,7 +135,7 @@ static PetscErrorCode DefiningResiduals(KergsStepper st, KergsPredictor p, const
       e = rk + dt / p->eta_abs * v;
     res[1] = PetscMax(res[1], PetscAbsReal(e));
   }
-  PetscCall(VecRestoreArrayRead(ops->vminus, &vm));
+  PetscCall(VecRestoreArrayRead(vminus, &vm));
   PetscCall(VecRestoreArrayRead(vt, &va));
   PetscCall(VecRestoreArrayRead(r, &ra));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &res[1], 1, MPIU_REAL, MPIU_MAX, st->comm));
@@ -148,6 +150,7 @@ static PetscErrorCode DefiningResiduals(KergsStepper st, KergsPredictor p, const
   PetscCall(VecDestroy(&b));
   PetscCall(VecDestroy(&vt));
   PetscCall(VecDestroy(&vg));
+  PetscCall(VecDestroy(&vminus));
   PetscFunctionReturn(0);
 }
 

@@ -66,5 +66,10 @@ PETSC_EXTERN PetscErrorCode KergsContactsCreate(MPI_Comm, KergsContacts *);
    ones), and set nglobal and start (collective). O(local disks). */
 PETSC_EXTERN PetscErrorCode KergsContactsDetect(KergsContacts, KergsScene);
 PETSC_EXTERN PetscErrorCode KergsContactsDestroy(KergsContacts *);
+/* Whether contact c (owned or foreign) is active this step (eq. 2: the law applies when the predicted gap g~ <= 0,
+   otherwise r = 0). Paper's rule: g~ = g^-; LMGC90's: g~ = g^- + (1 - theta) dt v_n^-, v_n^- = n.(V_a - V_b) from the
+   velocities at the start of the step (a wall's: its velocity of the step, as the assembly sets it). Computed from the
+   contact and the bodies' state alone, so that every rank holding the contact decides alike. */
+PETSC_EXTERN PetscBool KergsContactIsActive(KergsScene, const KergsContact *);
 
 #endif

@@ -25,12 +25,12 @@ struct _p_KergsOperators {
   Mat Hf;             /* H_f, NULL until KergsOperatorsGetHf */
   Mat HgT;            /* H_g^T, NULL when the scene has no driven wall */
   Mat W;              /* H_f^T M^-1 H_f, (MPI)SBAIJ with block size ncomp: upper block triangle */
+  PetscBool W_active_only; /* W couples the active contacts only (KergsOperatorsAssembleW) */
   Vec Minv;           /* diagonal of M^-1 over free DOFs */
   Vec Vf;             /* free velocities V_f (V_f^- on entry of a step, V_f^+ after the update) */
   Vec Rd;             /* impulse of external forces over the step */
   Vec Vg;             /* given velocities V_g^+ (NULL without driven walls) */
   Vec vd;             /* free local velocity v^d */
-  Vec vminus;         /* local velocity at the start of the step, H_f^T V_f^- + H_g^T V_g (for the LMGC90 gap rule) */
   Vec r, v;           /* contact impulses and local velocities */
   PetscInt   nfree, nfree_local, ngiven; /* free DOFs (global, local), given DOFs */
   PetscInt   dstart;                      /* first disk of this rank when the DOF vectors were built */
@@ -38,15 +38,20 @@ struct _p_KergsOperators {
 };
 
 PETSC_EXTERN PetscErrorCode KergsOperatorsCreate(MPI_Comm, KergsOperators *);
-/* Build H_f^T, H_g^T, M^-1, W, V_f^-, V_g^+, R^d, v^d for the current scene and contact set: AssembleH then AssembleW. */
+/* Build H_f^T, H_g^T, M^-1, W (over all pairs), V_f^-, V_g^+, R^d, v^d for the current scene and contact set:
+   AssembleH (keeping H) then AssembleW. */
 PETSC_EXTERN PetscErrorCode KergsOperatorsAssemble(KergsOperators, KergsScene, KergsContacts);
 /* The two halves, for a caller that frees H before W exists (the time step, so that its peak memory is the larger of
-   H and W, not their sum). AssembleH: the DOF vectors, H_f^T, H_g^T, v^d, v^-, and r, v (the step's other objects are
-   destroyed). AssembleW: W, from the contacts and M^-1 (no H needed). BuildH: H_f^T and H_g^T again (after
-   ReleaseH, for the velocity update). Release*: destroy them. */
-PETSC_EXTERN PetscErrorCode KergsOperatorsAssembleH(KergsOperators, KergsScene, KergsContacts);
-PETSC_EXTERN PetscErrorCode KergsOperatorsAssembleW(KergsOperators, KergsScene, KergsContacts);
-PETSC_EXTERN PetscErrorCode KergsOperatorsBuildH(KergsOperators, KergsScene, KergsContacts);
+   H and W, not their sum). AssembleH: the DOF vectors, v^d, and r, v (the step's other objects are destroyed); H_f^T
+   and H_g^T stay when keep, else each is freed once v^d has its part. AssembleW: W, from the contacts and M^-1 (no H
+   needed); with activeonly, only the blocks between active contacts (KergsContactIsActive) and the diagonal blocks:
+   an inactive contact has r = 0 throughout the solve (the solver zeroes its warm start), so its coupling adds zeros
+   to the others' sums and its own sum is not needed (its law gives r = 0 whatever v); NLGS then gives the same
+   impulses to the bit, from a W whose size is about that of the active set. BuildHf: H_f^T again (for the velocity
+   update). Release*: destroy them. */
+PETSC_EXTERN PetscErrorCode KergsOperatorsAssembleH(KergsOperators, KergsScene, KergsContacts, PetscBool keep);
+PETSC_EXTERN PetscErrorCode KergsOperatorsAssembleW(KergsOperators, KergsScene, KergsContacts, PetscBool activeonly);
+PETSC_EXTERN PetscErrorCode KergsOperatorsBuildHf(KergsOperators, KergsScene, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseH(KergsOperators);
 PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseW(KergsOperators);
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetHf(KergsOperators, Mat *);

@@ -56,8 +56,9 @@ struct _p_KergsSolver {
   KergsCriterion criterion;
   KergsSweep     sweep;         /* Gauss-Seidel on W; also computes the physical residual */
   KergsSweep     iterate_sweep; /* when set, the sweeps run on this one instead (nlkergs: on W~) */
-  PetscBool      needs_H;       /* the type reads H_f, H_g during its solve (kernel projector, predictors): the time step
-                                   keeps them alive from assembly to the velocity update */
+  PetscBool      needs_H;       /* the type reads H_f, H_g during its solve (kernel projector, predictors), and W over all
+                                   pairs of contacts: the time step keeps H alive from assembly to the velocity update and
+                                   assembles the whole W (otherwise W couples the active contacts only) */
   PetscReal     *mu;     /* per local contact */
   PetscBool     *active; /* per local contact */
   PetscInt       nalloc;

@@ -8,7 +8,7 @@
    theta-method (Algorithm 1): free bodies move by dt (theta V^+ + (1 - theta) V^-), driven walls by dt V_g^+,
    so the end-of-step gap (linearised, frames fixed over the step) is
      g^+ = g^- + dt ((1 - theta) H_f^T V_f^- + theta H_f^T V~_f + H_g^T V_g^+) = g^- + dt ((1 - theta) v^- + theta v~)
-   with v^- = H_f^T V_f^- + H_g^T V_g^+ (ops->vminus) and v~ = H_f^T V~_f + H_g^T V_g^+. The paper uses theta = 1,
+   with v^- = H_f^T V_f^- + H_g^T V_g^+ and v~ = H_f^T V~_f + H_g^T V_g^+. The paper uses theta = 1,
    where this is Algorithm 5 exactly; for theta < 1 the system is
      (M + theta (dt^2/eps) H_f D H_f^T) V~ = R^d + M V^- - (dt/eps) H_f D (g^- + (1 - theta) dt v^- + theta dt H_g^T V_g^+). */
 #include <kergs/predictor.h>
@@ -17,25 +17,28 @@ static PetscErrorCode KergsPredictorPredict_Elastic(KergsPredictor p, KergsScene
                                                     const PetscBool *active, Vec rtilde)
 {
   const PetscReal    dt = scene->dt, th = scene->theta, k = dt / p->epsilon_abs;
-  Vec                q;
+  Vec                q, vminus;
   PetscScalar       *qa;
   const PetscScalar *vm;
 
   PetscFunctionBeginUser;
   /* q = (dt/eps) (g^- + (1 - theta) dt v^- + theta dt H_g^T V_g^+) on the normal components */
   PetscCall(VecDuplicate(rtilde, &q));
+  PetscCall(VecDuplicate(rtilde, &vminus));
   if (ops->HgT)
     PetscCall(MatMult(ops->HgT, ops->Vg, q));
   else
     PetscCall(VecZeroEntries(q));
+  PetscCall(MatMultAdd(ops->HfT, ops->Vf, q, vminus)); /* v^- = H_f^T V_f^- + H_g^T V_g^+ */
   PetscCall(VecGetArray(q, &qa));
-  PetscCall(VecGetArrayRead(ops->vminus, &vm));
+  PetscCall(VecGetArrayRead(vminus, &vm));
   for (PetscInt a = 0; a < contacts->n; a++) {
     const PetscInt i = a * ops->ncomp;
     qa[i]            = k * (contacts->c[a].gap + (1.0 - th) * dt * vm[i] + th * dt * qa[i]);
   }
-  PetscCall(VecRestoreArrayRead(ops->vminus, &vm));
+  PetscCall(VecRestoreArrayRead(vminus, &vm));
   PetscCall(VecRestoreArray(q, &qa));
+  PetscCall(VecDestroy(&vminus));
   PetscCall(KergsPredictorSolveRegularised(p, contacts, ops, active, th * dt * k, q, rtilde));
   PetscCall(VecDestroy(&q));
   PetscFunctionReturn(0);
