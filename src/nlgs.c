@@ -410,7 +410,11 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
     const PetscBool act = active ? active[a] : PETSC_TRUE;
     const PetscInt   jlow = acc ? ai[a] : ds[2 * a], jup = acc ? ai[a] + 1 : ds[2 * a + 1]; /* upper: W_aa first */
 
-    if (act) {
+    if (!act) { /* the law gives r_a = 0: nothing changes, and nothing is measured, once it is 0 */
+      PetscBool zero = PETSC_TRUE;
+      for (c = 0; c < nc; c++) zero = (PetscBool)(zero && r[a * nc + c] == 0.0);
+      if (zero) continue;
+    } else {
       PetscReal t[KERGS_MAXCOMP] = {0.0};
       if (acc) /* upper storage: the blocks before the own one, summed in the same order as whole storage does */
         for (c = 0; c < nc; c++) t[c] = acc[a * nc + c];
