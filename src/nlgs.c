@@ -326,6 +326,7 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   if (s->ghost_scatter) PetscCall(PetscCalloc1(m, &s->boff)); /* none on one rank: no off-process part */
   if (upper) PetscCall(PetscMalloc1(m + 1, &s->acc));
   PetscCall(LocateDiagonalBlocks(s));
+  s->compute_seconds = 0;
   PetscFunctionReturn(0);
 }
 
@@ -504,6 +505,7 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   const PetscScalar *vdl, *rg;
   SweepSums          loc = {0, 0, 0, 0, 0}, glob;
   PetscReal          sums[4], maxd;
+  PetscLogDouble     t0, t1, t2, t3;
 
   PetscFunctionBeginUser;
   if (!s->W) SETERRQ(s->comm, PETSC_ERR_ORDER, "KergsSweepRun: call KergsSweepSetUp first");
@@ -518,17 +520,23 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
     PetscCall(VecScatterEnd(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
     PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
     PetscCall(VecGetArrayRead(s->rghost, &rg));
+    PetscCall(PetscTime(&t0));
     if (nc == 2) OffProcessProduct(2, s->n, s->bi, s->bj, s->ba, rg, s->boff);
     else OffProcessProduct(1, s->n, s->bi, s->bj, s->ba, rg, s->boff);
+    PetscCall(PetscTime(&t1));
+    s->compute_seconds += t1 - t0;
     PetscCall(VecRestoreArrayRead(s->rghost, &rg));
     if (s->upper) PetscCall(EndLowerRanksCoupling(s));
   }
   if (s->acc) PetscCall(PetscArrayzero(s->acc, m));
   PetscCall(VecGetArray(r, &rl));
   PetscCall(VecGetArrayRead(vd, &vdl));
+  PetscCall(PetscTime(&t2));
   if (nc == 2)
     SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
   else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
+  PetscCall(PetscTime(&t3));
+  s->compute_seconds += t3 - t2;
   PetscCall(VecRestoreArrayRead(vd, &vdl));
   PetscCall(VecRestoreArray(r, &rl));
   /* upper storage: each stored off-diagonal block is applied twice (as itself and transposed) */

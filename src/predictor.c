@@ -183,6 +183,19 @@ static PetscErrorCode SolveK(KergsPredictor p, Mat K, Vec b, Vec x)
   PetscReal          nx;
 
   PetscFunctionBeginUser;
+  {
+    /* after a repartition the DOFs of a rank change: PETSc refuses new local sizes for a KSP's operator */
+    PetscBool set;
+    Mat       Kold;
+    PetscInt  m, mold;
+    PetscCall(KSPGetOperatorsSet(p->ksp, &set, NULL));
+    if (set) {
+      PetscCall(KSPGetOperators(p->ksp, &Kold, NULL));
+      PetscCall(MatGetLocalSize(Kold, &mold, NULL));
+      PetscCall(MatGetLocalSize(K, &m, NULL));
+      if (m != mold) PetscCall(KSPReset(p->ksp));
+    }
+  }
   PetscCall(KSPSetOperators(p->ksp, K, K));
   PetscCall(KSPSolve(p->ksp, b, x));
   PetscCall(KSPGetConvergedReason(p->ksp, &reason));

@@ -139,7 +139,8 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
     }
   }
   PetscCall(PetscTime(&t1));
-  stats->sweep_seconds = t1 - t0;
+  stats->sweep_seconds   = t1 - t0;
+  stats->compute_seconds = (s->iterate_sweep ? s->iterate_sweep : s->sweep)->compute_seconds;
   stats->criterion     = value;
   /* the natural criterion has just computed the residual (and v) of the final r */
   if (s->criterion == KERGS_CRITERION_NATURAL && stats->iterations > 0) stats->residual = value;
@@ -153,6 +154,7 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
 
   PetscFunctionBeginUser;
   PetscCheck(s->ops.solve, s->comm, PETSC_ERR_ORDER, "Call KergsSolverSetFromOptions() or KergsSolverSetType() first");
+  PetscCall(PetscMemzero(stats, sizeof(*stats)));
   PetscCall(PetscLogEventBegin(KERGS_Solve, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   if (s->ops.setup) PetscCall((*s->ops.setup)(s, scene, contacts, ops));

@@ -194,7 +194,7 @@ static PetscErrorCode RecordStep(KergsStepper st, const KergsSolveStats *ss, Pet
   PetscCall(KergsResultsRecord(res, "peak_memory", peak));
   PetscCall(KergsResultsRecord(res, "baseline_memory", st->baseline_rss));
   PetscCall(KergsSolverRecordStats(st->solver, st->ops, res));
-  PetscCall(KergsPartitionRecord(st->partition, st->scene, st->contacts, ss->sweep_seconds, res));
+  PetscCall(KergsPartitionRecord(st->partition, st->scene, st->contacts, ss->sweep_seconds, ss->compute_seconds, res));
   PetscCall(KergsResultsEndStep(res));
   if (!st->quiet)
     PetscCall(PetscPrintf(st->comm, "step %5" PetscInt_FMT " t %-10.5g contacts %6" PetscInt_FMT " active %6" PetscInt_FMT " sweeps %4" PetscInt_FMT "%s residual %8.2e violation mean %8.2e max %8.2e solve %.3g s\n", st->scene->step, (double)st->scene->time,

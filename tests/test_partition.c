@@ -663,6 +663,43 @@ static PetscErrorCode TestThresholds(void)
   PetscFunctionReturn(0);
 }
 
+/* Measured work (-partition_work measured): a rank whose sweeps took twice the time per modelled unit counts that
+   time as its work, and the next partition gives it less of the model (its grains weigh twice as much). The times are
+   set by hand, so that the check is deterministic. */
+static PetscErrorCode TestMeasuredWork(void)
+{
+  KergsStepper           st;
+  KergsPartition         p;
+  KergsPartitionMeasures m;
+  PetscMPIInt            size, rank;
+  PetscReal              before, after, tmax, tsum;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &rank));
+  if (size == 1) PetscFunctionReturn(0);
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20", "-partition_work measured", &st));
+  p = st->partition;
+  PetscCall(StepTo(st, 11)); /* METIS replaced the geometric partition at step 10 */
+  PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
+  before             = m.my_work;
+  p->compute_seconds = (rank == 0 ? 2e-9 : 1e-9) * m.my_work; /* rank 0: twice the time per unit */
+  PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
+  PetscCall(MPIU_Allreduce(&p->compute_seconds, &tmax, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
+  PetscCall(MPIU_Allreduce(&p->compute_seconds, &tsum, 1, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
+  PetscCall(Check((PetscBool)(PetscAbsReal(m.imbalance - tmax / (tsum / size)) < 1e-12), "measured work: imbalance of the times", m.imbalance, tmax / (tsum / size)));
+  PetscCall(Check((PetscBool)(rank == 0 ? p->work_scale > 1.2 : p->work_scale < 1.0), "measured work: rank 0's factor above 1, the others' below", p->work_scale, rank == 0 ? 1.2 : 1.0));
+  PetscCall(KergsPartitionApply(p, st->scene, st->contacts));
+  PetscCall(KergsContactsDetect(st->contacts, st->scene)); /* the contacts of the new layout */
+  p->compute_seconds = 0;                                  /* the old times describe the old ownership */
+  PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
+  after = m.my_work;
+  if (rank == 0) PetscCall(Check((PetscBool)(after < 0.85 * before), "measured work: the slow rank gets less modelled work", after, before));
+  PetscCall(ReportPartition("measured work", st));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   PetscMPIInt size;
@@ -680,6 +717,7 @@ int main(int argc, char **argv)
   PetscCall(TestRobustness());
   PetscCall(TestGrainOnThreeRanks());
   PetscCall(TestThresholds());
+  PetscCall(TestMeasuredWork());
   PetscCall(PetscOptionsClear(NULL));
   {
     int code = Finish();

@@ -72,6 +72,9 @@ int main(int argc, char **argv)
     PetscCall(PetscSNPrintf(opts, sizeof(opts), CONFINE5 "-solver_type nlgsjac -predictor_type linear -solver_omega_factor %g", omegas[i]));
     PetscCall(Extreme(omegas[i] == 1e-6 ? "omega 1e-6 ||W||" : omegas[i] == 1e3 ? "omega 1e3 ||W||" : "omega in range", opts));
   }
+  /* the predictors' factorizations across repartitions (the DOFs of a rank change size: on several ranks) */
+  PetscCall(Extreme("nlgsjac, linear predictor, repartitioned every step", CONFINE5 "-solver_type nlgsjac -predictor_type linear -partition_check_every 1 -partition_imbalance_tol 1.0"));
+  PetscCall(Extreme("nlgsjac, elastic predictor, repartitioned every step", CONFINE5 "-solver_type nlgsjac -predictor_type elastic -partition_check_every 1 -partition_imbalance_tol 1.0"));
   /* eta down to 1e-12, epsilon from 1e-12 to 1 */
   for (size_t i = 0; i < 3; i++) {
     PetscCall(PetscSNPrintf(opts, sizeof(opts), CONFINE5 "-solver_type nlgsjac -predictor_type linear -predictor_eta %g", etas[i]));

@@ -35,6 +35,8 @@ struct _p_KergsSweep {
   VecScatter   lower_scatter; /* a copy of ghost_scatter, used reversed, in flight together with it */
   PetscInt    *ubi, *ubj;     /* the copy of the off-process part (upper: columns right of this rank), owned */
   PetscScalar *uba;
+  PetscLogDouble compute_seconds; /* this rank's time in the sweeps' arithmetic since KergsSweepSetUp, messages and
+                                     reductions excluded: its share of the work, as the partition measures it */
 };
 
 /* Measures of one sweep, reduced over ranks by KergsSweepRun.

@@ -31,6 +31,7 @@ typedef struct {
   PetscReal residual;  /* natural-map residual recomputed from r at exit */
   PetscReal seconds;       /* whole solve: set-up, sweeps, final residual */
   PetscReal sweep_seconds; /* the sweeps alone */
+  PetscReal compute_seconds; /* this rank's arithmetic in the sweeps (no waiting for messages or reductions) */
 } KergsSolveStats;
 
 typedef struct _p_KergsSolver *KergsSolver;
