@@ -2,7 +2,8 @@
    and 6). The sweep reads W's block CSR arrays directly: one block row per contact, blocks W_alpha,beta of
    ncomp x ncomp (BAIJ, each block stored column by column; AIJ is the case ncomp = 1). Inside a rank it is Gauss-Seidel (contact alpha sees
    the impulses already updated in this sweep); across ranks it is Jacobi: the impulses of other ranks'
-   contacts are scattered once per sweep into rghost and enter through boff = Ao rghost.
+   contacts are scattered once per sweep into rghost and enter through Ao rghost, a correction kept for the few rows
+   they couple to (the coupled rows) only, so that the sweep reads no more per contact than on one rank.
    W symmetric may be stored by its upper block triangle only (SBAIJ: W_alpha,beta for beta >= alpha), which halves
    the memory the sweep streams. Then, with the same Gauss-Seidel order, sum_{beta < alpha} W_alpha,beta r_beta(new)
    = sum_{beta < alpha} W_beta,alpha^T r_beta(new) is gathered in acc_alpha: once r_beta(new) is known, row beta
@@ -88,7 +89,9 @@ PetscErrorCode KergsSweepReset(KergsSweep s)
   PetscCall(VecScatterDestroy(&s->ghost_scatter));
   PetscCall(VecDestroy(&s->rghost));
   PetscCall(PetscFree(s->Wdiag));
-  PetscCall(PetscFree(s->boff));
+  PetscCall(PetscFree(s->orows));
+  PetscCall(PetscFree(s->corr));
+  s->norows = 0;
   PetscCall(PetscFree(s->dsplit));
   PetscCall(MatDestroy(&s->W));
   s->mu     = NULL;
@@ -296,6 +299,39 @@ static PetscErrorCode SetUpParts(KergsSweep s)
   PetscFunctionReturn(0);
 }
 
+/* The rows with an off-process coupling (coupled rows, sorted): a block of B, or a contribution from a lower rank
+   (upper storage: found by scattering ones back), and their corrections corr. */
+static PetscErrorCode FindCoupledRows(KergsSweep s)
+{
+  const PetscInt nc = s->ncomp;
+  PetscBool     *coupled;
+  PetscInt       a, c;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscCalloc1(s->n + 1, &coupled));
+  for (a = 0; a < s->n; a++) coupled[a] = (PetscBool)(s->bi[a + 1] > s->bi[a]);
+  if (s->upper) {
+    const PetscScalar *bl;
+    PetscCall(VecSet(s->blower, 0.0));
+    PetscCall(VecSet(s->ylower, 1.0));
+    PetscCall(VecScatterBegin(s->lower_scatter, s->ylower, s->blower, ADD_VALUES, SCATTER_REVERSE));
+    PetscCall(VecScatterEnd(s->lower_scatter, s->ylower, s->blower, ADD_VALUES, SCATTER_REVERSE));
+    PetscCall(VecGetArrayRead(s->blower, &bl));
+    for (a = 0; a < s->n; a++)
+      for (c = 0; c < nc; c++) coupled[a] = (PetscBool)(coupled[a] || PetscRealPart(bl[a * nc + c]) != 0.0);
+    PetscCall(VecRestoreArrayRead(s->blower, &bl));
+    PetscCall(VecSet(s->blower, 0.0));
+  }
+  s->norows = 0;
+  for (a = 0; a < s->n; a++) s->norows += coupled[a];
+  PetscCall(PetscMalloc1(s->norows + 1, &s->orows));
+  for (a = 0, s->norows = 0; a < s->n; a++)
+    if (coupled[a]) s->orows[s->norows++] = a;
+  PetscCall(PetscFree(coupled));
+  PetscCall(PetscMalloc1(s->norows * nc + 1, &s->corr));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active)
 {
   PetscBool ismpi = PETSC_FALSE, blocked = PETSC_FALSE, upper = PETSC_FALSE;
@@ -323,7 +359,7 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   if (ismpi) PetscCall(SetUpParts(s));
   else s->Ad = W;
   PetscCall(GetBlockCSR(s->Ad, blocked, upper, &s->ai, &s->aj, &s->aa));
-  if (s->ghost_scatter) PetscCall(PetscCalloc1(m, &s->boff)); /* none on one rank: no off-process part */
+  if (s->ghost_scatter) PetscCall(FindCoupledRows(s)); /* none on one rank: no off-process part */
   if (upper) PetscCall(PetscMalloc1(m + 1, &s->acc));
   PetscCall(LocateDiagonalBlocks(s));
   s->compute_seconds = 0;
@@ -344,15 +380,18 @@ static inline KERGS_ALWAYS_INLINE void BlocksTimesX(const PetscInt nc, const Pet
   }
 }
 
-/* boff = Ao rghost: the contributions of other ranks' contacts, frozen for the sweep (Jacobi across ranks). */
-static inline KERGS_ALWAYS_INLINE void OffProcessProduct(const PetscInt nc, PetscInt n, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *rg, PetscReal *boff)
+/* corr_k = (Ao rghost)_a + lower_a at the k-th coupled row a: the contributions of other ranks' contacts, frozen
+   for the sweep (Jacobi across ranks); lower (NULL without upper storage) is the lower ranks' share. */
+static inline KERGS_ALWAYS_INLINE void OffProcessProduct(const PetscInt nc, PetscInt nrows, const PetscInt *rows, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *rg,
+                                                         const PetscScalar *lower, PetscReal *corr)
 {
-  PetscInt a, c;
+  PetscInt k, a, c;
 
-  for (a = 0; a < n; a++) {
+  for (k = 0; k < nrows; k++) {
     PetscReal t[KERGS_MAXCOMP] = {0.0};
+    a = rows[k];
     BlocksTimesX(nc, bj, ba, bi[a], bi[a + 1], rg, t);
-    for (c = 0; c < nc; c++) boff[a * nc + c] = t[c];
+    for (c = 0; c < nc; c++) corr[k * nc + c] = t[c] + (lower ? PetscRealPart(lower[a * nc + c]) : 0.0);
   }
 }
 
@@ -370,14 +409,15 @@ static inline KERGS_ALWAYS_INLINE void BlocksTransposeTimesX(const PetscInt nc, 
   }
 }
 
-/* y = B^T r over the n local contacts (upper storage): the coupling of this rank's contacts with the higher ranks'
+/* y = B^T r over the coupled rows (upper storage): the coupling of this rank's contacts with the higher ranks'
    ones seen from those ranks, y ordered as B's block columns (rghost). */
-static inline KERGS_ALWAYS_INLINE void OffProcessTransposeProduct(const PetscInt nc, PetscInt n, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *r, PetscReal *y)
+static inline KERGS_ALWAYS_INLINE void OffProcessTransposeProduct(const PetscInt nc, PetscInt nrows, const PetscInt *rows, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *r, PetscReal *y)
 {
-  PetscInt a, c;
+  PetscInt k, a, c;
 
-  for (a = 0; a < n; a++) {
+  for (k = 0; k < nrows; k++) {
     PetscReal x[KERGS_MAXCOMP];
+    a = rows[k];
     for (c = 0; c < nc; c++) x[c] = PetscRealPart(r[a * nc + c]);
     BlocksTransposeTimesX(nc, bj, ba, bi[a], bi[a + 1], x, y);
   }
@@ -393,7 +433,9 @@ typedef struct {
 } SweepSums;
 
 /* The Gauss-Seidel loop over the rank's contacts (Algorithm 2): for contact a,
-     b_a = vd_a + extra_a + boff_a + sum_{local beta != a} W_a,beta r_beta   (latest r),
+     b_a = vd_a + corr_a + extra_a + sum_{local beta != a} W_a,beta r_beta   (latest r),
+   corr_a the other ranks' contributions, frozen for the sweep, at the coupled rows orows (several ranks; found by a
+   cursor that follows a: the sweep reads nothing more at the other rows),
    then the exact law with the block Wlaw_a, r_a updated in place. Block row a of W is contact a: its blocks
    before and after the own block, [ai[a], ds[2a]) and [ds[2a+1], ai[a+1]), give the sum. With upper storage
    (acc not NULL, zero on entry; ds not used) the row holds W_aa first, then beta > a only (r_beta not yet updated: the old values, as
@@ -401,14 +443,17 @@ typedef struct {
    completes the sum; once r_a(new) is known the same row adds W_a,beta^T r_a(new) to acc_beta. nc is 1 or 2; the
    function is inlined with a constant nc so that the small loops over components unroll. */
 static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscInt *ds,
-                                 const PetscScalar *vd, const PetscReal *boff, const PetscReal *extra, const PetscReal *Wlaw, const PetscReal *Wdiag,
+                                 const PetscScalar *vd, PetscInt norows, const PetscInt *orows, const PetscReal *corr, const PetscReal *extra, const PetscReal *Wlaw, const PetscReal *Wdiag,
                                  const PetscReal *mu, const PetscBool *active, PetscScalar *r, PetscReal *acc, SweepSums *sums)
 {
   PetscReal b[KERGS_MAXCOMP], rnew[KERGS_MAXCOMP], dr[KERGS_MAXCOMP], w[KERGS_MAXCOMP * KERGS_MAXCOMP], dWd, rWr;
-  PetscInt  a, c, e, i;
+  PetscInt  a, c, e, i, k = 0;
 
   for (a = 0; a < n; a++) {
     const PetscBool act = active ? active[a] : PETSC_TRUE;
+    const PetscReal *co = NULL;
+
+    if (k < norows && orows[k] == a) co = corr + nc * k++;
     const PetscInt   jlow = acc ? ai[a] : ds[2 * a], jup = acc ? ai[a] + 1 : ds[2 * a + 1]; /* upper: W_aa first */
 
     if (!act) { /* the law gives r_a = 0: nothing changes, and nothing is measured, once it is 0 */
@@ -423,7 +468,7 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
       BlocksTimesX(nc, aj, aa, jup, ai[a + 1], r, t);
       for (c = 0; c < nc; c++) {
         i    = a * nc + c;
-        b[c] = PetscRealPart(vd[i]) + (boff ? boff[i] : 0.0) + t[c];
+        b[c] = PetscRealPart(vd[i]) + (co ? co[c] : 0.0) + t[c];
         if (extra) b[c] += extra[i];
       }
     }
@@ -464,36 +509,54 @@ static void MeasuresFromSums(const SweepSums *g, KergsSweepMeasures *m)
   m->maxm = mean > 0 ? PetscSqrtReal(g->maxd) / mean : (g->maxd > 0 ? 1.0 : 0.0);
 }
 
-/* Upper storage: the lower ranks' share of boff is (B^T r) computed on each of them and added back through the ghost
-   scatter reversed (r is the impulse at the start of the sweep, as for the forward part: Jacobi across ranks).
-   Started before the forward scatter so that both messages are in flight together. */
+/* Upper storage: the lower ranks' share of the coupling is (B^T r) computed on each of them and added back through the
+   ghost scatter reversed (r is the impulse at the start of the sweep, as for the forward part: Jacobi across ranks).
+   Started before the forward scatter so that both messages are in flight together. The reverse scatter adds only into
+   the rows that the lower ranks couple to (coupled rows), the only entries of blower zeroed and read. */
 static PetscErrorCode BeginLowerRanksCoupling(KergsSweep s, Vec r)
 {
   const PetscScalar *rl;
-  PetscScalar       *y;
+  PetscScalar       *y, *bl;
 
   PetscFunctionBeginUser;
   PetscCall(VecSet(s->ylower, 0.0));
   PetscCall(VecGetArrayRead(r, &rl));
   PetscCall(VecGetArray(s->ylower, &y));
-  if (s->ncomp == 2) OffProcessTransposeProduct(2, s->n, s->bi, s->bj, s->ba, rl, y);
-  else OffProcessTransposeProduct(1, s->n, s->bi, s->bj, s->ba, rl, y);
+  if (s->ncomp == 2) OffProcessTransposeProduct(2, s->norows, s->orows, s->bi, s->bj, s->ba, rl, y);
+  else OffProcessTransposeProduct(1, s->norows, s->orows, s->bi, s->bj, s->ba, rl, y);
   PetscCall(VecRestoreArray(s->ylower, &y));
   PetscCall(VecRestoreArrayRead(r, &rl));
-  PetscCall(VecSet(s->blower, 0.0));
+  PetscCall(VecGetArray(s->blower, &bl));
+  for (PetscInt k = 0; k < s->norows; k++)
+    for (PetscInt c = 0; c < s->ncomp; c++) bl[s->orows[k] * s->ncomp + c] = 0.0;
+  PetscCall(VecRestoreArray(s->blower, &bl));
   PetscCall(VecScatterBegin(s->lower_scatter, s->ylower, s->blower, ADD_VALUES, SCATTER_REVERSE));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode EndLowerRanksCoupling(KergsSweep s)
+/* Several ranks: the other ranks' contributions at the coupled rows, corr. */
+static PetscErrorCode OffProcessCorrection(KergsSweep s, Vec r)
 {
-  const PetscScalar *bl;
+  const PetscInt     nc = s->ncomp;
+  const PetscScalar *rg, *bl = NULL;
+  PetscLogDouble     t0, t1;
 
   PetscFunctionBeginUser;
-  PetscCall(VecScatterEnd(s->lower_scatter, s->ylower, s->blower, ADD_VALUES, SCATTER_REVERSE));
-  PetscCall(VecGetArrayRead(s->blower, &bl));
-  for (PetscInt i = 0; i < s->n * s->ncomp; i++) s->boff[i] += PetscRealPart(bl[i]);
-  PetscCall(VecRestoreArrayRead(s->blower, &bl));
+  PetscCall(PetscLogEventBegin(KERGS_Exchange, 0, 0, 0, 0));
+  if (s->upper) PetscCall(BeginLowerRanksCoupling(s, r));
+  PetscCall(VecScatterBegin(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
+  if (s->upper) PetscCall(VecScatterEnd(s->lower_scatter, s->ylower, s->blower, ADD_VALUES, SCATTER_REVERSE));
+  PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
+  PetscCall(VecGetArrayRead(s->rghost, &rg));
+  if (s->upper) PetscCall(VecGetArrayRead(s->blower, &bl));
+  PetscCall(PetscTime(&t0));
+  if (nc == 2) OffProcessProduct(2, s->norows, s->orows, s->bi, s->bj, s->ba, rg, bl, s->corr);
+  else OffProcessProduct(1, s->norows, s->orows, s->bi, s->bj, s->ba, rg, bl, s->corr);
+  PetscCall(PetscTime(&t1));
+  s->compute_seconds += t1 - t0;
+  if (s->upper) PetscCall(VecRestoreArrayRead(s->blower, &bl));
+  PetscCall(VecRestoreArrayRead(s->rghost, &rg));
   PetscFunctionReturn(0);
 }
 
@@ -502,10 +565,10 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   const PetscInt     nc = s->ncomp, m = s->n * s->ncomp;
   PetscInt           mr, mv;
   PetscScalar       *rl;
-  const PetscScalar *vdl, *rg;
+  const PetscScalar *vdl;
   SweepSums          loc = {0, 0, 0, 0, 0}, glob;
   PetscReal          sums[4], maxd;
-  PetscLogDouble     t0, t1, t2, t3;
+  PetscLogDouble     t0, t1;
 
   PetscFunctionBeginUser;
   if (!s->W) SETERRQ(s->comm, PETSC_ERR_ORDER, "KergsSweepRun: call KergsSweepSetUp first");
@@ -513,30 +576,15 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   PetscCall(VecGetLocalSize(vd, &mv));
   if (mr != m || mv != m) SETERRQ(s->comm, PETSC_ERR_ARG_SIZ, "KergsSweepRun: r and vd need %" PetscInt_FMT " local entries (have %" PetscInt_FMT ", %" PetscInt_FMT ")", m, mr, mv);
   PetscCall(PetscLogEventBegin(KERGS_Sweep, 0, 0, 0, 0));
-  if (s->ghost_scatter) {
-    PetscCall(PetscLogEventBegin(KERGS_Exchange, 0, 0, 0, 0));
-    if (s->upper) PetscCall(BeginLowerRanksCoupling(s, r));
-    PetscCall(VecScatterBegin(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(s->ghost_scatter, r, s->rghost, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
-    PetscCall(VecGetArrayRead(s->rghost, &rg));
-    PetscCall(PetscTime(&t0));
-    if (nc == 2) OffProcessProduct(2, s->n, s->bi, s->bj, s->ba, rg, s->boff);
-    else OffProcessProduct(1, s->n, s->bi, s->bj, s->ba, rg, s->boff);
-    PetscCall(PetscTime(&t1));
-    s->compute_seconds += t1 - t0;
-    PetscCall(VecRestoreArrayRead(s->rghost, &rg));
-    if (s->upper) PetscCall(EndLowerRanksCoupling(s));
-  }
+  if (s->ghost_scatter) PetscCall(OffProcessCorrection(s, r));
   if (s->acc) PetscCall(PetscArrayzero(s->acc, m));
   PetscCall(VecGetArray(r, &rl));
   PetscCall(VecGetArrayRead(vd, &vdl));
-  PetscCall(PetscTime(&t2));
-  if (nc == 2)
-    SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
-  else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->boff, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
-  PetscCall(PetscTime(&t3));
-  s->compute_seconds += t3 - t2;
+  PetscCall(PetscTime(&t0));
+  if (nc == 2) SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->norows, s->orows, s->corr, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
+  else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->norows, s->orows, s->corr, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
+  PetscCall(PetscTime(&t1));
+  s->compute_seconds += t1 - t0;
   PetscCall(VecRestoreArrayRead(vd, &vdl));
   PetscCall(VecRestoreArray(r, &rl));
   /* upper storage: each stored off-diagonal block is applied twice (as itself and transposed) */

@@ -25,7 +25,8 @@ struct _p_KergsSweep {
   PetscBool *active;          /* per contact: predicted gap <= 0 (the caller's array; NULL: all active) */
   Vec        rghost;          /* off-process impulses, ordered as Ao's (block) columns */
   VecScatter ghost_scatter;
-  PetscReal *boff;            /* per local component: sum over off-process contacts W r (fixed in a sweep); NULL on one rank */
+  PetscInt   norows, *orows;  /* several ranks: the local contacts coupled to other ranks' (sorted) */
+  PetscReal *corr;            /* several ranks: per coupled row, the other ranks' W r (fixed in a sweep) */
   PetscInt  *dsplit;          /* per local contact a: [start, end) of its own block W_aa in aj (skipped by the sweep); NULL with
                                  upper storage, where W_aa is the first block of row a */
   /* upper storage only */
