@@ -700,6 +700,43 @@ static PetscErrorCode TestMeasuredWork(void)
   PetscFunctionReturn(0);
 }
 
+/* The ghost layer around METIS's irregular parts: every ghost is within the reach 2 max R + alert + skin (plus the
+   skin the grains may have moved since the build) of a disk owned here; a bounding-box test alone kept many more. */
+static PetscErrorCode TestGhostsNearOwned(void)
+{
+  KergsStepper st;
+  KergsScene   sc;
+  PetscReal    rmax = 0, reach, worst = 0;
+  PetscInt     far = 0;
+  PetscMPIInt  size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  if (size == 1) PetscFunctionReturn(0);
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20 -ghost_skin 0.002", NULL, &st));
+  PetscCall(StepTo(st, 11)); /* METIS at step 10 */
+  sc = st->scene;
+  for (PetscInt i = 0; i < sc->nlocal; i++) rmax = PetscMax(rmax, sc->radius[i]);
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rmax, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
+  reach = 2 * rmax + sc->alert + 0.002;
+  for (PetscInt g = sc->nowned; g < sc->nlocal; g++) {
+    PetscReal dmin = PETSC_MAX_REAL;
+    for (PetscInt i = 0; i < sc->nowned; i++) {
+      PetscReal d2 = 0;
+      for (PetscInt d = 0; d < KERGS_DIM; d++) d2 += PetscSqr(sc->x[KERGS_DIM * g + d] - sc->x[KERGS_DIM * i + d]);
+      dmin = PetscMin(dmin, PetscSqrtReal(d2));
+    }
+    worst = PetscMax(worst, dmin / reach);
+    far += dmin > reach + 0.002;
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &far, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &worst, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
+  PetscCall(Check((PetscBool)(far == 0 && st->partition->last_method == KERGS_PARTITION_METIS), "ghosts: each within reach of an owned disk (METIS parts)", worst, 1));
+  PetscCall(ReportPartition("ghosts near owned", st));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   PetscMPIInt size;
@@ -718,6 +755,7 @@ int main(int argc, char **argv)
   PetscCall(TestGrainOnThreeRanks());
   PetscCall(TestThresholds());
   PetscCall(TestMeasuredWork());
+  PetscCall(TestGhostsNearOwned());
   PetscCall(PetscOptionsClear(NULL));
   {
     int code = Finish();
