@@ -7,7 +7,8 @@
 
    Types (-partition_type):
      contiguous  the even split of KergsSceneSetDisks, never changed
-     geometric   sort by a Hilbert space-filling-curve key of the centres, cut into chunks of equal work
+     geometric   sort by a Hilbert space-filling-curve key of the centres, cut into chunks of equal work; inside
+                 a part the disks keep their index order (the sweeps' Gauss-Seidel order), as with metis
      metis       METIS k-way on the grain graph (vertices: grains, weighted by their work; edges: disk-disk
                  contacts), recomputed when the work imbalance or the edge cut grows past the thresholds. The
                  initial partition (no contacts yet) and partitions of graphs too sparse to describe the packing
@@ -16,8 +17,8 @@
                  graph is gathered there, the new order broadcast), with a fixed seed, on the graph in grain-id order
                  (so that a graph that changed little gets a similar partition), and with light edges along the
                  Hilbert curve (-partition_metis_curve) so that grains without contacts stay with their neighbours.
-                 When METIS misses the imbalance tolerance (tiny graphs) and the geometric partition is better
-                 balanced, the geometric one is used. Parts are matched to the ranks that own most of their grains already.
+                 When METIS misses the imbalance tolerance (tiny graphs) and the geometric partition meets it, or
+                 METIS leaves a rank without grains and the geometric partition does not, the geometric one is used. Parts are matched to the ranks that own most of their grains already.
    On one rank nothing is ever renumbered (every type is then the contiguous one).
 
    Measures: the work of a grain is 1 + the work of each of its contacts (disk-disk and disk-wall), 6 for an active
