@@ -8,6 +8,7 @@ static const char help[] = "Tests of contact detection (src/detect.c): the cell-
    disks), with grain ids set by the test on the owned disks. Detection builds the ghost layer itself. The
    reference for every check is a brute-force search over the disks gathered in global-index order. */
 #include <kergs/detect.h>
+#include "gathered_disks.h"
 
 #define TOL 1e-12
 
@@ -19,13 +20,6 @@ typedef struct {
   PetscInt  ida, idb;
   PetscReal ra, rb, mu;
 } Reference;
-
-/* Every disk of a scene, in global-index order, on every rank. */
-typedef struct {
-  PetscInt   n;
-  PetscReal *x, *radius;
-  PetscInt  *id, *material;
-} Global;
 
 /* splitmix64: a small deterministic generator, identical on every rank. */
 static PetscReal Uniform(unsigned long long *state)
@@ -77,25 +71,6 @@ static PetscErrorCode SceneSetDisks(KergsScene s, PetscInt n, const PetscReal x[
              s->ndisks, s->nowned);
   for (PetscInt i = 0; i < s->nowned; i++) s->id[i] = id ? id[s->dstart + i] : 1000 + s->dstart + i;
   s->frictional = PETSC_TRUE;
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode GlobalGather(KergsScene s, Global *g)
-{
-  PetscFunctionBeginUser;
-  g->n = s->ndisks;
-  PetscCall(PetscMalloc4(KERGS_DIM * g->n + 1, &g->x, g->n + 1, &g->radius, g->n + 1, &g->id, g->n + 1, &g->material));
-  PetscCall(KergsSceneAllGatherReal(s, s->x, KERGS_DIM, g->x));
-  PetscCall(KergsSceneAllGatherReal(s, s->radius, 1, g->radius));
-  PetscCall(KergsSceneAllGatherInt(s, s->id, 1, g->id));
-  PetscCall(KergsSceneAllGatherInt(s, s->material, 1, g->material));
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode GlobalFree(Global *g)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree4(g->x, g->radius, g->id, g->material));
   PetscFunctionReturn(0);
 }
 
@@ -179,7 +154,7 @@ static int CompareKeyTriples(const void *p, const void *q)
 }
 
 /* The bookkeeping fields of a reference (a, kind, b set) from the gathered disks: ids, radii, friction. */
-static void CompleteReference(KergsScene s, const Global *g, Reference *r)
+static void CompleteReference(KergsScene s, const Disks *g, Reference *r)
 {
   const PetscInt mb = r->kind == KERGS_CONTACT_DISK_DISK ? g->material[r->b] : s->walls[r->b].material;
 
@@ -198,10 +173,10 @@ static PetscErrorCode BruteForce(KergsScene s, Reference **ref, PetscInt *nref)
 {
   PetscInt   n = 0, cap = 16;
   Reference *r;
-  Global     g;
+  Disks     g;
 
   PetscFunctionBeginUser;
-  PetscCall(GlobalGather(s, &g));
+  PetscCall(DisksGather(s, &g));
   PetscCall(PetscMalloc1(cap, &r));
   for (PetscInt i = 0; i < g.n; i++) {
     const PetscReal *xi = &g.x[KERGS_DIM * i];
@@ -242,7 +217,7 @@ static PetscErrorCode BruteForce(KergsScene s, Reference **ref, PetscInt *nref)
     }
   }
   qsort(r, (size_t)n, sizeof(Reference), CompareReferenceByIndex);
-  PetscCall(GlobalFree(&g));
+  PetscCall(DisksFree(&g));
   *ref  = r;
   *nref = n;
   PetscFunctionReturn(0);
@@ -523,7 +498,7 @@ static PetscErrorCode TestAlertAndWalls(void)
   PetscReal     x[2 * (sizeof(pos) / sizeof(pos[0]))], r[sizeof(pos) / sizeof(pos[0])];
   KergsScene    s;
   KergsContacts ct;
-  Global        g;
+  Disks        g;
 
   PetscFunctionBeginUser;
   PetscCall(SceneCreate(PETSC_COMM_SELF, 2, alert, &s));
@@ -535,9 +510,9 @@ static PetscErrorCode TestAlertAndWalls(void)
   PetscCall(SetWall(s, 0, PETSC_TRUE, 0, 0, 1, 0, 0));       /* bottom line, normal +y */
   PetscCall(SetWall(s, 1, PETSC_FALSE, 200, 10, 200, 0, 1)); /* segment, normal +x */
   PetscCall(SceneSetDisks(s, ndisks, x, r, NULL));
-  PetscCall(GlobalGather(s, &g));
+  PetscCall(DisksGather(s, &g));
   for (PetscInt k = 0; k < 3; k++) CompleteReference(s, &g, &expect[k]);
-  PetscCall(GlobalFree(&g));
+  PetscCall(DisksFree(&g));
   PetscCall(KergsContactsCreate(PETSC_COMM_SELF, &ct));
   PetscCall(KergsContactsDetect(ct, s));
   PetscCheck(ct->n == 3 && ct->nglobal == 3 && ct->start == 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,

@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <fclib.h>
+#include "gathered_disks.h"
 
 #ifndef KERGS_FCLIB_LIBRARY
 #define KERGS_FCLIB_LIBRARY "libfclib.so.0"
@@ -500,23 +501,12 @@ static PetscErrorCode ExpectReadError(KergsScene target, const char path[], cons
   PetscFunctionReturn(0);
 }
 
-/* Every disk of a scene, gathered in global-index order on every rank. */
-typedef struct {
-  PetscReal x[KERGS_DIM * NDISKS], v[KERGS_DIM * NDISKS], rot[KERGS_NROT * NDISKS], omega[KERGS_NROT * NDISKS], radius[NDISKS];
-  PetscInt  id[NDISKS], material[NDISKS];
-} DiskArrays;
-
-static PetscErrorCode GatherDisks(KergsScene s, DiskArrays *all)
+/* Every disk of a scene of NDISKS disks, gathered in global-index order on every rank. */
+static PetscErrorCode GatherDisks(KergsScene s, Disks *all)
 {
   PetscFunctionBeginUser;
   PetscCheck(s->ndisks == NDISKS, s->comm, PETSC_ERR_PLIB, "scene %s has %" PetscInt_FMT " disks, not %d", s->name, s->ndisks, NDISKS);
-  PetscCall(KergsSceneAllGatherReal(s, s->x, KERGS_DIM, all->x));
-  PetscCall(KergsSceneAllGatherReal(s, s->v, KERGS_DIM, all->v));
-  PetscCall(KergsSceneAllGatherReal(s, s->rot, KERGS_NROT, all->rot));
-  PetscCall(KergsSceneAllGatherReal(s, s->omega, KERGS_NROT, all->omega));
-  PetscCall(KergsSceneAllGatherReal(s, s->radius, 1, all->radius));
-  PetscCall(KergsSceneAllGatherInt(s, s->id, 1, all->id));
-  PetscCall(KergsSceneAllGatherInt(s, s->material, 1, all->material));
+  PetscCall(DisksGather(s, all));
   PetscFunctionReturn(0);
 }
 
@@ -582,7 +572,7 @@ static PetscErrorCode TestSample(KergsScene scene, const char dir[])
   PetscCall(KergsSampleRead(target, path));
   ok = (PetscBool)(target->ndisks == NDISKS && target->time == scene->time);
   if (ok) { /* both scenes gathered in global-index order */
-    DiskArrays want, got;
+    Disks want, got;
     PetscCall(GatherDisks(scene, &want));
     PetscCall(GatherDisks(target, &got));
     ok = (PetscBool)(SameArray(got.x, want.x, KERGS_DIM * NDISKS) && SameArray(got.v, want.v, KERGS_DIM * NDISKS) &&
@@ -596,6 +586,8 @@ static PetscErrorCode TestSample(KergsScene scene, const char dir[])
           want.id[i] != DiskId(i) || want.material[i] != DiskMaterial(i))
         ok = PETSC_FALSE;
     }
+    PetscCall(DisksFree(&want));
+    PetscCall(DisksFree(&got));
   }
   PetscCall(Expect(comm, ok, "sample: write/read round-trips x, v, rot, omega, radius, material, id, time exactly"));
 

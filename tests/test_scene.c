@@ -4,6 +4,7 @@
    the gathered scene must be exactly the same on every rank and on any number of ranks.
    With -from_command_line the program instead builds a scene from the command line and views it (for -help). */
 #include <kergs/scene.h>
+#include "gathered_disks.h"
 #include <petscviewer.h>
 
 static PetscInt nfailed = 0;
@@ -61,42 +62,6 @@ static PetscErrorCode SceneGood(MPI_Comm comm, const char opts[], KergsScene *sc
   PetscFunctionBeginUser;
   PetscCall(SceneFromString(comm, opts, scene, &ierr, &msg));
   PetscCheck(!ierr, comm, PETSC_ERR_PLIB, "Valid options \"%s\" were rejected: %s", opts, msg);
-  PetscFunctionReturn(0);
-}
-
-/* Every disk of a scene in global-index order, gathered on every rank. */
-typedef struct {
-  PetscInt   n;
-  PetscReal *x, *v, *rot, *omega, *radius, *mass, *inertia;
-  PetscInt  *id, *material;
-} Disks;
-
-static PetscErrorCode DisksGather(KergsScene s, Disks *all)
-{
-  const PetscInt n = s->ndisks;
-
-  PetscFunctionBeginUser;
-  all->n = n;
-  PetscCall(PetscMalloc7(KERGS_DIM * n + 1, &all->x, KERGS_DIM * n + 1, &all->v, KERGS_NROT * n + 1, &all->rot, KERGS_NROT * n + 1, &all->omega,
-                         n + 1, &all->radius, n + 1, &all->mass, n + 1, &all->inertia));
-  PetscCall(PetscMalloc2(n + 1, &all->id, n + 1, &all->material));
-  PetscCall(KergsSceneAllGatherReal(s, s->x, KERGS_DIM, all->x));
-  PetscCall(KergsSceneAllGatherReal(s, s->v, KERGS_DIM, all->v));
-  PetscCall(KergsSceneAllGatherReal(s, s->rot, KERGS_NROT, all->rot));
-  PetscCall(KergsSceneAllGatherReal(s, s->omega, KERGS_NROT, all->omega));
-  PetscCall(KergsSceneAllGatherReal(s, s->radius, 1, all->radius));
-  PetscCall(KergsSceneAllGatherReal(s, s->mass, 1, all->mass));
-  PetscCall(KergsSceneAllGatherReal(s, s->inertia, 1, all->inertia));
-  PetscCall(KergsSceneAllGatherInt(s, s->id, 1, all->id));
-  PetscCall(KergsSceneAllGatherInt(s, s->material, 1, all->material));
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode DisksFree(Disks *all)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree7(all->x, all->v, all->rot, all->omega, all->radius, all->mass, all->inertia));
-  PetscCall(PetscFree2(all->id, all->material));
   PetscFunctionReturn(0);
 }
 
