@@ -451,11 +451,10 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
 
   for (a = 0; a < n; a++) {
     const PetscBool act = active ? active[a] : PETSC_TRUE;
+    const PetscInt   jlow = acc ? ai[a] : ds[2 * a], jup = acc ? ai[a] + 1 : ds[2 * a + 1]; /* upper: W_aa first */
     const PetscReal *co = NULL;
 
     if (k < norows && orows[k] == a) co = corr + nc * k++;
-    const PetscInt   jlow = acc ? ai[a] : ds[2 * a], jup = acc ? ai[a] + 1 : ds[2 * a + 1]; /* upper: W_aa first */
-
     if (!act) { /* the law gives r_a = 0: nothing changes, and nothing is measured, once it is 0 */
       PetscBool zero = PETSC_TRUE;
       for (c = 0; c < nc; c++) zero = (PetscBool)(zero && r[a * nc + c] == 0.0);
@@ -517,13 +516,17 @@ static PetscErrorCode BeginLowerRanksCoupling(KergsSweep s, Vec r)
 {
   const PetscScalar *rl;
   PetscScalar       *y, *bl;
+  PetscLogDouble     t0, t1;
 
   PetscFunctionBeginUser;
   PetscCall(VecSet(s->ylower, 0.0));
   PetscCall(VecGetArrayRead(r, &rl));
   PetscCall(VecGetArray(s->ylower, &y));
+  PetscCall(PetscTime(&t0));
   if (s->ncomp == 2) OffProcessTransposeProduct(2, s->norows, s->orows, s->bi, s->bj, s->ba, rl, y);
   else OffProcessTransposeProduct(1, s->norows, s->orows, s->bi, s->bj, s->ba, rl, y);
+  PetscCall(PetscTime(&t1));
+  s->compute_seconds += t1 - t0;
   PetscCall(VecRestoreArray(s->ylower, &y));
   PetscCall(VecRestoreArrayRead(r, &rl));
   PetscCall(VecGetArray(s->blower, &bl));
