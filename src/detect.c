@@ -341,12 +341,7 @@ static PetscErrorCode DetectDiskWall(KergsContacts ct, KergsScene scene, const W
   PetscFunctionReturn(0);
 }
 
-/* Order of contacts and of their histories: (a, kind, idb). */
-#define KERGS_COMPARE_KEYS(p, q) \
-  ((p)->a != (q)->a ? ((p)->a < (q)->a ? -1 : 1) : \
-   (p)->kind != (q)->kind ? ((p)->kind < (q)->kind ? -1 : 1) : (p)->idb != (q)->idb ? ((p)->idb < (q)->idb ? -1 : 1) : 0)
-
-static int CompareHistoryQsort(const void *p, const void *q)
+int KergsContactHistoryCompare(const void *p, const void *q)
 {
   return KERGS_COMPARE_KEYS((const KergsContactHistory *)p, (const KergsContactHistory *)q);
 }
@@ -368,7 +363,7 @@ static PetscErrorCode SaveHistory(KergsContacts ct)
   /* the list is sorted unless a caller reordered it (the migration of contacts sorts what it receives) */
   for (PetscInt k = 1; k < ct->nprev; k++)
     if (KERGS_COMPARE_KEYS(&ct->prev[k - 1], &ct->prev[k]) > 0) {
-      qsort(ct->prev, (size_t)ct->nprev, sizeof(KergsContactHistory), CompareHistoryQsort);
+      qsort(ct->prev, (size_t)ct->nprev, sizeof(KergsContactHistory), KergsContactHistoryCompare);
       break;
     }
   PetscFunctionReturn(0);

@@ -252,32 +252,16 @@ PetscErrorCode KergsPartitionRecord(KergsPartition p, KergsScene sc, KergsContac
 /* ---------------------------------------------------------------------------------------------------------- */
 /* Renumbering (migration)                                                                                    */
 
-/* A contact on its way to its new owner: the key of its history (a as a new global index, kind, idb) and its
-   impulse. Its frame needs no change: body a is the disk of smaller grain id whatever the numbering. */
-typedef struct {
-  PetscInt         a, idb;
-  KergsContactKind kind;
-  PetscReal        r[KERGS_MAXCOMP];
-} MovingContact;
-
-static int CompareContactKeys(const void *x, const void *y)
-{
-  const KergsContact *p = (const KergsContact *)x, *q = (const KergsContact *)y;
-
-  if (p->a != q->a) return p->a < q->a ? -1 : 1;
-  if (p->kind != q->kind) return p->kind < q->kind ? -1 : 1;
-  if (p->idb != q->idb) return p->idb < q->idb ? -1 : 1;
-  return 0;
-}
-
 /* Send every contact to the new owner of its disk a. The received ones replace ct->c, sorted by key and holding
    only their key and impulse (b = -1: the ghost layer is gone), so that the next detection carries the impulses
-   over; nothing else may read them before that detection. */
+   over; nothing else may read them before that detection. A contact travels as its history record (detect.h), a
+   being its new global index; its frame needs no change: body a is the disk of smaller grain id whatever the
+   numbering. */
 static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[], const PetscInt newranges[], PetscMPIInt rank,
                                       PetscMPIInt size)
 {
   PetscMPIInt   *scount, *fill, *dest;
-  MovingContact *sendbuf, *recvbuf;
+  KergsContactHistory *sendbuf, *recvbuf;
   PetscInt       nrecv;
 
   PetscFunctionBeginUser;
@@ -289,13 +273,14 @@ static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[],
   }
   for (PetscMPIInt q = 1; q < size; q++) fill[q] = fill[q - 1] + scount[q - 1];
   for (PetscInt k = 0; k < ct->n; k++) {
-    MovingContact *m = &sendbuf[fill[dest[k]]++];
+    KergsContactHistory *m = &sendbuf[fill[dest[k]]++];
     m->a             = newidx[ct->c[k].a];
     m->idb           = ct->c[k].idb;
     m->kind          = ct->c[k].kind;
     for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) m->r[j] = ct->c[k].r[j];
   }
-  PetscCall(KergsExchangeRecords(ct->comm, sizeof(MovingContact), scount, sendbuf, NULL, &recvbuf, &nrecv));
+  PetscCall(KergsExchangeRecords(ct->comm, sizeof(KergsContactHistory), scount, sendbuf, NULL, &recvbuf, &nrecv));
+  qsort(recvbuf, (size_t)nrecv, sizeof(KergsContactHistory), KergsContactHistoryCompare); /* new indices: same order as local ones */
   if (nrecv > ct->nalloc) {
     PetscCall(PetscFree(ct->c));
     PetscCall(PetscMalloc1(nrecv, &ct->c));
@@ -310,7 +295,6 @@ static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[],
     c->kind = recvbuf[k].kind;
     for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) c->r[j] = recvbuf[k].r[j];
   }
-  qsort(ct->c, (size_t)nrecv, sizeof(KergsContact), CompareContactKeys);
   ct->n     = nrecv;
   ct->start = 0;
   PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));

@@ -37,6 +37,13 @@ typedef struct {
   PetscReal        r[KERGS_MAXCOMP];
 } KergsContactHistory;
 
+/* Order of contacts and of their histories (any records with a, kind, idb): -1, 0 or 1. */
+#define KERGS_COMPARE_KEYS(p, q) \
+  ((p)->a != (q)->a ? ((p)->a < (q)->a ? -1 : 1) : \
+   (p)->kind != (q)->kind ? ((p)->kind < (q)->kind ? -1 : 1) : (p)->idb != (q)->idb ? ((p)->idb < (q)->idb ? -1 : 1) : 0)
+/* qsort comparator of KergsContactHistory records by key */
+PETSC_EXTERN int KergsContactHistoryCompare(const void *, const void *);
+
 typedef struct _p_KergsContacts *KergsContacts;
 struct _p_KergsContacts {
   MPI_Comm      comm;
