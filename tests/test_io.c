@@ -7,7 +7,7 @@
 #define _GNU_SOURCE /* RTLD_DEEPBIND */
 #include <kergs/results.h>
 #include <kergs/sample.h>
-#include <kergs/fclib_export.h>
+#include <kergs/fclib.h>
 #include <petscviewerhdf5.h>
 #include <dlfcn.h>
 #include <math.h>

@@ -8,11 +8,11 @@
 #include <kergs/detect.h>
 #include <kergs/operators.h>
 #include <kergs/law.h>
-#include <kergs/nlgs.h>
+#include <kergs/sweep.h>
 #include <kergs/solver.h>
 #include <kergs/results.h>
 #include <kergs/sample.h>
-#include <kergs/fclib_export.h>
+#include <kergs/fclib.h>
 #include <kergs/stepper.h>
 
 #endif

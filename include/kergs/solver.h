@@ -9,7 +9,7 @@
 #define KERGS_SOLVER_H
 
 #include <kergs/operators.h>
-#include <kergs/nlgs.h>
+#include <kergs/sweep.h>
 #include <kergs/results.h>
 
 typedef const char *KergsSolverType;

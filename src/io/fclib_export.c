@@ -7,7 +7,7 @@
    HDF5 calls bind to its own serial HDF5, and only rank 0 calls it. libfclib exits the process on an HDF5
    failure, so everything it is given is checked first. */
 #define _GNU_SOURCE /* RTLD_DEEPBIND */
-#include <kergs/fclib_export.h>
+#include <kergs/fclib.h>
 #include <kergs/results.h>
 #include <dlfcn.h>
 #include <limits.h>

@@ -3,8 +3,8 @@
    Unknowns per contact: normal then tangential; u = W r + q. Frictionless scenes are padded with a
    decoupled tangential component (W_tt = W_nn, mu = 0). Only active contacts are exported; the
    impulses kergs found are written as the problem's guess/solution. */
-#ifndef KERGS_FCLIB_EXPORT_H
-#define KERGS_FCLIB_EXPORT_H
+#ifndef KERGS_FCLIB_H
+#define KERGS_FCLIB_H
 
 #include <kergs/operators.h>
 

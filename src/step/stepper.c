@@ -2,7 +2,7 @@
    scene state -> detect -> operators -> solver -> update -> results. */
 #include <kergs/stepper.h>
 #include <kergs/sample.h>
-#include <kergs/fclib_export.h>
+#include <kergs/fclib.h>
 #include <sys/resource.h>
 
 /* Peak resident memory of the whole run so far, in bytes, summed over ranks. */

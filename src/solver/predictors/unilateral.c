@@ -1,11 +1,11 @@
 /* kergs predictor type "unilateral": the frictionless unilateral problem solved exactly on the normal
    components of the active contacts (the paper's "prédicteur unilatéral", section 3), no parameter:
      v_n = W_nn r_n + v^d_n,   0 <= v_n _|_ r_n >= 0 (active),   r_n = 0 (inactive),
-   by NLGS sweeps (include/kergs/nlgs.h, one component per contact, mu = 0) on the normal sub-block W_nn of W,
+   by NLGS sweeps (include/kergs/sweep.h, one component per contact, mu = 0) on the normal sub-block W_nn of W,
    warm-started from the contacts' impulses, until the W-weighted change quad < -predictor_unilateral_tol or
    -predictor_unilateral_max_it sweeps. Without friction in the scene W_nn is W itself. */
 #include <kergs/predictor.h>
-#include <kergs/nlgs.h>
+#include <kergs/sweep.h>
 
 typedef struct {
   PetscReal  tol;

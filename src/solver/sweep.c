@@ -1,4 +1,4 @@
-/* kergs nlgs: one non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2, DESIGN.md sections 4
+/* kergs sweep: one non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2, DESIGN.md sections 4
    and 6). The sweep reads W's block CSR arrays directly: one block row per contact, blocks W_alpha,beta of
    ncomp x ncomp (BAIJ, each block stored column by column; AIJ is the case ncomp = 1). Inside a rank it is Gauss-Seidel (contact alpha sees
    the impulses already updated in this sweep); across ranks it is Jacobi: the impulses of other ranks'
@@ -12,7 +12,7 @@
    computed on those ranks and added back through the same scatter reversed.
    For Algorithm 6 (NLGS-Jac) the caller passes the extra right-hand side and the regularised diagonal
    blocks W_aa + Z_aa; both are used as given. */
-#include <kergs/nlgs.h>
+#include <kergs/sweep.h>
 
 /* The block kernels are specialised by inlining with a constant number of components (1 or 2); the compiler's
    heuristics alone do not inline the sweep loop into its two call sites. */

@@ -1,11 +1,11 @@
-/* kergs nlgs: the non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2), reading W's block
+/* kergs sweep: the non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2), reading W's block
    CSR arrays directly (one block row of ncomp x ncomp blocks per contact), whole (AIJ, BAIJ) or upper block
    triangle only (SBAIJ). Gauss-Seidel inside a rank, Jacobi across ranks: the impulses of other ranks'
    contacts are scattered once per sweep (DESIGN.md section 6).
    Regularised variants (Algorithm 6, NLGS-Jac) pass an extra right-hand side per component and
    replacement diagonal blocks. */
-#ifndef KERGS_NLGS_H
-#define KERGS_NLGS_H
+#ifndef KERGS_SWEEP_H
+#define KERGS_SWEEP_H
 
 #include <kergs/law.h>
 #include <petscmat.h>
