@@ -35,23 +35,11 @@ static PetscErrorCode CheckUnusedOptions(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
-/* With -help, list the options of every solver type, not only of the chosen one: the regularised types
-   (kernel projector, predictors) are queried only when chosen. */
-static PetscErrorCode ListAllSolverOptions(MPI_Comm comm)
-{
-  KergsSolver all;
-
-  PetscFunctionBeginUser;
-  PetscCall(KergsSolverCreate(comm, &all));
-  PetscCall(KergsSolverSetType(all, KERGS_SOLVER_NLKERGS));
-  PetscCall((*all->ops.setfromoptions)(all, NULL));
-  PetscCall(KergsSolverDestroy(&all));
-  PetscFunctionReturn(0);
-}
-
 int main(int argc, char **argv)
 {
   KergsStepper stepper;
+  KergsScene   scene;
+  KergsSolver  solver;
   PetscBool    want_help = PETSC_FALSE;
 
   KergsReturnFreedMemory(); /* peak resident memory = peak of live data (base.h) */
@@ -60,11 +48,14 @@ int main(int argc, char **argv)
   PetscCall(PetscOptionsHasHelp(NULL, &want_help));
   PetscCall(KergsStepperCreate(PETSC_COMM_WORLD, &stepper));
   PetscCall(KergsStepperSetFromOptions(stepper));
-  if (want_help) PetscCall(ListAllSolverOptions(PETSC_COMM_WORLD));
+  PetscCall(KergsStepperGetScene(stepper, &scene));
+  PetscCall(KergsStepperGetSolver(stepper, &solver));
+  /* with -help, the options of every solver type, not only of the chosen one */
+  if (want_help) PetscCall(KergsSolverPrintHelpAllTypes(PETSC_COMM_WORLD));
   else {
     PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
-    PetscCall(KergsSceneView(stepper->scene, PETSC_VIEWER_STDOUT_WORLD));
-    PetscCall(KergsSolverView(stepper->solver, PETSC_VIEWER_STDOUT_WORLD));
+    PetscCall(KergsSceneView(scene, PETSC_VIEWER_STDOUT_WORLD));
+    PetscCall(KergsSolverView(solver, PETSC_VIEWER_STDOUT_WORLD));
     PetscCall(KergsStepperRun(stepper));
   }
   PetscCall(KergsStepperDestroy(&stepper));

@@ -3,7 +3,7 @@
 #ifndef KERGS_TESTS_GATHERED_DISKS_H
 #define KERGS_TESTS_GATHERED_DISKS_H
 
-#include <kergs/scene.h>
+#include "internals.h"
 
 typedef struct {
   PetscInt   n;

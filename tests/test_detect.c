@@ -7,7 +7,7 @@ static const char help[] = "Tests of contact detection (src/detect.c): the cell-
    KergsSceneSetDisks (the same full arrays on every rank, each rank keeps its contiguous slice as its owned
    disks), with grain ids set by the test on the owned disks. Detection builds the ghost layer itself. The
    reference for every check is a brute-force search over the disks gathered in global-index order. */
-#include <kergs/detect.h>
+#include "internals.h"
 #include "gathered_disks.h"
 
 #define TOL 1e-12

@@ -5,9 +5,7 @@
    contacts and operators are built by hand from the headers.
    Option: -dir <directory> for the files written (default test_io_out). */
 #define _GNU_SOURCE /* RTLD_DEEPBIND */
-#include <kergs/results.h>
-#include <kergs/sample.h>
-#include <kergs/fclib.h>
+#include "internals.h"
 #include <petscviewerhdf5.h>
 #include <dlfcn.h>
 #include <math.h>

@@ -5,7 +5,7 @@
 static const char help[] = "kergs kernel projector tests.\n";
 
 #include "testing.h"
-#include <kergs/kernel.h>
+#include "internals.h"
 #include <petscblaslapack.h>
 
 /* This step's contacts and operators at the current positions. */

@@ -1,7 +1,7 @@
 /* Tests of the exact one-contact law (src/law.c): for thousands of random SPD 2x2 blocks and right-hand
    sides, the returned r satisfies the Signorini-Coulomb law to rounding, the natural-map residual vanishes
    there and not at a perturbed r; plus hand-made cases, ncomp = 1, inactive contacts and degenerate blocks. */
-#include <kergs/law.h>
+#include "internals.h"
 
 static const char help[] = "Tests of the one-contact Signorini-Coulomb law.\n";
 

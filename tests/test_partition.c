@@ -5,7 +5,7 @@
 static const char help[] = "kergs partition tests: same physics on 1 and n ranks, renumbering, warm start across swaps, robustness.\n";
 
 #include "testing.h"
-#include <kergs/partition.h>
+#include "internals.h"
 
 /* Frictionless, with a tight natural-map criterion: the velocities are unique, so runs must agree closely. */
 #define TIGHT "-friction 0 -solver_criterion natural -solver_tol 1e-10 -solver_max_it 10000 "

@@ -460,7 +460,11 @@ static PetscErrorCode TestActiveOnlyW(void)
     PetscCall(VecDuplicate(ops->r, &r[k]));
     PetscCall(VecCopy(ops->r, r[k]));
   }
-  for (PetscInt k = 0; k < st->contacts->n; k++) nactive += KergsContactIsActive(st->scene, &st->contacts->c[k]);
+  {
+    KergsActivity act;
+    PetscCall(KergsContactsGetActivity(st->contacts, st->scene, &act));
+    for (PetscInt k = 0; k < st->contacts->n; k++) nactive += KergsContactIsActive(&act, &st->contacts->c[k]);
+  }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &nactive, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
   PetscCall(VecAXPY(r[1], -1.0, r[0]));
   PetscCall(VecNorm(r[1], NORM_INFINITY, &diff));

@@ -5,7 +5,7 @@
 static const char help[] = "kergs predictor tests: column, single disk closed forms, inactive contacts, 1 vs 2 ranks, options.\n";
 
 #include "testing.h"
-#include <kergs/predictor.h>
+#include "internals.h"
 
 /* Run nsteps steps, then build the next step's problem: detect, assemble, and mark the active contacts
    (g^- <= 0, the paper's gap rule). */

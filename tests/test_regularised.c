@@ -5,7 +5,7 @@
 static const char help[] = "kergs regularised solver tests.\n";
 
 #include "testing.h"
-#include <kergs/kernel.h>
+#include "internals.h"
 
 /* Run a scene to the end; report whether everything stayed finite and how many steps claimed convergence
    although their recorded criterion was above the tolerance (must be none). */

@@ -3,7 +3,7 @@
    owns a contiguous slice), so the checks gather the disks in global-index order (KergsSceneAllGather*), and
    the gathered scene must be exactly the same on every rank and on any number of ranks.
    With -from_command_line the program instead builds a scene from the command line and views it (for -help). */
-#include <kergs/scene.h>
+#include "internals.h"
 #include "gathered_disks.h"
 #include <petscviewer.h>
 

@@ -7,7 +7,7 @@
    - the NLGS-Jac entry points (extra right-hand side, replacement diagonal blocks) against the equivalent
      problem (W + omega I) r + vd - omega r~;
    - ns per contact per sweep on a larger lattice (printed only). */
-#include <kergs/sweep.h>
+#include "internals.h"
 
 static const char help[] = "Tests of the NLGS sweep.\n"
                            "  -perf_contacts <n>: number of contacts of the timing problem (default 50000)\n";

@@ -3,7 +3,7 @@
 #ifndef KERGS_TESTING_H
 #define KERGS_TESTING_H
 
-#include <kergs/kergs.h>
+#include "internals.h"
 
 static PetscInt nfail = 0;
 

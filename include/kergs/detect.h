@@ -45,27 +45,6 @@ typedef struct {
 PETSC_EXTERN int KergsContactHistoryCompare(const void *, const void *);
 
 typedef struct _p_KergsContacts *KergsContacts;
-struct _p_KergsContacts {
-  MPI_Comm      comm;
-  PetscInt      n, nalloc; /* contacts owned by this rank */
-  KergsContact *c;         /* sorted by (a, kind, idb) */
-  PetscInt      nglobal, start; /* global count and global index of c[0] */
-  /* foreign contacts: disk-disk contacts of another rank (their body a is a ghost here, of smaller id) whose body b
-     is a disk owned here, with their global index. Together with the owned contacts they are every contact at an
-     owned disk, as the assembly of W needs (each rank adds its bodies' terms). */
-  PetscInt      nforeign, nforeignalloc;
-  KergsContact *foreign;
-  PetscInt     *foreign_index;
-  /* previous detection, for persistence, sorted by (a, kind, idb); exists only during a detection */
-  PetscInt             nprev;
-  KergsContactHistory *prev;
-  /* broad-phase workspace: cell list over the bounding box of the disk centres, rebuilt by every call.
-     cellhead[cell] is the highest disk index in the cell (-1: empty), next[i] the next lower index in
-     disk i's cell (-1: end), so a walk visits a cell's disks in decreasing index order. */
-  PetscInt  ncellx, ncelly, ncellalloc, *cellhead, *next;
-  PetscInt  nnextalloc; /* capacity of next[] */
-  PetscReal cellsize, origin[KERGS_DIM];
-};
 
 PETSC_EXTERN PetscErrorCode KergsContactsCreate(MPI_Comm, KergsContacts *);
 /* Find every potential contact (gap < scene->alert) owned by this rank, among its owned disks and their ghosts
@@ -73,10 +52,32 @@ PETSC_EXTERN PetscErrorCode KergsContactsCreate(MPI_Comm, KergsContacts *);
    ones), and set nglobal and start (collective). O(local disks). */
 PETSC_EXTERN PetscErrorCode KergsContactsDetect(KergsContacts, KergsScene);
 PETSC_EXTERN PetscErrorCode KergsContactsDestroy(KergsContacts *);
-/* Whether contact c (owned or foreign) is active this step (eq. 2: the law applies when the predicted gap g~ <= 0,
-   otherwise r = 0). Paper's rule: g~ = g^-; LMGC90's: g~ = g^- + (1 - theta) dt v_n^-, v_n^- = n.(V_a - V_b) from the
-   velocities at the start of the step (a wall's: its velocity of the step, as the assembly sets it). Computed from the
-   contact and the bodies' state alone, so that every rank holding the contact decides alike. */
-PETSC_EXTERN PetscBool KergsContactIsActive(KergsScene, const KergsContact *);
+/* Accessors. The owned contacts, sorted by key (a, kind, idb); their impulses r may be written (the solve's result). */
+PETSC_EXTERN PetscErrorCode KergsContactsGetLocal(KergsContacts, PetscInt *n, KergsContact **c);
+/* The foreign contacts: disk-disk contacts owned by another rank (their body a is a ghost here, of smaller grain id)
+   whose body b is a disk owned here, with their global indices. With the owned contacts they are every contact at an
+   owned disk, as the assembly of W needs (each rank adds its own bodies' terms). */
+PETSC_EXTERN PetscErrorCode KergsContactsGetForeign(KergsContacts, PetscInt *n, const KergsContact **c, const PetscInt **index);
+/* Global index of this rank's first contact (contacts are numbered rank after rank) and the global count. */
+PETSC_EXTERN PetscErrorCode KergsContactsGetGlobalRange(KergsContacts, PetscInt *start, PetscInt *nglobal);
+/* Collective, when the disks migrate (partition): every contact goes to the new owner of its disk a, where it is kept
+   only as its key and impulse (b = -1) until the next detection, which carries the impulses over; nothing else may
+   read it before then. newidx[i]: new global index of owned disk i; newranges: the ranks' new index ranges (size + 1
+   entries). Call before the disks move. */
+PETSC_EXTERN PetscErrorCode KergsContactsMigrate(KergsContacts, const PetscInt newidx[], const PetscInt newranges[]);
+/* Which contacts are active this step (eq. 2: the law applies when the predicted gap g~ <= 0, otherwise r = 0). The
+   paper's rule: g~ = g^-; LMGC90's: g~ = g^- + (1 - theta) dt v_n^-, v_n^- = n.(V_a - V_b) from the velocities at the
+   start of the step (a wall's: its velocity of the step, as the assembly sets it). Decided from the contact and its
+   bodies' state alone, so that every rank holding a contact decides alike. KergsContactsGetActivity fetches the
+   rule and the state it reads (valid while the disks and walls do not change); KergsContactIsActive applies it to
+   one contact, owned or foreign. */
+typedef struct {
+  KergsGapRule     rule;
+  PetscReal        lead;  /* (1 - theta) dt */
+  const PetscReal *v;     /* disk velocities (local indices) */
+  const KergsWall *walls;
+} KergsActivity;
+PETSC_EXTERN PetscErrorCode KergsContactsGetActivity(KergsContacts, KergsScene, KergsActivity *);
+PETSC_EXTERN PetscBool      KergsContactIsActive(const KergsActivity *, const KergsContact *);
 
 #endif

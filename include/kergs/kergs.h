@@ -9,10 +9,13 @@
 #include <kergs/operators.h>
 #include <kergs/law.h>
 #include <kergs/sweep.h>
+#include <kergs/kernel.h>
+#include <kergs/predictor.h>
 #include <kergs/solver.h>
 #include <kergs/results.h>
 #include <kergs/sample.h>
 #include <kergs/fclib.h>
+#include <kergs/partition.h>
 #include <kergs/stepper.h>
 
 #endif

@@ -1,4 +1,4 @@
-/* kergs operators: the linear maps of one step as PETSc objects (DESIGN.md sections 2 and 6).
+/* kergs operators: the linear maps of one step as PETSc objects (docs/design.md: notation, parallel layout).
    Free DOFs: per disk KERGS_DIM translations, plus KERGS_NROT rotations only when the scene is
    frictional (frictionless contacts exert no torque on disks); then KERGS_DIM translations per free
    wall, owned by the last rank. Given DOFs: KERGS_DIM translations per driven wall, owned by rank 0.
@@ -15,27 +15,18 @@
 #include <petscmat.h>
 
 typedef struct _p_KergsOperators *KergsOperators;
-struct _p_KergsOperators {
-  MPI_Comm comm;
-  PetscInt ndof_disk; /* free DOFs per disk: KERGS_DIM (+ KERGS_NROT if frictional) */
-  PetscInt ncomp;     /* components per contact: 1 (frictionless) or KERGS_DIM */
-  PetscInt nfreewalls, ndrivenwalls;
-  PetscInt *wall_dof; /* per wall: global index of its first free DOF, or of its first given DOF (driven) */
-  Mat HfT;            /* H_f^T */
-  Mat Hf;             /* H_f, NULL until KergsOperatorsGetHf */
-  Mat HgT;            /* H_g^T, NULL when the scene has no driven wall */
-  Mat W;              /* H_f^T M^-1 H_f, (MPI)SBAIJ with block size ncomp: upper block triangle */
-  PetscBool W_active_only; /* W couples the active contacts only (KergsOperatorsAssembleW) */
-  Vec Minv;           /* diagonal of M^-1 over free DOFs */
-  Vec Vf;             /* free velocities V_f (V_f^- on entry of a step, V_f^+ after the update) */
-  Vec Rd;             /* impulse of external forces over the step */
-  Vec Vg;             /* given velocities V_g^+ (NULL without driven walls) */
-  Vec vd;             /* free local velocity v^d */
-  Vec r, v;           /* contact impulses and local velocities */
-  PetscInt   nfree, nfree_local, ngiven; /* free DOFs (global, local), given DOFs */
-  PetscInt   dstart;                      /* first disk of this rank when the DOF vectors were built */
-  PetscReal  nnz_Hf, nnz_W;               /* global nonzeros of H_f and of the whole W (both triangles) when built */
-};
+
+/* The layout of the unknowns (KergsOperatorsGetLayout). Free DOFs: disks in global-index order, ndof_disk each
+   (KergsOperatorsDiskDof), then KERGS_DIM per free wall (on the last rank); wall_dof[w] is wall w's first free DOF
+   (free wall) or first given DOF (driven wall). Contact components: ncomp per contact, contacts in global order. */
+typedef struct {
+  PetscInt        ncomp;          /* components per contact: 1 (frictionless) or KERGS_DIM */
+  PetscInt        ndof_disk;      /* free DOFs per disk: KERGS_DIM (+ KERGS_NROT when the disks rotate) */
+  PetscInt        ndisks;         /* disks (the first ndisks * ndof_disk free DOFs) */
+  PetscInt        nfreewalls, ndrivenwalls;
+  PetscInt        nfree, nfree_local, ngiven; /* free DOFs (global, this rank's), given DOFs */
+  const PetscInt *wall_dof;
+} KergsDofLayout;
 
 PETSC_EXTERN PetscErrorCode KergsOperatorsCreate(MPI_Comm, KergsOperators *);
 /* Build H_f^T, H_g^T, M^-1, W (over all pairs), V_f^-, V_g^+, R^d, v^d for the current scene and contact set:
@@ -54,7 +45,6 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsAssembleW(KergsOperators, KergsScene, 
 PETSC_EXTERN PetscErrorCode KergsOperatorsBuildHf(KergsOperators, KergsScene, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseH(KergsOperators);
 PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseW(KergsOperators);
-PETSC_EXTERN PetscErrorCode KergsOperatorsGetHf(KergsOperators, Mat *);
 /* W with both triangles stored, (MPI)BAIJ with block size ncomp ((MPI)AIJ when ncomp = 1), for the users that need
    whole rows (a new matrix: MatDestroy it) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetFullW(KergsOperators, Mat *);
@@ -64,8 +54,20 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsSetImpulses(KergsOperators, KergsConta
 /* V_f^+ = V_f^- + M^-1 (H_f r + R^d) (needs H_f), then copy the new velocities into the owned disks (velocities, angular
    velocities when the scene rotates) and the free walls (broadcast from their owner, the last rank) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators, KergsScene);
-/* Global free DOF index of the first DOF of the disk of global index i (scene->gidx[local index]) */
-#define KergsOperatorsDiskDof(ops, i) ((i) * (ops)->ndof_disk)
+/* Accessors. Objects of the current step, NULL when not built (or released). */
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetLayout(KergsOperators, KergsDofLayout *);
+/* r (impulses), v (local velocities) and v^d over the contact components; any argument may be NULL */
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetContactVectors(KergsOperators, Vec *r, Vec *v, Vec *vd);
+/* V_f, M^-1 (its diagonal), R^d over the free DOFs, V_g over the given DOFs (NULL without driven walls) */
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetDofVectors(KergsOperators, Vec *Vf, Vec *Minv, Vec *Rd, Vec *Vg);
+/* H_f^T, H_g^T */
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetH(KergsOperators, Mat *HfT, Mat *HgT);
+/* W as stored (upper block triangle, (MPI)SBAIJ), and whether it couples only the active contacts */
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetW(KergsOperators, Mat *W, PetscBool *active_only);
+/* Nonzeros of H_f and of the whole W (both triangles) when last built */
+PETSC_EXTERN PetscErrorCode KergsOperatorsGetNonzeros(KergsOperators, PetscReal *nnz_Hf, PetscReal *nnz_W);
+/* Global free DOF index of the first DOF of the disk of global index i, in a layout */
+#define KergsDiskDof(layout, i) ((i) * (layout)->ndof_disk)
 PETSC_EXTERN PetscErrorCode KergsOperatorsDestroy(KergsOperators *);
 
 #endif

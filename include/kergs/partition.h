@@ -22,18 +22,18 @@
    On one rank nothing is ever renumbered (every type is then the contiguous one).
 
    Measures: the work of a grain is 1 + the work of each of its contacts (disk-disk and disk-wall), 6 for an active
-   contact and 1 for an inactive one (src/partition.c, ContactWork: their costs in a sweep); the work of a rank is
-   the sum over the grains it owns. With -partition_work measured (the default) the work of a rank is instead its
+   contact and 1 for an inactive one (src/partition/partition.c, ContactWork: their costs in a sweep); the work of a
+   rank is the sum over the grains it owns (-partition_work model, the default). With -partition_work measured the work of a rank is instead its
    time in the sweeps' arithmetic at the last step (messages and reductions excluded), once every rank has timed
    some, and METIS weighs each grain by the model times its rank's time per modelled unit: what the model misses
    (measured on biaxial 20k: an active contact costs 38 ns per sweep in one half of the box, 48 in the other) is
    balanced at the next check. imbalance = max over ranks of the work / mean work. The edge cut is the
    number of disk-disk contacts whose grains are owned by different ranks. The ghosts of a rank are those of its
-   current ghost layer (src/scene_ghosts.c). */
+   current ghost layer (src/scene/ghosts.c). */
 #ifndef KERGS_PARTITION_H
 #define KERGS_PARTITION_H
 
-#include <kergs/results.h>
+#include <kergs/detect.h>
 
 typedef enum { KERGS_PARTITION_CONTIGUOUS, KERGS_PARTITION_GEOMETRIC, KERGS_PARTITION_METIS } KergsPartitionType;
 PETSC_EXTERN const char *const KergsPartitionTypes[];
@@ -63,6 +63,7 @@ typedef struct {
   PetscInt  my_grains, my_contacts, my_ghosts;
   PetscReal my_work;    /* modelled */
   PetscReal my_seconds; /* measured: time in the sweeps' arithmetic at the last step */
+  PetscInt  repartitions; /* partitions computed after the initial one, so far */
 } KergsPartitionMeasures;
 
 /* Repartitioning rule, checked every check_every steps: repartition when
@@ -71,32 +72,8 @@ typedef struct {
      edgecut > edgecut_growth * max(edgecut_base, 1), or
      the partition is provisional and the graph is dense enough for METIS. */
 typedef struct _p_KergsPartition *KergsPartition;
-struct _p_KergsPartition {
-  MPI_Comm           comm;
-  KergsPartitionType type;
-  PetscReal          imbalance_tol;  /* -partition_imbalance_tol (default 1.10) */
-  PetscReal          edgecut_growth; /* -partition_edgecut_growth (default 1.25) */
-  PetscInt           check_every;    /* -partition_check_every: steps between checks (0: never) */
-  PetscBool          view;           /* -partition_view: one line per rank and step */
-  PetscInt           metis_seed;     /* -partition_metis_seed */
-  PetscBool          metis_curve;    /* -partition_metis_curve: Hilbert-curve edges in METIS's graph */
-  KergsPartitionWork work;           /* -partition_work (default model) */
-  /* state */
-  PetscBool              initialized;    /* the initial partition was done */
-  PetscBool              provisional;    /* type metis, METIS not run yet: replace once the graph is dense enough */
-  PetscInt               edgecut_base;   /* edge cut right after the last partition (-1: unknown, set at the next check) */
-  PetscReal              imbalance_base; /* imbalance right after the last partition, on the graph it was computed from */
-  PetscInt               nrepartitions;  /* partitions computed after the initial one */
-  PetscInt               nmoved;         /* grains that changed rank, summed over every partition */
-  PetscInt               last_method;    /* method of the latest partition (a KergsPartitionType) */
-  PetscLogDouble         seconds;        /* time spent partitioning and renumbering */
-  KergsPartitionMeasures last;           /* latest measures (KergsPartitionRecord) */
-  PetscReal              compute_seconds; /* this rank's time in the sweeps' arithmetic at the last step (KergsPartitionRecord) */
-  PetscReal              work_scale;      /* measured work: this rank's time per modelled unit over the mean (KergsPartitionMeasure) */
-};
 
 PETSC_EXTERN PetscErrorCode KergsPartitionCreate(MPI_Comm, KergsPartition *);
-PETSC_EXTERN PetscErrorCode KergsPartitionSetType(KergsPartition, KergsPartitionType);
 /* -partition_type, -partition_imbalance_tol, -partition_edgecut_growth, -partition_check_every, -partition_view,
    -partition_metis_curve, -partition_metis_seed. Default type: metis on more than one rank, contiguous on one. */
 PETSC_EXTERN PetscErrorCode KergsPartitionSetFromOptions(KergsPartition);
@@ -111,10 +88,13 @@ PETSC_EXTERN PetscErrorCode KergsPartitionApply(KergsPartition, KergsScene, Kerg
 PETSC_EXTERN PetscErrorCode KergsPartitionUpdate(KergsPartition, KergsScene, KergsContacts, PetscBool *repartitioned);
 /* Collective: edge cut, work imbalance, ghosts, per-rank counts of the current partition and contacts. */
 PETSC_EXTERN PetscErrorCode KergsPartitionMeasure(KergsPartition, KergsScene, KergsContacts, KergsPartitionMeasures *);
-/* Collective: measure, record "edge_cut", "imbalance", "ghosts", "repartitions" (cumulative) in the results,
-   and with -partition_view print one line per rank (grains, ghosts, contacts, work, sweep_seconds: this rank's
-   sweep time, compute_seconds: its arithmetic in them, the measured work) and one summary line. */
-PETSC_EXTERN PetscErrorCode KergsPartitionRecord(KergsPartition, KergsScene, KergsContacts, PetscReal sweep_seconds, PetscReal compute_seconds, KergsResults);
+/* Collective, after each step's solve: measure the partition (into *m, may be NULL), keep this rank's time in the
+   sweeps' arithmetic (compute_seconds, for -partition_work measured), and with -partition_view print one line per
+   rank (grains, ghosts, contacts, work, sweep_seconds: this rank's sweep time, compute_seconds: its arithmetic in
+   them) and one summary line. */
+PETSC_EXTERN PetscErrorCode KergsPartitionObserve(KergsPartition, KergsScene, KergsContacts, PetscReal sweep_seconds, PetscReal compute_seconds, KergsPartitionMeasures *m);
+/* Whether -partition_view was given */
+PETSC_EXTERN PetscErrorCode KergsPartitionGetView(KergsPartition, PetscBool *);
 PETSC_EXTERN PetscErrorCode KergsPartitionView(KergsPartition, PetscViewer);
 PETSC_EXTERN PetscErrorCode KergsPartitionDestroy(KergsPartition *);
 

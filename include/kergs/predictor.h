@@ -8,7 +8,7 @@
    prefix predictor_ (default: direct Cholesky, CHOLMOD on one rank, MUMPS on several). D selects the normal
    components of the active contacts (g^- < 0).
 
-   Units (DESIGN.md section 2; impulses in mass x velocity). The linear law r_n = -(dt/eta) v_n makes eta/dt
+   Units (impulses in mass x velocity). The linear law r_n = -(dt/eta) v_n makes eta/dt
    a compliance (velocity per impulse, 1/mass) like W_nn; the elastic law r_n = -(dt/eps) g^+ makes 1/eps a
    contact stiffness (force per length), so eps/dt^2 is again a compliance. With -predictor_relative (the
    default) -predictor_eta and -predictor_epsilon are dimensionless and scaled by w, the mean W_nn over the
@@ -38,32 +38,7 @@ typedef const char *KergsPredictorType;
 #define KERGS_PREDICTOR_ELASTIC    "elastic"
 
 typedef struct _p_KergsPredictor *KergsPredictor;
-typedef struct {
-  PetscErrorCode (*setfromoptions)(KergsPredictor, PetscOptionItems *);
-  PetscErrorCode (*predict)(KergsPredictor, KergsScene, KergsContacts, KergsOperators, const PetscBool *active, Vec rtilde);
-  PetscErrorCode (*view)(KergsPredictor, PetscViewer);
-  PetscErrorCode (*destroy)(KergsPredictor);
-} KergsPredictorOps;
 
-struct _p_KergsPredictor {
-  MPI_Comm          comm;
-  char              type[64];
-  KergsPredictorOps ops;
-  void             *data;
-  PetscReal         eta;         /* -predictor_eta (linear) */
-  PetscReal         epsilon;     /* -predictor_epsilon (elastic) */
-  KSP               ksp;         /* DOF-space solver, prefix predictor_ */
-  PetscInt          ksp_its;     /* iterations of the last solve (0 for direct) */
-  PetscReal         seconds;     /* time of the last prediction */
-  PetscBool         relative;    /* -predictor_relative: eta and epsilon relative to the mean W_nn (above) */
-  PetscReal         wmean;       /* last prediction: mean W_nn over the active contacts (1/mass; 1 if none) */
-  PetscReal         eta_abs;     /* last prediction: eta in s/kg (dt/eta_abs multiplies velocities) */
-  PetscReal         epsilon_abs; /* last prediction: epsilon in s^2/kg */
-  PetscInt          nactive;     /* last prediction: active contacts (global) */
-  PetscInt          sweeps;      /* last prediction (unilateral): NLGS sweeps */
-  PetscBool         converged;   /* last prediction: the KSP or the unilateral NLGS reached its tolerance */
-  Vec               Vtilde;      /* last prediction (linear, elastic): V~_f; NULL when no system was solved */
-};
 
 PETSC_EXTERN PetscErrorCode KergsPredictorRegister(const char[], PetscErrorCode (*)(KergsPredictor));
 PETSC_EXTERN PetscErrorCode KergsPredictorCreate(MPI_Comm, KergsPredictor *);
@@ -77,19 +52,17 @@ PETSC_EXTERN PetscErrorCode KergsPredictorPredict(KergsPredictor, KergsScene, Ke
 PETSC_EXTERN PetscErrorCode KergsPredictorView(KergsPredictor, PetscViewer);
 PETSC_EXTERN PetscErrorCode KergsPredictorDestroy(KergsPredictor *);
 
-PETSC_EXTERN PetscErrorCode KergsPredictorCreate_None(KergsPredictor);
-PETSC_EXTERN PetscErrorCode KergsPredictorCreate_Linear(KergsPredictor);
-PETSC_EXTERN PetscErrorCode KergsPredictorCreate_Unilateral(KergsPredictor);
-PETSC_EXTERN PetscErrorCode KergsPredictorCreate_Elastic(KergsPredictor);
-
-/* Shared by the types. */
-/* Create p->ksp (prefix predictor_) with the direct default; KergsPredictorSetFromOptions then reads its options. */
-PETSC_EXTERN PetscErrorCode KergsPredictorCreateKSP(KergsPredictor);
-/* The regularised prediction of Algorithms 4 and 5, with A = D H_f^T (the active normal rows of H_f^T):
-     (M + c A^T A) V~ = R^d + M V_f^- - A^T q,   r~_n = -(q + c A V~) on the active normal components.
-   q: over all contact components (layout of ops->r), only its active normal entries are read.
-   Sets p->Vtilde, p->ksp_its, p->converged; rtilde's other components are left untouched. Collective. */
-PETSC_EXTERN PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor, KergsContacts, KergsOperators, const PetscBool *active,
-                                                           PetscReal c, Vec q, Vec rtilde);
+/* What the last prediction found and cost (KergsPredictorGetStats). */
+typedef struct {
+  const char *type;        /* the predictor type */
+  PetscReal   seconds;     /* time of the prediction */
+  PetscInt    ksp_its;     /* iterations of the DOF-space solve (0 for a direct solve) */
+  PetscInt    sweeps;      /* unilateral: NLGS sweeps */
+  PetscBool   converged;   /* the KSP or the unilateral NLGS reached its tolerance */
+  PetscInt    nactive;     /* active contacts (global) */
+  PetscReal   eta_abs;     /* eta used, in s/kg */
+  PetscReal   epsilon_abs; /* epsilon used, in s^2/kg */
+} KergsPredictorStats;
+PETSC_EXTERN PetscErrorCode KergsPredictorGetStats(KergsPredictor, KergsPredictorStats *);
 
 #endif

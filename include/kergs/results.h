@@ -12,24 +12,11 @@
 #ifndef KERGS_RESULTS_H
 #define KERGS_RESULTS_H
 
-#include <kergs/operators.h>
+#include <kergs/detect.h>
 
 #define KERGS_RESULTS_MAXSTATS 64
 
 typedef struct _p_KergsResults *KergsResults;
-struct _p_KergsResults {
-  MPI_Comm    comm;
-  char        path[PETSC_MAX_PATH_LEN], tmppath[PETSC_MAX_PATH_LEN];
-  PetscViewer viewer;
-  PetscInt    snapshot_every; /* -output_every: steps between snapshots (0: first and last only) */
-  PetscInt    nsnapshots;
-  PetscInt    nstats, nrows, nalloc;
-  char        statname[KERGS_RESULTS_MAXSTATS][64];
-  PetscReal  *statvalues[KERGS_RESULTS_MAXSTATS];
-  PetscBool   enabled;
-  char        scenename[PETSC_MAX_PATH_LEN]; /* names the default output path results/<scenename>.h5 */
-  PetscInt    last_snapshot_step;            /* step of the latest snapshot (-1: none yet) */
-};
 
 PETSC_EXTERN PetscErrorCode KergsResultsCreate(MPI_Comm, KergsResults *);
 /* Name used for the default path results/<name>.h5 when -output is not given (call before Open;
@@ -40,6 +27,15 @@ PETSC_EXTERN PetscErrorCode KergsResultsOpen(KergsResults);
 /* Record one statistic of the current step (same call on every rank, values already reduced). */
 PETSC_EXTERN PetscErrorCode KergsResultsRecord(KergsResults, const char name[], PetscReal value);
 PETSC_EXTERN PetscErrorCode KergsResultsEndStep(KergsResults);
+/* Record a text of the run (a type name, ...) as a string attribute of /stats; the last value given is kept. */
+PETSC_EXTERN PetscErrorCode KergsResultsRecordText(KergsResults, const char name[], const char value[]);
+/* The statistic `name` of step row `row` (-1: the last completed row), as recorded so far; *found tells whether it was
+   recorded (NaN for a row where it was not). */
+PETSC_EXTERN PetscErrorCode KergsResultsGetStatistic(KergsResults, const char name[], PetscInt row, PetscReal *value, PetscBool *found);
+/* Rows completed so far */
+PETSC_EXTERN PetscErrorCode KergsResultsGetNumRows(KergsResults, PetscInt *);
+/* The results file's path, and whether results are written at all (-output_none) */
+PETSC_EXTERN PetscErrorCode KergsResultsGetPath(KergsResults, const char **path, PetscBool *enabled);
 /* Whether the snapshot policy asks for a snapshot at this step: the first snapshot of the run (none
    written yet), the last step (last = PETSC_TRUE), and with -output_every N > 0 every step that is a
    multiple of N. Always PETSC_FALSE with -output_none. */

@@ -1,9 +1,9 @@
 /* kergs scene: the bodies (disks, walls), materials, loading programs and numerical settings of a run.
    A scene is read from the options database (an options file under cases/); its disks come from a
    built-in generator (lattice, random) or from a sample file written by an earlier run.
-   The disk state is distributed (DESIGN.md section 6): rank p owns the disks of the global index range
+   The disk state is distributed (docs/design.md, "Parallel layout"): rank p owns the disks of the global index range
    [dstart, dend), stored first in its local arrays, followed by ghost copies of other ranks' disks that can
-   touch its own (src/scene_ghosts.c). A disk's global index is its place in the current partition's numbering
+   touch its own (src/scene/ghosts.c). A disk's global index is its place in the current partition's numbering
    (it changes when disks migrate); its grain id is persistent. */
 #ifndef KERGS_SCENE_H
 #define KERGS_SCENE_H
@@ -44,47 +44,23 @@ typedef struct {
 } KergsWall;
 
 typedef struct _p_KergsScene *KergsScene;
-struct _p_KergsScene {
-  MPI_Comm comm;
-  char     name[PETSC_MAX_PATH_LEN];
-  /* disks: local structure of arrays, owned disks [0, nowned) then ghosts [nowned, nlocal) */
-  PetscInt   ndisks;           /* global number of disks */
-  PetscInt   nowned, nlocal;   /* disks owned here; owned + ghosts */
-  PetscInt   nalloc;           /* capacity of the local arrays */
-  PetscInt  *gidx;     /* global index (owned disk i: dstart + i) */
-  PetscInt  *id;       /* persistent grain id */
-  PetscReal *x;        /* KERGS_DIM * ndisks positions */
-  PetscReal *rot;      /* KERGS_NROT * ndisks orientations */
-  PetscReal *v;        /* KERGS_DIM * ndisks velocities */
-  PetscReal *omega;    /* KERGS_NROT * ndisks angular velocities */
-  PetscReal *radius, *mass, *inertia;
-  PetscInt  *material;
-  PetscInt   dstart, dend; /* global indices of the disks owned by this rank */
-  /* ghost layer (src/scene_ghosts.c) */
-  PetscSF    ghost_sf;       /* roots: owned disks, leaves: ghosts (NULL: no valid ghost layer) */
-  PetscInt  *ghost_owner;    /* per ghost: the rank that owns it */
-  PetscReal  ghost_skin;     /* -ghost_skin: the layer is rebuilt once some disk moved more than half of it */
-  PetscReal *xref;           /* owned positions when the layer was built */
-  PetscInt   ghost_rebuilds; /* layers built so far */
-  /* walls (replicated) */
-  PetscInt   nwalls;
-  KergsWall *walls;
-  /* materials */
-  PetscInt   nmaterials;
-  PetscReal *density; /* per material (mass per unit area in 2D) */
-  PetscReal *mu;      /* friction coefficient, nmaterials x nmaterials, symmetric */
-  PetscBool  frictional; /* some pair has mu > 0: contacts carry tangential components, disks rotate */
-  PetscBool  lock_rotation; /* -disks_lock_rotation: disks translate only (sliding blocks), no rotation DOFs */
-  /* loading and numerics */
-  PetscReal    gravity[KERGS_DIM];
-  PetscReal    dt, theta;
-  PetscInt     nsteps;
-  KergsGapRule gaprule;
-  PetscReal    alert; /* alert distance: potential contacts have gap < alert */
-  /* clock */
-  PetscInt  step;
-  PetscReal time;
-};
+
+/* This rank's disks (KergsSceneGetDisks): a structure of arrays, owned disks [0, nowned) first, then ghosts
+   [nowned, nlocal). The arrays are the scene's own, valid until the disks are replaced (KergsSceneSetDisks), migrate
+   (KergsSceneMigrate) or the ghost layer is rebuilt (KergsSceneUpdateGhosts); only the time step's update writes the
+   owned disks' positions and velocities (KergsSceneAdvance). */
+typedef struct {
+  PetscInt         ndisks;         /* global number of disks */
+  PetscInt         nowned, nlocal; /* disks owned here; owned + ghosts */
+  PetscInt         dstart, dend;   /* global indices of the owned disks */
+  const PetscInt  *gidx;           /* global index (owned disk i: dstart + i) */
+  const PetscInt  *id;             /* persistent grain id */
+  const PetscInt  *material;
+  const PetscInt  *ghost_owner;    /* per ghost (local index nowned + g): the rank that owns it */
+  PetscReal       *x, *v;          /* KERGS_DIM per disk: centre, velocity */
+  PetscReal       *rot, *omega;    /* KERGS_NROT per disk: orientation, angular velocity */
+  const PetscReal *radius, *mass, *inertia;
+} KergsDisks;
 
 /* Defaults: gravity (0, -9.81), dt 1e-3, 100 steps, theta 1, paper gap rule, one material of density 1 without
    friction, alert automatic (negative until disks are set), no disks, no walls. */
@@ -109,7 +85,37 @@ PETSC_EXTERN PetscErrorCode KergsSceneKineticEnergy(KergsScene, PetscReal *ek, P
 /* Make room for n local disks (owned + ghosts), keeping the first nlocal. */
 PETSC_EXTERN PetscErrorCode KergsSceneReserve(KergsScene, PetscInt n);
 
-/* Distributed state (src/scene_ghosts.c). */
+/* Disk source "file": replace the scene's disks with those of a sample file written by KergsSampleWrite (kergs/sample.h;
+   materials must exist in the scene, grain ids must be distinct non-negative integers). Collective. */
+PETSC_EXTERN PetscErrorCode KergsSampleRead(KergsScene, const char path[]);
+
+/* Accessors. */
+PETSC_EXTERN PetscErrorCode KergsSceneGetDisks(KergsScene, KergsDisks *);
+/* The walls (replicated on every rank); their positions and velocities are the scene's to change. */
+PETSC_EXTERN PetscErrorCode KergsSceneGetWalls(KergsScene, PetscInt *nwalls, const KergsWall **walls);
+PETSC_EXTERN PetscErrorCode KergsSceneGetName(KergsScene, const char **name);
+PETSC_EXTERN PetscErrorCode KergsSceneGetComm(KergsScene, MPI_Comm *);
+PETSC_EXTERN PetscErrorCode KergsSceneGetTimeStep(KergsScene, PetscReal *dt, PetscReal *theta);
+/* Steps taken, scene time, and the number of steps the run asks for (-steps). */
+PETSC_EXTERN PetscErrorCode KergsSceneGetStep(KergsScene, PetscInt *step, PetscReal *time, PetscInt *nsteps);
+PETSC_EXTERN PetscErrorCode KergsSceneGetGravity(KergsScene, PetscReal gravity[]);
+/* Materials: their number and the friction table mu[a * nmaterials + b] (symmetric). */
+PETSC_EXTERN PetscErrorCode KergsSceneGetMaterials(KergsScene, PetscInt *nmaterials, const PetscReal **mu);
+/* Alert distance (potential contacts have a gap below it) and the rule deciding which of them are active. */
+PETSC_EXTERN PetscErrorCode KergsSceneGetContactRule(KergsScene, PetscReal *alert, KergsGapRule *rule);
+/* What the scene models: frictional (some material pair has mu > 0: contacts carry a tangential component) and
+   rotating (frictional disks not locked by -disks_lock_rotation: a rotational DOF per disk). */
+PETSC_EXTERN PetscErrorCode KergsSceneGetModel(KergsScene, PetscBool *frictional, PetscBool *rotating);
+/* The end of a time step (Algorithm 1): the owned disks' and free walls' new velocities are already in place;
+   x+ = x- + dt (theta V+ + (1 - theta) V-) for them with V- = (vold, wold, wvold: per owned disk KERGS_DIM and
+   KERGS_NROT values, per wall KERGS_DIM), driven walls move with their velocity of the step, and the clock advances by
+   one step. The ghosts are not refreshed (KergsSceneRefreshGhosts). */
+PETSC_EXTERN PetscErrorCode KergsSceneAdvance(KergsScene, const PetscReal vold[], const PetscReal wold[], const PetscReal wvold[]);
+/* Set wall w's velocity (KERGS_DIM values): a driven wall's for the step (its program's, set by the assembly), a free
+   wall's new one (the velocity update). Disks' velocities are written through KergsDisks. */
+PETSC_EXTERN PetscErrorCode KergsSceneSetWallVelocity(KergsScene, PetscInt w, const PetscReal v[]);
+
+/* Distributed state (src/scene/ghosts.c). */
 /* Collective. Rebuild the ghost layer when asked, when there is none, or when some disk moved more than
    ghost_skin / 2 since the last build; otherwise leave it (its state is current after KergsSceneRefreshGhosts).
    After a build, every disk of another rank whose centre is within 2 max(R) + alert + ghost_skin of this rank's

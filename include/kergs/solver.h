@@ -9,8 +9,6 @@
 #define KERGS_SOLVER_H
 
 #include <kergs/operators.h>
-#include <kergs/sweep.h>
-#include <kergs/results.h>
 
 typedef const char *KergsSolverType;
 #define KERGS_SOLVER_NLGS    "nlgs"
@@ -24,46 +22,39 @@ typedef enum {
 } KergsCriterion;
 PETSC_EXTERN const char *const KergsCriteria[];
 
+/* A named figure of a solve (KergsSolveStats): the time step hands them to the results file as statistics. */
+#define KERGS_SOLVE_MAXEXTRA 32
+typedef struct {
+  char      name[32];
+  PetscReal value;
+} KergsNamedValue;
+/* A named text of a solve, such as the type of a sub-object: recorded once per run. */
+#define KERGS_SOLVE_MAXTEXT 4
+typedef struct {
+  char name[32];
+  char value[64];
+} KergsNamedText;
+
+/* What a solve found and cost (KergsSolverSolve). */
 typedef struct {
   PetscInt  iterations;
-  PetscBool converged;
-  PetscReal criterion; /* value of the chosen criterion at exit */
-  PetscReal residual;  /* natural-map residual recomputed from r at exit */
-  PetscReal seconds;       /* whole solve: set-up, sweeps, final residual */
-  PetscReal sweep_seconds; /* the sweeps alone */
+  PetscBool converged;       /* the chosen criterion fell below -solver_tol before -solver_max_it */
+  PetscReal criterion;       /* value of the chosen criterion at exit */
+  PetscReal residual;        /* natural-map residual of the original problem, recomputed from r at exit */
+  PetscReal seconds;         /* whole solve: set-up, sweeps, final residual */
+  PetscReal sweep_seconds;   /* the sweeps alone */
   PetscReal compute_seconds; /* this rank's arithmetic in the sweeps (no waiting for messages or reductions) */
+  PetscInt        nextra;    /* the type's own figures of the step (kernel, predictor, omega, ...) */
+  KergsNamedValue extra[KERGS_SOLVE_MAXEXTRA];
+  PetscInt        ntext;     /* the type's own texts (predictor type, ...) */
+  KergsNamedText  text[KERGS_SOLVE_MAXTEXT];
 } KergsSolveStats;
+/* Add a named figure or text to the statistics of a solve (for the types). */
+PETSC_EXTERN PetscErrorCode KergsSolveStatsAdd(KergsSolveStats *, const char name[], PetscReal value);
+PETSC_EXTERN PetscErrorCode KergsSolveStatsAddText(KergsSolveStats *, const char name[], const char value[]);
 
 typedef struct _p_KergsSolver *KergsSolver;
-typedef struct {
-  PetscErrorCode (*setfromoptions)(KergsSolver, PetscOptionItems *); /* called after the common options, outside their block (NULL items): a type opens its own */
-  PetscErrorCode (*setup)(KergsSolver, KergsScene, KergsContacts, KergsOperators);
-  PetscErrorCode (*solve)(KergsSolver, KergsScene, KergsContacts, KergsOperators, KergsSolveStats *);
-  PetscErrorCode (*view)(KergsSolver, PetscViewer);
-  PetscErrorCode (*destroy)(KergsSolver);
-  /* optional: before every sweep, update the extra right-hand side from the current r (NLGS-Jac's Jacobi part) */
-  PetscErrorCode (*presweep)(KergsSolver, KergsOperators, PetscReal *extra);
-  /* optional: record the type's own statistics of the step */
-  PetscErrorCode (*record)(KergsSolver, KergsResults);
-} KergsSolverOps;
 
-struct _p_KergsSolver {
-  MPI_Comm       comm;
-  char           type[64];
-  KergsSolverOps ops;
-  void          *data;
-  PetscInt       max_it;
-  PetscReal      tol;
-  KergsCriterion criterion;
-  KergsSweep     sweep;         /* Gauss-Seidel on W; also computes the physical residual */
-  KergsSweep     iterate_sweep; /* when set, the sweeps run on this one instead (nlkergs: on W~) */
-  PetscBool      needs_H;       /* the type reads H_f, H_g during its solve (kernel projector, predictors), and W over all
-                                   pairs of contacts: the time step keeps H alive from assembly to the velocity update and
-                                   assembles the whole W (otherwise W couples the active contacts only) */
-  PetscReal     *mu;     /* per local contact */
-  PetscBool     *active; /* per local contact */
-  PetscInt       nalloc;
-};
 
 PETSC_EXTERN PetscErrorCode KergsSolverRegister(const char[], PetscErrorCode (*)(KergsSolver));
 PETSC_EXTERN PetscErrorCode KergsSolverCreate(MPI_Comm, KergsSolver *);
@@ -72,16 +63,17 @@ PETSC_EXTERN PetscErrorCode KergsSolverSetFromOptions(KergsSolver);
 PETSC_EXTERN PetscErrorCode KergsSolverSolve(KergsSolver, KergsScene, KergsContacts, KergsOperators, KergsSolveStats *);
 PETSC_EXTERN PetscErrorCode KergsSolverView(KergsSolver, PetscViewer);
 PETSC_EXTERN PetscErrorCode KergsSolverDestroy(KergsSolver *);
-/* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */
-PETSC_EXTERN PetscErrorCode KergsSolverSetUpSweep(KergsSolver, KergsScene, KergsContacts, KergsOperators);
-/* Shared by the types: run sweeps until the criterion or max_it, extra/diag as in KergsSweepRun; when the type
-   has a presweep hook, extra (one entry per local component) is updated by it before every sweep. */
-PETSC_EXTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *);
-/* Statistics of the step common to every type (sizes of H_f and W) and the type's own. */
-PETSC_EXTERN PetscErrorCode KergsSolverRecordStats(KergsSolver, KergsOperators, KergsResults);
+/* With -help: print the options of every registered type, not only of the chosen one. Collective. */
+PETSC_EXTERN PetscErrorCode KergsSolverPrintHelpAllTypes(MPI_Comm);
 
-PETSC_EXTERN PetscErrorCode KergsSolverCreate_NLGS(KergsSolver);
-PETSC_EXTERN PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver);
-PETSC_EXTERN PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver);
-
+/* Accessors. */
+PETSC_EXTERN PetscErrorCode KergsSolverGetType(KergsSolver, KergsSolverType *);
+/* Per local contact, whether it was active in the last solve (valid until the next solve) */
+PETSC_EXTERN PetscErrorCode KergsSolverGetActive(KergsSolver, const PetscBool **active);
+/* Whether the type reads H_f and H_g during its solve and W over all pairs of contacts (the kernel-regularised types):
+   the time step then keeps H alive from assembly to the velocity update and assembles the whole W (otherwise W
+   couples the active contacts only). */
+PETSC_EXTERN PetscErrorCode KergsSolverNeedsH(KergsSolver, PetscBool *);
+/* -solver_max_it and -solver_tol */
+PETSC_EXTERN PetscErrorCode KergsSolverGetTolerances(KergsSolver, PetscReal *tol, PetscInt *max_it);
 #endif

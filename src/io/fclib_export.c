@@ -59,11 +59,9 @@ static PetscErrorCode KergsFCLibProblemFree(KergsFCLibProblem *p)
 
 /* Global row indices of W (contact components) of this rank's active contacts, gathered on rank 0 in
    order; also the per-contact pack (q_n, q_t, mu, r_n, r_t) of those contacts. */
-static PetscErrorCode KergsFCLibGather(KergsContacts contacts, KergsOperators ops, const PetscBool *active, PetscInt rstart, PetscInt *na,
-                                       PetscInt **rows, PetscReal **pack)
+static PetscErrorCode FCLibGather(MPI_Comm comm, PetscInt n, const KergsContact *contacts, PetscInt nc, Vec vdv, const PetscBool *active, PetscInt rstart,
+                                  PetscInt *na, PetscInt **rows, PetscReal **pack)
 {
-  const PetscInt     nc   = ops->ncomp;
-  MPI_Comm           comm = ops->comm;
   PetscMPIInt        rank, size, nloc = 0, ntot = 0, *counts = NULL, *displs = NULL;
   PetscInt          *lrows;
   PetscReal         *lpack;
@@ -72,12 +70,12 @@ static PetscErrorCode KergsFCLibGather(KergsContacts contacts, KergsOperators op
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCallMPI(MPI_Comm_size(comm, &size));
-  for (PetscInt k = 0; k < contacts->n; k++)
+  for (PetscInt k = 0; k < n; k++)
     if (active[k]) nloc++;
   PetscCall(PetscMalloc2(nloc * nc, &lrows, nloc * KERGS_FCLIB_PACK, &lpack));
-  PetscCall(VecGetArrayRead(ops->vd, &vd));
-  for (PetscInt k = 0, a = 0; k < contacts->n; k++) {
-    const KergsContact *c = &contacts->c[k];
+  PetscCall(VecGetArrayRead(vdv, &vd));
+  for (PetscInt k = 0, a = 0; k < n; k++) {
+    const KergsContact *c = &contacts[k];
     if (!active[k]) continue;
     for (PetscInt j = 0; j < nc; j++) lrows[a * nc + j] = rstart + k * nc + j;
     lpack[a * KERGS_FCLIB_PACK + 0] = PetscRealPart(vd[k * nc]);
@@ -87,7 +85,7 @@ static PetscErrorCode KergsFCLibGather(KergsContacts contacts, KergsOperators op
     lpack[a * KERGS_FCLIB_PACK + 4] = nc > 1 ? c->r[1] : 0.0;
     a++;
   }
-  PetscCall(VecRestoreArrayRead(ops->vd, &vd));
+  PetscCall(VecRestoreArrayRead(vdv, &vd));
   if (rank == 0) PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
   PetscCallMPI(MPI_Gather(&nloc, 1, MPI_INT, counts, 1, MPI_INT, 0, comm));
   if (rank == 0) {
@@ -192,8 +190,11 @@ static PetscErrorCode KergsFCLibBuildVectors(const PetscReal *pack, KergsFCLibPr
 }
 
 /* Rank 0: write path.tmp with libfclib, then rename it to path; msg is set on failure. */
-static PetscErrorCode KergsFCLibWrite(KergsScene scene, KergsFCLibProblem *p, const char path[], char msg[], size_t len)
+static PetscErrorCode FCLibWrite(KergsScene scene, KergsFCLibProblem *p, const char path[], char msg[], size_t len)
 {
+  const char *name = "";
+  PetscInt    step = 0;
+  PetscReal   time = 0;
   KergsFCLibWriteLocalFn    write_local    = NULL;
   KergsFCLibWriteSolutionFn write_solution = NULL;
   char                      tmp[PETSC_MAX_PATH_LEN], title[PETSC_MAX_PATH_LEN + 64], description[256], math[256];
@@ -203,13 +204,17 @@ static PetscErrorCode KergsFCLibWrite(KergsScene scene, KergsFCLibProblem *p, co
   struct fclib_solution     solution;
 
   PetscFunctionBeginUser;
+  if (scene) {
+    PetscCall(KergsSceneGetName(scene, &name));
+    PetscCall(KergsSceneGetStep(scene, &step, &time, NULL));
+  }
   KergsFCLibLoad(&write_local, &write_solution, msg, len);
   if (msg[0]) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
-  PetscCall(PetscSNPrintf(title, sizeof(title), "kergs %s step %" PetscInt_FMT, scene ? scene->name : "", scene ? scene->step : 0));
+  PetscCall(PetscSNPrintf(title, sizeof(title), "kergs %s step %" PetscInt_FMT, name, step));
   PetscCall(PetscSNPrintf(description, sizeof(description),
                           "2D disks, time %g, %" PetscInt_FMT " active contacts%s; unknowns per contact normal then tangential",
-                          scene ? (double)scene->time : 0.0, p->na,
+                          (double)time, p->na,
                           p->padded ? ", frictionless (tangential components padded: W_tt = W_nn, q_t = 0, mu = 0)" : ""));
   PetscCall(PetscSNPrintf(
       math, sizeof(math),
@@ -232,31 +237,40 @@ static PetscErrorCode KergsFCLibWrite(KergsScene scene, KergsFCLibProblem *p, co
 
 PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsOperators ops, const PetscBool *active, const char path[])
 {
-  MPI_Comm          comm = ops->comm;
+  MPI_Comm          comm;
   PetscMPIInt       rank;
-  PetscInt          nc = ops->ncomp, rstart, rend, vlo, vhi, *rows = NULL;
+  PetscInt          nc, rstart, rend, vlo, vhi, *rows = NULL, n;
   PetscReal        *pack = NULL;
   IS                is;
-  Mat              *sub;
+  Mat              *sub, W;
+  Vec               vd;
+  KergsContact     *c;
+  KergsDofLayout    layout;
   KergsFCLibProblem p                                 = {0};
   char              msg[2 * PETSC_MAX_PATH_LEN + 128] = "";
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetW(ops, &W, NULL));
+  PetscCall(KergsOperatorsGetContactVectors(ops, NULL, NULL, &vd));
+  PetscCall(KergsContactsGetLocal(contacts, &n, &c));
+  PetscCheck(W && vd, PETSC_COMM_SELF, PETSC_ERR_ORDER, "FCLib export to %s: assemble the operators (W, v^d) first", path);
+  comm = PetscObjectComm((PetscObject)W);
+  nc   = layout.ncomp;
   PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "FCLib export: empty file name");
   PetscCheck(nc == 1 || nc == KERGS_FCLIB_SPACEDIM, comm, PETSC_ERR_SUP,
              "FCLib export: %" PetscInt_FMT " components per contact; FCLib 2D needs 1 (padded) or 2", nc);
-  PetscCheck(ops->W && ops->vd, comm, PETSC_ERR_ORDER, "FCLib export to %s: assemble the operators (W, v^d) first", path);
-  PetscCheck(!contacts->n || active, comm, PETSC_ERR_ARG_NULL, "FCLib export to %s: no active-contact flags", path);
-  PetscCall(MatGetOwnershipRange(ops->W, &rstart, &rend));
-  PetscCall(VecGetOwnershipRange(ops->vd, &vlo, &vhi));
-  PetscCheck(rend - rstart == contacts->n * nc && vlo == rstart && vhi == rend, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ,
+  PetscCheck(!n || active, comm, PETSC_ERR_ARG_NULL, "FCLib export to %s: no active-contact flags", path);
+  PetscCall(MatGetOwnershipRange(W, &rstart, &rend));
+  PetscCall(VecGetOwnershipRange(vd, &vlo, &vhi));
+  PetscCheck(rend - rstart == n * nc && vlo == rstart && vhi == rend, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ,
              "FCLib export to %s: W rows [%" PetscInt_FMT ", %" PetscInt_FMT ") and v^d [%" PetscInt_FMT ", %" PetscInt_FMT
              ") do not match this rank's %" PetscInt_FMT " contacts x %" PetscInt_FMT " components",
-             path, rstart, rend, vlo, vhi, contacts->n, nc);
+             path, rstart, rend, vlo, vhi, n, nc);
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
   PetscCall(KergsFileMakeParentDir(comm, path));
-  PetscCall(KergsFCLibGather(contacts, ops, active, rstart, &p.na, &rows, &pack));
+  PetscCall(FCLibGather(comm, n, c, nc, vd, active, rstart, &p.na, &rows, &pack));
   /* W restricted to the active contacts, as one sequential matrix on rank 0 (empty elsewhere) */
   PetscCall(ISCreateGeneral(PETSC_COMM_SELF, p.na * nc, rows, PETSC_USE_POINTER, &is));
   PetscCall(ISSetBlockSize(is, nc)); /* whole contacts: BAIJ W extracts by blocks only */
@@ -272,7 +286,7 @@ PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsO
     p.padded = (PetscBool)(nc == 1);
     PetscCall(KergsFCLibBuildCSC(sub[0], nc, &p));
     PetscCall(KergsFCLibBuildVectors(pack, &p));
-    PetscCall(KergsFCLibWrite(scene, &p, path, msg, sizeof(msg)));
+    PetscCall(FCLibWrite(scene, &p, path, msg, sizeof(msg)));
     PetscCall(KergsFCLibProblemFree(&p));
   }
   PetscCall(MatDestroySubMatrices(1, &sub));

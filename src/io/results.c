@@ -1,7 +1,7 @@
 /* kergs results: one HDF5 file per run (statistics per step and snapshots of the packing), written
    through PetscViewerHDF5 to "<path>.tmp" and renamed to <path> only once complete, so a run that dies
    leaves no file that looks finished. The layout is documented in docs/results.md. */
-#include <kergs/results.h>
+#include <kergs/private/resultsimpl.h>
 #include <petscviewerhdf5.h>
 #include <errno.h>
 #include <math.h>
@@ -224,6 +224,54 @@ PetscErrorCode KergsResultsRecord(KergsResults res, const char name[], PetscReal
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsResultsRecordText(KergsResults res, const char name[], const char value[])
+{
+  PetscInt  j;
+  PetscBool same = PETSC_FALSE;
+
+  PetscFunctionBeginUser;
+  for (j = 0; j < res->ntexts && !same; j++) PetscCall(PetscStrcmp(res->textname[j], name, &same));
+  if (same) j--;
+  else {
+    PetscCheck(res->ntexts < KERGS_RESULTS_MAXTEXTS, res->comm, PETSC_ERR_ARG_OUTOFRANGE, "Too many texts (at most %d) when adding \"%s\" to %s", KERGS_RESULTS_MAXTEXTS, name, res->path);
+    PetscCheck(name[0] && strlen(name) < sizeof(res->textname[0]) && !strchr(name, '/'), res->comm, PETSC_ERR_ARG_WRONG, "Text name \"%s\" must be non-empty, shorter than %d characters and without '/'", name, (int)sizeof(res->textname[0]));
+    j = res->ntexts++;
+    PetscCall(PetscStrncpy(res->textname[j], name, sizeof(res->textname[0])));
+  }
+  PetscCall(PetscStrncpy(res->textvalue[j], value, sizeof(res->textvalue[0])));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsResultsGetStatistic(KergsResults res, const char name[], PetscInt row, PetscReal *value, PetscBool *found)
+{
+  PetscBool same = PETSC_FALSE;
+
+  PetscFunctionBeginUser;
+  *value = PETSC_MAX_REAL;
+  if (row < 0) row = res->nrows - 1;
+  for (PetscInt j = 0; j < res->nstats && !same; j++) {
+    PetscCall(PetscStrcmp(res->statname[j], name, &same));
+    if (same && row >= 0 && row < res->nrows) *value = res->statvalues[j][row];
+  }
+  if (found) *found = (PetscBool)(*value != PETSC_MAX_REAL);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsResultsGetNumRows(KergsResults res, PetscInt *nrows)
+{
+  PetscFunctionBeginUser;
+  *nrows = res->nrows;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsResultsGetPath(KergsResults res, const char **path, PetscBool *enabled)
+{
+  PetscFunctionBeginUser;
+  if (path) *path = res->path;
+  if (enabled) *enabled = res->enabled;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsResultsEndStep(KergsResults res)
 {
   PetscFunctionBeginUser;
@@ -251,6 +299,7 @@ static PetscErrorCode KergsResultsWriteStats(KergsResults res)
   PetscCall(VecCreateMPI(res->comm, rank == 0 ? res->nrows : 0, res->nrows, &col));
   PetscCall(PetscViewerHDF5PushGroup(res->viewer, "/stats"));
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "nrows", PETSC_INT, &res->nrows));
+  for (PetscInt j = 0; j < res->ntexts; j++) PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, res->textname[j], PETSC_STRING, res->textvalue[j]));
   for (PetscInt j = 0; j < res->nstats; j++) {
     PetscScalar *a;
     PetscCall(VecGetArray(col, &a));
@@ -342,46 +391,55 @@ PetscErrorCode KergsViewIntegers(PetscViewer viewer, MPI_Comm comm, const char n
    order. */
 static PetscErrorCode KergsSnapshotDisks(PetscViewer viewer, KergsScene scene)
 {
-  const PetscInt s = scene->dstart, n = scene->nowned;
-  PetscInt       nsum;
+  KergsDisks D;
+  MPI_Comm   sccomm;
+  PetscInt   s, n, nsum;
 
   PetscFunctionBeginUser;
-  PetscCheck(0 <= s && s <= scene->dend && scene->dend <= scene->ndisks && n == scene->dend - s, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "Scene disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not within the %" PetscInt_FMT " disks", s, scene->dend,
-             scene->ndisks);
-  PetscCall(MPIU_Allreduce(&n, &nsum, 1, MPIU_INT, MPI_SUM, scene->comm));
-  PetscCheck(nsum == scene->ndisks, scene->comm, PETSC_ERR_ARG_WRONG,
-             "Scene disk ranges cover %" PetscInt_FMT " disks, not the %" PetscInt_FMT " of the scene", nsum, scene->ndisks);
-  PetscCall(KergsViewIntegers(viewer, scene->comm, "id", n, scene->id));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "x", n, KERGS_DIM, scene->x));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "v", n, KERGS_DIM, scene->v));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "rot", n, KERGS_NROT, scene->rot));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "omega", n, KERGS_NROT, scene->omega));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "radius", n, 1, scene->radius));
-  PetscCall(KergsViewIntegers(viewer, scene->comm, "material", n, scene->material));
+  PetscCall(KergsSceneGetDisks(scene, &D));
+  PetscCall(KergsSceneGetComm(scene, &sccomm));
+  s = D.dstart;
+  n = D.nowned;
+  PetscCheck(0 <= s && s <= D.dend && D.dend <= D.ndisks && n == D.dend - s, sccomm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not within the %" PetscInt_FMT " disks", s, D.dend,
+             D.ndisks);
+  PetscCall(MPIU_Allreduce(&n, &nsum, 1, MPIU_INT, MPI_SUM, sccomm));
+  PetscCheck(nsum == D.ndisks, sccomm, PETSC_ERR_ARG_WRONG,
+             "Scene disk ranges cover %" PetscInt_FMT " disks, not the %" PetscInt_FMT " of the scene", nsum, D.ndisks);
+  PetscCall(KergsViewIntegers(viewer, sccomm, "id", n, D.id));
+  PetscCall(KergsViewBlocks(viewer, sccomm, "x", n, KERGS_DIM, D.x));
+  PetscCall(KergsViewBlocks(viewer, sccomm, "v", n, KERGS_DIM, D.v));
+  PetscCall(KergsViewBlocks(viewer, sccomm, "rot", n, KERGS_NROT, D.rot));
+  PetscCall(KergsViewBlocks(viewer, sccomm, "omega", n, KERGS_NROT, D.omega));
+  PetscCall(KergsViewBlocks(viewer, sccomm, "radius", n, 1, D.radius));
+  PetscCall(KergsViewIntegers(viewer, sccomm, "material", n, D.material));
   PetscFunctionReturn(0);
 }
 
 /* walls (nwalls x 2*KERGS_DIM: a then b) and wall_infinite (0 segment, 1 line), written by rank 0. */
 static PetscErrorCode KergsSnapshotWalls(PetscViewer viewer, KergsScene scene)
 {
+  MPI_Comm sccomm;
+  PetscInt scnwalls; const KergsWall *scwalls;
   PetscMPIInt rank;
   PetscInt    n;
   PetscReal  *ab, *inf;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(scene->comm, &rank));
-  n = rank == 0 ? scene->nwalls : 0;
+  PetscCall(KergsSceneGetComm(scene, &sccomm));
+  PetscCall(KergsSceneGetWalls(scene, &scnwalls, &scwalls));
+  PetscCallMPI(MPI_Comm_rank(sccomm, &rank));
+  n = rank == 0 ? scnwalls : 0;
   PetscCall(PetscMalloc2(n * KERGS_WALL_COLUMNS, &ab, n, &inf));
   for (PetscInt w = 0; w < n; w++) {
     for (PetscInt d = 0; d < KERGS_DIM; d++) {
-      ab[w * KERGS_WALL_COLUMNS + d]             = scene->walls[w].a[d];
-      ab[w * KERGS_WALL_COLUMNS + KERGS_DIM + d] = scene->walls[w].b[d];
+      ab[w * KERGS_WALL_COLUMNS + d]             = scwalls[w].a[d];
+      ab[w * KERGS_WALL_COLUMNS + KERGS_DIM + d] = scwalls[w].b[d];
     }
-    inf[w] = scene->walls[w].infinite ? 1.0 : 0.0;
+    inf[w] = scwalls[w].infinite ? 1.0 : 0.0;
   }
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "walls", n, KERGS_WALL_COLUMNS, ab));
-  PetscCall(KergsViewBlocks(viewer, scene->comm, "wall_infinite", n, 1, inf));
+  PetscCall(KergsViewBlocks(viewer, sccomm, "walls", n, KERGS_WALL_COLUMNS, ab));
+  PetscCall(KergsViewBlocks(viewer, sccomm, "wall_infinite", n, 1, inf));
   PetscCall(PetscFree2(ab, inf));
   PetscFunctionReturn(0);
 }
@@ -390,21 +448,28 @@ static PetscErrorCode KergsSnapshotWalls(PetscViewer viewer, KergsScene scene)
    1), kind, n, gap, r. The tangential impulse is 0 in frictionless scenes. */
 static PetscErrorCode KergsSnapshotContacts(PetscViewer viewer, KergsScene scene, KergsContacts contacts)
 {
-  const PetscInt m    = contacts ? contacts->n : 0;
-  MPI_Comm       comm = scene->comm;
-  PetscInt      *a, *b, *kind;
-  PetscReal     *nrm, *gap, *r;
+  PetscInt      m = 0;
+  KergsContact *cts = NULL;
+  KergsDisks    D;
+  MPI_Comm      comm;
+  PetscBool     scfrictional;
+  PetscInt     *a, *b, *kind;
+  PetscReal    *nrm, *gap, *r;
 
   PetscFunctionBeginUser;
+  if (contacts) PetscCall(KergsContactsGetLocal(contacts, &m, &cts));
+  PetscCall(KergsSceneGetDisks(scene, &D));
+  PetscCall(KergsSceneGetComm(scene, &comm));
+  PetscCall(KergsSceneGetModel(scene, &scfrictional, NULL));
   PetscCall(PetscMalloc6(m, &a, m, &b, m, &kind, m * KERGS_DIM, &nrm, m, &gap, m * KERGS_MAXCOMP, &r));
   for (PetscInt k = 0; k < m; k++) {
-    const KergsContact *c = &contacts->c[k];
-    a[k]                  = scene->gidx[c->a];
-    b[k]                  = c->kind == KERGS_CONTACT_DISK_DISK ? scene->gidx[c->b] : c->b;
+    const KergsContact *c = &cts[k];
+    a[k]                  = D.gidx[c->a];
+    b[k]                  = c->kind == KERGS_CONTACT_DISK_DISK ? D.gidx[c->b] : c->b;
     kind[k]               = c->kind == KERGS_CONTACT_DISK_WALL ? 1 : 0;
     gap[k]                = c->gap;
     for (PetscInt d = 0; d < KERGS_DIM; d++) nrm[k * KERGS_DIM + d] = c->n[d];
-    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) r[k * KERGS_MAXCOMP + j] = (j == 0 || scene->frictional) ? c->r[j] : 0.0;
+    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) r[k * KERGS_MAXCOMP + j] = (j == 0 || scfrictional) ? c->r[j] : 0.0;
   }
   PetscCall(KergsViewIntegers(viewer, comm, "a", m, a));
   PetscCall(KergsViewIntegers(viewer, comm, "b", m, b));
@@ -418,22 +483,29 @@ static PetscErrorCode KergsSnapshotContacts(PetscViewer viewer, KergsScene scene
 
 PetscErrorCode KergsResultsSnapshot(KergsResults res, KergsScene scene, KergsContacts contacts)
 {
-  char     group[64];
-  PetscInt ncontacts, nlocal = contacts ? contacts->n : 0;
+  KergsDisks D;
+  PetscInt   scstep, scnwalls;
+  PetscReal  sctime;
+  char       group[64];
+  PetscInt   ncontacts, nlocal = 0;
 
   PetscFunctionBeginUser;
+  if (contacts) PetscCall(KergsContactsGetLocal(contacts, &nlocal, NULL));
+  PetscCall(KergsSceneGetDisks(scene, &D));
+  PetscCall(KergsSceneGetStep(scene, &scstep, &sctime, NULL));
+  PetscCall(KergsSceneGetWalls(scene, &scnwalls, NULL));
   if (!res->enabled) PetscFunctionReturn(0);
   PetscCheck(res->viewer, res->comm, PETSC_ERR_ORDER, "Results file %s is not open: call KergsResultsOpen() before KergsResultsSnapshot()",
              res->path[0] ? res->path : "(unnamed)");
-  if (scene->step == res->last_snapshot_step) PetscFunctionReturn(0);
+  if (scstep == res->last_snapshot_step) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
   PetscCall(MPIU_Allreduce(&nlocal, &ncontacts, 1, MPIU_INT, MPI_SUM, res->comm));
   PetscCall(PetscSNPrintf(group, sizeof(group), "/snapshots/%06" PetscInt_FMT, res->nsnapshots));
   PetscCall(PetscViewerHDF5PushGroup(res->viewer, group));
-  PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "step", PETSC_INT, &scene->step));
-  PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "time", PETSC_REAL, &scene->time));
-  PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "ndisks", PETSC_INT, &scene->ndisks));
-  PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "nwalls", PETSC_INT, &scene->nwalls));
+  PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "step", PETSC_INT, &scstep));
+  PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "time", PETSC_REAL, &sctime));
+  PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "ndisks", PETSC_INT, &D.ndisks));
+  PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "nwalls", PETSC_INT, &scnwalls));
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "ncontacts", PETSC_INT, &ncontacts));
   PetscCall(KergsSnapshotDisks(res->viewer, scene));
   PetscCall(KergsSnapshotWalls(res->viewer, scene));
@@ -441,6 +513,6 @@ PetscErrorCode KergsResultsSnapshot(KergsResults res, KergsScene scene, KergsCon
   PetscCall(PetscViewerHDF5PopGroup(res->viewer));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   res->nsnapshots++;
-  res->last_snapshot_step = scene->step;
+  res->last_snapshot_step = scstep;
   PetscFunctionReturn(0);
 }

@@ -1,26 +1,28 @@
-/* kergs sample: a packing of disks saved by one run and read back by another (layout in docs/results.md).
-   Written through PetscViewerHDF5 to "<path>.tmp" and renamed when complete; reading checks that the file
-   is a readable HDF5 file before PETSc opens it, then every size and value, so a bad file gives a PETSc
-   error that names it instead of a crash. */
+/* kergs sample: a packing of disks saved by one run, for another to start from (layout in docs/results.md; read by
+   the scene's disk source "file", src/scene/sample_read.c). Written through PetscViewerHDF5 to "<path>.tmp" and
+   renamed when complete. */
 #include <kergs/sample.h>
 #include <kergs/results.h>
 #include <petscviewerhdf5.h>
-#include <petsclayouthdf5.h>
 #include <stdio.h>
 
 #define KERGS_SAMPLE_GROUP "/sample"
 
-/* ---------------------------------------------------------------------------------------------
-   Writing */
-
 PetscErrorCode KergsSampleWrite(KergsScene scene, const char path[])
 {
+  KergsDisks  D;
+  PetscReal   sctime;
   char        tmp[PETSC_MAX_PATH_LEN];
   PetscViewer viewer;
-  MPI_Comm    comm = scene->comm;
-  PetscInt    n    = scene->ndisks, nl = scene->nowned;
+  MPI_Comm    comm;
+  PetscInt    n, nl;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(scene, &D));
+  PetscCall(KergsSceneGetComm(scene, &comm));
+  PetscCall(KergsSceneGetStep(scene, NULL, &sctime, NULL));
+  n  = D.ndisks;
+  nl = D.nowned;
   PetscCall(KergsInitializePackage());
   PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
   PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
@@ -32,239 +34,19 @@ PetscErrorCode KergsSampleWrite(KergsScene scene, const char path[])
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, "/", "kergs_format", PETSC_STRING, "kergs sample 1"));
   PetscCall(PetscViewerHDF5PushGroup(viewer, KERGS_SAMPLE_GROUP));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "ndisks", PETSC_INT, &n));
-  PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "time", PETSC_REAL, &scene->time));
+  PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "time", PETSC_REAL, &sctime));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "dim", PETSC_INT, &(PetscInt){KERGS_DIM}));
   /* each rank writes its owned disks, global indices [dstart, dend), in rank order */
-  PetscCall(KergsViewBlocks(viewer, comm, "x", nl, KERGS_DIM, scene->x));
-  PetscCall(KergsViewBlocks(viewer, comm, "v", nl, KERGS_DIM, scene->v));
-  PetscCall(KergsViewBlocks(viewer, comm, "rot", nl, KERGS_NROT, scene->rot));
-  PetscCall(KergsViewBlocks(viewer, comm, "omega", nl, KERGS_NROT, scene->omega));
-  PetscCall(KergsViewBlocks(viewer, comm, "radius", nl, 1, scene->radius));
-  PetscCall(KergsViewIntegers(viewer, comm, "material", nl, scene->material));
-  PetscCall(KergsViewIntegers(viewer, comm, "id", nl, scene->id));
+  PetscCall(KergsViewBlocks(viewer, comm, "x", nl, KERGS_DIM, D.x));
+  PetscCall(KergsViewBlocks(viewer, comm, "v", nl, KERGS_DIM, D.v));
+  PetscCall(KergsViewBlocks(viewer, comm, "rot", nl, KERGS_NROT, D.rot));
+  PetscCall(KergsViewBlocks(viewer, comm, "omega", nl, KERGS_NROT, D.omega));
+  PetscCall(KergsViewBlocks(viewer, comm, "radius", nl, 1, D.radius));
+  PetscCall(KergsViewIntegers(viewer, comm, "material", nl, D.material));
+  PetscCall(KergsViewIntegers(viewer, comm, "id", nl, D.id));
   PetscCall(PetscViewerHDF5PopGroup(viewer));
   PetscCall(PetscViewerDestroy(&viewer));
   PetscCall(KergsFileCommit(comm, tmp, path));
-  PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
-  PetscFunctionReturn(0);
-}
-
-/* ---------------------------------------------------------------------------------------------
-   Reading */
-
-/* A packing as read from the file, replicated on every rank. */
-typedef struct {
-  PetscInt   n;
-  PetscReal  time;
-  PetscReal *x, *v, *rot, *omega, *radius, *material, *id;
-} KergsSampleData;
-
-static PetscErrorCode KergsSampleDataFree(KergsSampleData *s)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree(s->x));
-  PetscCall(PetscFree(s->v));
-  PetscCall(PetscFree(s->rot));
-  PetscCall(PetscFree(s->omega));
-  PetscCall(PetscFree(s->radius));
-  PetscCall(PetscFree(s->material));
-  PetscCall(PetscFree(s->id));
-  PetscFunctionReturn(0);
-}
-
-/* Rank 0 checks that path is a readable file that HDF5 can open (a truncated or non-HDF5 file fails
-   here, quietly), so that PETSc's viewer is only ever given a good file. */
-static PetscErrorCode KergsSampleCheckFile(MPI_Comm comm, const char path[])
-{
-  char        msg[PETSC_MAX_PATH_LEN + 128] = "";
-  PetscMPIInt rank;
-
-  PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  if (rank == 0) {
-    PetscBool readable;
-    PetscCall(PetscTestFile(path, 'r', &readable));
-    if (!readable)
-      PetscCall(PetscSNPrintf(msg, sizeof(msg), "Sample file %s does not exist or is not readable", path));
-    else {
-      H5E_auto2_t handler = NULL;
-      void       *data    = NULL;
-      hid_t       file;
-      /* HDF5's own error printing is switched off around this probe: failing is an expected outcome */
-      const herr_t got = H5Eget_auto2(H5E_DEFAULT, &handler, &data);
-      if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-      file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
-      if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, handler, data);
-      if (file < 0)
-        PetscCall(
-            PetscSNPrintf(msg, sizeof(msg), "Sample file %s cannot be opened as HDF5: not an HDF5 file, or truncated or corrupt", path));
-      else if (H5Fclose(file) < 0)
-        PetscCall(PetscSNPrintf(msg, sizeof(msg), "Sample file %s: HDF5 cannot close it after opening", path));
-    }
-  }
-  PetscCallMPI(MPI_Bcast(msg, (int)sizeof(msg), MPI_CHAR, 0, comm));
-  PetscCheck(msg[0] == 0, comm, PETSC_ERR_FILE_OPEN, "%s", msg);
-  PetscFunctionReturn(0);
-}
-
-/* Load /sample/<name> (n blocks of bs reals) into a newly allocated replicated array. */
-static PetscErrorCode KergsSampleLoadField(PetscViewer viewer, MPI_Comm comm, const char path[], const char name[], PetscInt n, PetscInt bs,
-                                           PetscReal **all)
-{
-  PetscBool          has;
-  PetscInt           fbs, fN;
-  PetscErrorCode     ierr, anyerr;
-  Vec                vec, seq;
-  VecScatter         toall;
-  const PetscScalar *a;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscViewerHDF5HasDataset(viewer, name, &has));
-  PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no dataset %s/%s", path, KERGS_SAMPLE_GROUP, name);
-  PetscCall(PetscViewerHDF5ReadSizes(viewer, name, &fbs, &fN));
-  PetscCheck(fN == n * bs && (fbs == bs || n == 0), comm, PETSC_ERR_FILE_UNEXPECTED,
-             "Sample file %s: dataset %s/%s holds %" PetscInt_FMT " values in blocks of %" PetscInt_FMT ", expected ndisks x %" PetscInt_FMT
-             " = %" PetscInt_FMT,
-             path, KERGS_SAMPLE_GROUP, name, fN, fbs, bs, n * bs);
-  PetscCall(VecCreate(comm, &vec));
-  PetscCall(VecSetSizes(vec, PETSC_DECIDE, n * bs));
-  PetscCall(VecSetBlockSize(vec, bs));
-  PetscCall(VecSetType(vec, VECMPI));
-  PetscCall(PetscObjectSetName((PetscObject)vec, name));
-  /* A read failure inside HDF5 becomes an error that names the file, on every rank. */
-  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-  ierr = VecLoad(vec, viewer);
-  PetscCall(PetscPopErrorHandler());
-  PetscCall(MPIU_Allreduce(&ierr, &anyerr, 1, MPI_INT, MPI_MAX, comm));
-  PetscCheck(!anyerr, comm, PETSC_ERR_FILE_READ, "Cannot read dataset %s/%s of sample file %s: corrupt or truncated file",
-             KERGS_SAMPLE_GROUP, name, path);
-  PetscCall(VecScatterCreateToAll(vec, &toall, &seq));
-  PetscCall(VecScatterBegin(toall, vec, seq, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(toall, vec, seq, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(PetscMalloc1(n * bs, all));
-  PetscCall(VecGetArrayRead(seq, &a));
-  for (PetscInt i = 0; i < n * bs; i++) (*all)[i] = PetscRealPart(a[i]);
-  PetscCall(VecRestoreArrayRead(seq, &a));
-  PetscCall(VecScatterDestroy(&toall));
-  PetscCall(VecDestroy(&seq));
-  PetscCall(VecDestroy(&vec));
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode KergsSampleLoad(PetscViewer viewer, MPI_Comm comm, const char path[], KergsSampleData *s)
-{
-  PetscBool has;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscViewerHDF5HasGroup(viewer, KERGS_SAMPLE_GROUP, &has));
-  PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no group %s", path, KERGS_SAMPLE_GROUP);
-  PetscCall(PetscViewerHDF5PushGroup(viewer, KERGS_SAMPLE_GROUP));
-  PetscCall(PetscViewerHDF5HasAttribute(viewer, NULL, "ndisks", &has));
-  PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute ndisks on %s", path, KERGS_SAMPLE_GROUP);
-  PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "ndisks", PETSC_INT, NULL, &s->n));
-  PetscCheck(s->n >= 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: ndisks = %" PetscInt_FMT " is negative", path, s->n);
-  PetscCall(PetscViewerHDF5HasAttribute(viewer, NULL, "time", &has));
-  PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute time on %s", path, KERGS_SAMPLE_GROUP);
-  PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "time", PETSC_REAL, NULL, &s->time));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "x", s->n, KERGS_DIM, &s->x));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "v", s->n, KERGS_DIM, &s->v));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "rot", s->n, KERGS_NROT, &s->rot));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "omega", s->n, KERGS_NROT, &s->omega));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "radius", s->n, 1, &s->radius));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "material", s->n, 1, &s->material));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "id", s->n, 1, &s->id));
-  PetscCall(PetscViewerHDF5PopGroup(viewer));
-  PetscFunctionReturn(0);
-}
-
-/* First non-finite entry of a (n blocks of bs), as a disk index, or -1. */
-static PetscInt KergsFirstNonFinite(const PetscReal *a, PetscInt n, PetscInt bs)
-{
-  for (PetscInt i = 0; i < n * bs; i++)
-    if (PetscIsInfOrNanReal(a[i])) return i / bs;
-  return -1;
-}
-
-/* Every value finite, radii positive, materials existing in the scene, ids non-negative integers. */
-static PetscErrorCode KergsSampleValidate(KergsScene scene, const char path[], const KergsSampleData *s)
-{
-  const struct {
-    const char      *name;
-    const PetscReal *a;
-    PetscInt         bs;
-  } fields[] = {{"x", s->x, KERGS_DIM},
-                {"v", s->v, KERGS_DIM},
-                {"rot", s->rot, KERGS_NROT},
-                {"omega", s->omega, KERGS_NROT},
-                {"radius", s->radius, 1},
-                {"material", s->material, 1},
-                {"id", s->id, 1}};
-
-  PetscFunctionBeginUser;
-  PetscCheck(!PetscIsInfOrNanReal(s->time), scene->comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: time is not finite", path);
-  for (size_t f = 0; f < sizeof(fields) / sizeof(fields[0]); f++) {
-    PetscInt bad = KergsFirstNonFinite(fields[f].a, s->n, fields[f].bs);
-    PetscCheck(bad < 0, scene->comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: %s of disk %" PetscInt_FMT " is not finite", path,
-               fields[f].name, bad);
-  }
-  for (PetscInt i = 0; i < s->n; i++) {
-    const PetscReal m = s->material[i], id = s->id[i];
-    PetscCheck(s->radius[i] > 0, scene->comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: disk %" PetscInt_FMT " has radius %g <= 0", path,
-               i, (double)s->radius[i]);
-    PetscCheck(m == PetscFloorReal(m) && m >= 0 && m < scene->nmaterials, scene->comm, PETSC_ERR_FILE_UNEXPECTED,
-               "Sample file %s: disk %" PetscInt_FMT " has material %g, the scene has materials 0..%" PetscInt_FMT, path, i, (double)m,
-               scene->nmaterials - 1);
-    PetscCheck(id == PetscFloorReal(id) && id >= 0 && id < (PetscReal)PETSC_MAX_INT, scene->comm, PETSC_ERR_FILE_UNEXPECTED,
-               "Sample file %s: disk %" PetscInt_FMT " has id %g, not a non-negative integer", path, i, (double)id);
-  }
-  PetscFunctionReturn(0);
-}
-
-/* Hand the disks to the scene (KergsSceneSetDisks allocates and computes masses), then the state it
-   does not take: orientations, angular velocities, ids and the clock. */
-static PetscErrorCode KergsSampleApply(KergsScene scene, const KergsSampleData *s)
-{
-  PetscInt *material;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscMalloc1(s->n, &material));
-  for (PetscInt i = 0; i < s->n; i++) material[i] = (PetscInt)s->material[i];
-  PetscCall(KergsSceneSetDisks(scene, s->n, s->x, s->radius, material, s->v));
-  PetscCall(PetscFree(material));
-  PetscCheck(scene->ndisks == s->n, scene->comm, PETSC_ERR_PLIB, "KergsSceneSetDisks() left %" PetscInt_FMT " disks, not %" PetscInt_FMT,
-             scene->ndisks, s->n);
-  /* every rank read the whole file; it keeps the state of its owned slice */
-  for (PetscInt i = 0; i < scene->nowned; i++) {
-    const PetscInt g = scene->dstart + i;
-    for (PetscInt d = 0; d < KERGS_NROT; d++) {
-      scene->rot[KERGS_NROT * i + d]   = s->rot[KERGS_NROT * g + d];
-      scene->omega[KERGS_NROT * i + d] = s->omega[KERGS_NROT * g + d];
-    }
-    scene->id[i] = (PetscInt)s->id[g];
-  }
-  scene->time = s->time;
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode KergsSampleRead(KergsScene scene, const char path[])
-{
-  MPI_Comm        comm = scene->comm;
-  PetscViewer     viewer;
-  KergsSampleData s = {0};
-  PetscErrorCode  ierr;
-
-  PetscFunctionBeginUser;
-  PetscCall(KergsInitializePackage());
-  PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
-  PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
-  PetscCall(KergsSampleCheckFile(comm, path));
-  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
-  ierr = KergsSampleLoad(viewer, comm, path, &s);
-  PetscCall(PetscViewerDestroy(&viewer));
-  if (!ierr) ierr = KergsSampleValidate(scene, path, &s);
-  if (!ierr) ierr = KergsSampleApply(scene, &s);
-  PetscCall(KergsSampleDataFree(&s));
-  PetscCall(ierr);
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }

@@ -7,7 +7,7 @@
    their disk a with their impulses, so that the next detection warm-starts them (Algorithm 1). METIS and the
    Hilbert sort run serially on rank 0 (O(ndisks) memory there at each partition, the only such place); at
    hundreds of ranks ParMETIS and a parallel sort would replace them. */
-#include <kergs/partition.h>
+#include <kergs/private/partitionimpl.h>
 #include <metis.h>
 #include <stdint.h>
 
@@ -42,12 +42,10 @@ PetscErrorCode KergsPartitionCreate(MPI_Comm comm, KergsPartition *partition)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsPartitionSetType(KergsPartition p, KergsPartitionType type)
+PetscErrorCode KergsPartitionGetView(KergsPartition p, PetscBool *view)
 {
   PetscFunctionBeginUser;
-  PetscCheck(type >= KERGS_PARTITION_CONTIGUOUS && type <= KERGS_PARTITION_METIS, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "Unknown partition type %d (see -partition_type)", (int)type);
-  p->type = type;
+  *view = p->view;
   PetscFunctionReturn(0);
 }
 
@@ -56,8 +54,8 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
   PetscFunctionBeginUser;
   PetscOptionsBegin(p->comm, NULL, "Partition options (ownership of the grains by the ranks)", NULL);
   PetscCall(PetscOptionsEnum(
-      "-partition_type", "contiguous (even split by index, never changed), geometric (Hilbert curve), metis (k-way on the contact graph)",
-      "KergsPartitionSetType", KergsPartitionTypes, (PetscEnum)p->type, (PetscEnum *)&p->type, NULL));
+      "-partition_type", "contiguous (even split by index, never changed), geometric (Hilbert curve), metis (k-way on the contact graph; the default on several ranks; one rank never partitions)",
+      "", KergsPartitionTypes, (PetscEnum)p->type, (PetscEnum *)&p->type, NULL));
   PetscCall(PetscOptionsReal(
       "-partition_imbalance_tol",
       "Repartition when the max rank work / mean work reaches this factor and grew since the last partition (1: at every check)", "",
@@ -119,23 +117,31 @@ PetscErrorCode KergsPartitionView(KergsPartition p, PetscViewer viewer)
 /* ranges[p] .. ranges[p+1]: the disks of rank p (size + 1 entries), checked to tile [0, ndisks) in rank order. */
 static PetscErrorCode GetRanges(KergsScene sc, PetscInt **ranges)
 {
+  KergsDisks D;
+  const char *scname;
+  MPI_Comm sccomm;
   PetscMPIInt size;
-  PetscInt    mine[2] = {sc->dstart, sc->dend}, *all;
+  PetscInt    mine[2], *all;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  mine[0] = D.dstart;
+  mine[1] = D.dend;
+  PetscCall(KergsSceneGetName(sc, &scname));
+  PetscCall(KergsSceneGetComm(sc, &sccomm));
+  PetscCallMPI(MPI_Comm_size(sccomm, &size));
   PetscCall(PetscMalloc1(2 * size, &all));
-  PetscCallMPI(MPI_Allgather(mine, 2, MPIU_INT, all, 2, MPIU_INT, sc->comm));
+  PetscCallMPI(MPI_Allgather(mine, 2, MPIU_INT, all, 2, MPIU_INT, sccomm));
   PetscCall(PetscMalloc1(size + 1, ranges));
   for (PetscMPIInt q = 0; q < size; q++) {
-    PetscCheck(all[2 * q] == (q ? all[2 * q - 1] : 0) && all[2 * q] <= all[2 * q + 1], sc->comm, PETSC_ERR_ARG_WRONGSTATE,
+    PetscCheck(all[2 * q] == (q ? all[2 * q - 1] : 0) && all[2 * q] <= all[2 * q + 1], sccomm, PETSC_ERR_ARG_WRONGSTATE,
                "Scene %s: rank %d owns disks [%" PetscInt_FMT ", %" PetscInt_FMT "), not the continuation of the previous rank's range",
-               sc->name, q, all[2 * q], all[2 * q + 1]);
+               scname, q, all[2 * q], all[2 * q + 1]);
     (*ranges)[q] = all[2 * q];
   }
   (*ranges)[size] = size ? all[2 * size - 1] : 0;
-  PetscCheck((*ranges)[size] == sc->ndisks, sc->comm, PETSC_ERR_ARG_WRONGSTATE,
-             "Scene %s: the ranks own %" PetscInt_FMT " disks, not %" PetscInt_FMT, sc->name, (*ranges)[size], sc->ndisks);
+  PetscCheck((*ranges)[size] == D.ndisks, sccomm, PETSC_ERR_ARG_WRONGSTATE,
+             "Scene %s: the ranks own %" PetscInt_FMT " disks, not %" PetscInt_FMT, scname, (*ranges)[size], D.ndisks);
   PetscCall(PetscFree(all));
   PetscFunctionReturn(0);
 }
@@ -148,9 +154,9 @@ static PetscErrorCode GetRanges(KergsScene sc, PetscInt **ranges)
    contact with r = 0 is skipped). Each disk counts 1 more for its own work outside the sweeps. */
 #define KERGS_WORK_INACTIVE 1
 #define KERGS_WORK_ACTIVE   6
-static inline PetscInt ContactWork(KergsScene sc, const KergsContact *c)
+static inline PetscInt ContactWork(const KergsActivity *act, const KergsContact *c)
 {
-  return KergsContactIsActive(sc, c) ? KERGS_WORK_ACTIVE : KERGS_WORK_INACTIVE;
+  return KergsContactIsActive(act, c) ? KERGS_WORK_ACTIVE : KERGS_WORK_INACTIVE;
 }
 
 /* Modelled work (per grain 1 + ContactWork of its contacts, summed over a rank's grains) and edge cut from each
@@ -159,39 +165,48 @@ static inline PetscInt ContactWork(KergsScene sc, const KergsContact *c)
    work_scale = (time / model) / (total time / total model) turns the model of its grains into time for METIS. */
 PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsContacts ct, KergsPartitionMeasures *m)
 {
+  PetscInt nct; KergsContact *cts;
+  KergsDisks D;
+  const char *scname;
   PetscMPIInt rank, size;
   PetscInt   *buf;
 
+  KergsActivity act;
+
   PetscFunctionBeginUser;
+  PetscCall(KergsContactsGetLocal(ct, &nct, &cts));
+  PetscCall(KergsContactsGetActivity(ct, sc, &act));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetName(sc, &scname));
   PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
   PetscCallMPI(MPI_Comm_size(p->comm, &size));
   /* buf: work per rank [0, size), edges, cut, ghosts */
   PetscCall(PetscCalloc1(size + 3, &buf));
-  buf[rank] += sc->nowned;
-  for (PetscInt k = 0; k < ct->n; k++) {
-    const KergsContact *c = &ct->c[k];
-    const PetscInt      w = ContactWork(sc, c);
+  buf[rank] += D.nowned;
+  for (PetscInt k = 0; k < nct; k++) {
+    const KergsContact *c = &cts[k];
+    const PetscInt      w = ContactWork(&act, c);
 
     buf[rank] += w;
     if (c->kind != KERGS_CONTACT_DISK_DISK) continue;
-    PetscCheck(c->b >= 0 && c->b < sc->nlocal, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONGSTATE,
+    PetscCheck(c->b >= 0 && c->b < D.nlocal, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONGSTATE,
                "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT " (contacts older than the ghost layer)",
-               sc->name, k, c->b, sc->nlocal);
+               scname, k, c->b, D.nlocal);
     buf[size]++;
-    if (c->b < sc->nowned) buf[rank] += w;
+    if (c->b < D.nowned) buf[rank] += w;
     else {
-      buf[sc->ghost_owner[c->b - sc->nowned]] += w;
+      buf[D.ghost_owner[c->b - D.nowned]] += w;
       buf[size + 1]++;
     }
   }
-  buf[size + 2] = sc->nlocal - sc->nowned;
+  buf[size + 2] = D.nlocal - D.nowned;
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, buf, size + 3, MPIU_INT, MPI_SUM, p->comm));
   m->edges       = buf[size];
   m->edgecut     = buf[size + 1];
   m->ghosts      = buf[size + 2];
-  m->my_grains   = sc->nowned;
-  m->my_contacts = ct->n;
-  m->my_ghosts   = sc->nlocal - sc->nowned;
+  m->my_grains   = D.nowned;
+  m->my_contacts = nct;
+  m->my_ghosts   = D.nlocal - D.nowned;
   m->my_work     = (PetscReal)buf[rank];
   m->work_max    = 0;
   m->work_mean   = 0;
@@ -216,35 +231,35 @@ PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsConta
   }
   m->imbalance = m->work_mean > 0 ? m->work_max / m->work_mean : 1.0;
   /* no partition beats max(1, size / ndisks): a rank holds at least one grain's work once ranks outnumber grains */
-  m->imbalance_bound = sc->ndisks > 0 ? PetscMax(1.0, (PetscReal)size / (PetscReal)sc->ndisks) : 1.0;
+  m->imbalance_bound = D.ndisks > 0 ? PetscMax(1.0, (PetscReal)size / (PetscReal)D.ndisks) : 1.0;
   PetscCall(PetscFree(buf));
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsPartitionRecord(KergsPartition p, KergsScene sc, KergsContacts ct, PetscReal sweep_seconds, PetscReal compute_seconds, KergsResults res)
+PetscErrorCode KergsPartitionObserve(KergsPartition p, KergsScene sc, KergsContacts ct, PetscReal sweep_seconds, PetscReal compute_seconds, KergsPartitionMeasures *out)
 {
+  PetscInt scstep;
   KergsPartitionMeasures *m = &p->last;
   PetscMPIInt             rank;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetStep(sc, &scstep, NULL, NULL));
   p->compute_seconds = compute_seconds;
   PetscCall(KergsPartitionMeasure(p, sc, ct, m));
-  PetscCall(KergsResultsRecord(res, "edge_cut", (PetscReal)m->edgecut));
-  PetscCall(KergsResultsRecord(res, "imbalance", m->imbalance));
-  PetscCall(KergsResultsRecord(res, "ghosts", (PetscReal)m->ghosts));
-  PetscCall(KergsResultsRecord(res, "repartitions", (PetscReal)p->nrepartitions));
+  m->repartitions = p->nrepartitions;
+  if (out) *out = *m;
   if (!p->view) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
   PetscCall(PetscSynchronizedPrintf(p->comm,
                                     "[partition] step %5" PetscInt_FMT " rank %3d: grains %6" PetscInt_FMT " ghosts %6" PetscInt_FMT
                                     " contacts %7" PetscInt_FMT " work %8.0f sweep %.3g s (arithmetic %.3g s)\n",
-                                    sc->step, rank, m->my_grains, m->my_ghosts, m->my_contacts, (double)m->my_work, (double)sweep_seconds,
+                                    scstep, rank, m->my_grains, m->my_ghosts, m->my_contacts, (double)m->my_work, (double)sweep_seconds,
                                     (double)compute_seconds));
   PetscCall(PetscSynchronizedFlush(p->comm, PETSC_STDOUT));
   PetscCall(PetscPrintf(p->comm,
                         "[partition] step %5" PetscInt_FMT ": %s, edge cut %" PetscInt_FMT " of %" PetscInt_FMT
                         " contact edges, imbalance %.4f, ghosts %" PetscInt_FMT ", repartitions %" PetscInt_FMT "\n",
-                        sc->step, KergsPartitionTypes[p->last_method], m->edgecut, m->edges, (double)m->imbalance, m->ghosts,
+                        scstep, KergsPartitionTypes[p->last_method], m->edgecut, m->edges, (double)m->imbalance, m->ghosts,
                         p->nrepartitions));
   PetscFunctionReturn(0);
 }
@@ -252,78 +267,31 @@ PetscErrorCode KergsPartitionRecord(KergsPartition p, KergsScene sc, KergsContac
 /* ---------------------------------------------------------------------------------------------------------- */
 /* Renumbering (migration)                                                                                    */
 
-/* Send every contact to the new owner of its disk a. The received ones replace ct->c, sorted by key and holding
-   only their key and impulse (b = -1: the ghost layer is gone), so that the next detection carries the impulses
-   over; nothing else may read them before that detection. A contact travels as its history record (detect.h), a
-   being its new global index; its frame needs no change: body a is the disk of smaller grain id whatever the
-   numbering. */
-static PetscErrorCode MigrateContacts(KergsContacts ct, const PetscInt newidx[], const PetscInt newranges[], PetscMPIInt rank,
-                                      PetscMPIInt size)
-{
-  PetscMPIInt   *scount, *fill, *dest;
-  KergsContactHistory *sendbuf, *recvbuf;
-  PetscInt       nrecv;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscCalloc2(size, &scount, size, &fill));
-  PetscCall(PetscMalloc2(ct->n + 1, &dest, ct->n + 1, &sendbuf));
-  for (PetscInt k = 0; k < ct->n; k++) {
-    dest[k] = KergsRangeOwner(newranges, size, newidx[ct->c[k].a]);
-    scount[dest[k]]++;
-  }
-  for (PetscMPIInt q = 1; q < size; q++) fill[q] = fill[q - 1] + scount[q - 1];
-  for (PetscInt k = 0; k < ct->n; k++) {
-    KergsContactHistory *m = &sendbuf[fill[dest[k]]++];
-    m->a             = newidx[ct->c[k].a];
-    m->idb           = ct->c[k].idb;
-    m->kind          = ct->c[k].kind;
-    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) m->r[j] = ct->c[k].r[j];
-  }
-  PetscCall(KergsExchangeRecords(ct->comm, sizeof(KergsContactHistory), scount, sendbuf, NULL, &recvbuf, &nrecv));
-  qsort(recvbuf, (size_t)nrecv, sizeof(KergsContactHistory), KergsContactHistoryCompare); /* new indices: same order as local ones */
-  if (nrecv > ct->nalloc) {
-    PetscCall(PetscFree(ct->c));
-    PetscCall(PetscMalloc1(nrecv, &ct->c));
-    ct->nalloc = nrecv;
-  }
-  for (PetscInt k = 0; k < nrecv; k++) {
-    KergsContact *c = &ct->c[k];
-    PetscCall(PetscMemzero(c, sizeof(*c)));
-    c->a    = recvbuf[k].a - newranges[rank];
-    c->b    = -1;
-    c->idb  = recvbuf[k].idb;
-    c->kind = recvbuf[k].kind;
-    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) c->r[j] = recvbuf[k].r[j];
-  }
-  ct->n     = nrecv;
-  ct->start = 0;
-  PetscCallMPI(MPI_Exscan(&ct->n, &ct->start, 1, MPIU_INT, MPI_SUM, ct->comm));
-  if (rank == 0) ct->start = 0; /* MPI_Exscan leaves rank 0's result undefined */
-  PetscCall(PetscFree(recvbuf));
-  PetscCall(PetscFree2(scount, fill));
-  PetscCall(PetscFree2(dest, sendbuf));
-  PetscFunctionReturn(0);
-}
-
 /* order must be a permutation and counts a split of ndisks over the ranks, the same on every rank (checked
    here on the local copy; the caller guarantees equality across ranks, e.g. by a broadcast). */
 static PetscErrorCode CheckRenumbering(KergsScene sc, const PetscInt order[], const PetscInt counts[], PetscMPIInt size, PetscInt *old2new)
 {
+  KergsDisks D;
+  const char *scname;
+  MPI_Comm sccomm;
   PetscInt total = 0;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetName(sc, &scname));
+  PetscCall(KergsSceneGetComm(sc, &sccomm));
   for (PetscMPIInt q = 0; q < size; q++) {
-    PetscCheck(counts[q] >= 0, sc->comm, PETSC_ERR_ARG_OUTOFRANGE, "Renumbering of scene %s: rank %d gets %" PetscInt_FMT " disks",
-               sc->name, q, counts[q]);
+    PetscCheck(counts[q] >= 0, sccomm, PETSC_ERR_ARG_OUTOFRANGE, "Renumbering of scene %s: rank %d gets %" PetscInt_FMT " disks",
+               scname, q, counts[q]);
     total += counts[q];
   }
-  PetscCheck(total == sc->ndisks, sc->comm, PETSC_ERR_ARG_WRONG,
-             "Renumbering of scene %s: the ranks get %" PetscInt_FMT " disks in all, not %" PetscInt_FMT, sc->name, total, sc->ndisks);
-  for (PetscInt i = 0; i < sc->ndisks; i++) old2new[i] = -1;
-  for (PetscInt k = 0; k < sc->ndisks; k++) {
-    PetscCheck(order[k] >= 0 && order[k] < sc->ndisks && old2new[order[k]] < 0, sc->comm, PETSC_ERR_ARG_WRONG,
+  PetscCheck(total == D.ndisks, sccomm, PETSC_ERR_ARG_WRONG,
+             "Renumbering of scene %s: the ranks get %" PetscInt_FMT " disks in all, not %" PetscInt_FMT, scname, total, D.ndisks);
+  for (PetscInt i = 0; i < D.ndisks; i++) old2new[i] = -1;
+  for (PetscInt k = 0; k < D.ndisks; k++) {
+    PetscCheck(order[k] >= 0 && order[k] < D.ndisks && old2new[order[k]] < 0, sccomm, PETSC_ERR_ARG_WRONG,
                "Renumbering of scene %s: new disk %" PetscInt_FMT " takes old disk %" PetscInt_FMT ", out of range or taken twice",
-               sc->name, k, order[k]);
+               scname, k, order[k]);
     old2new[order[k]] = k;
   }
   PetscFunctionReturn(0);
@@ -333,18 +301,22 @@ static PetscErrorCode CheckRenumbering(KergsScene sc, const PetscInt order[], co
    contacts follow their disk a (keys and impulses), then the disks move. */
 static PetscErrorCode MigrateOwned(KergsScene sc, KergsContacts ct, const PetscInt newidx[], const PetscInt counts[], PetscInt *nmoved)
 {
+  KergsDisks D;
+  MPI_Comm sccomm;
   PetscMPIInt rank, size;
   PetscInt   *newranges, moved = 0;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
-  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetComm(sc, &sccomm));
+  PetscCallMPI(MPI_Comm_rank(sccomm, &rank));
+  PetscCallMPI(MPI_Comm_size(sccomm, &size));
   PetscCall(PetscMalloc1(size + 1, &newranges));
   newranges[0] = 0;
   for (PetscMPIInt q = 0; q < size; q++) newranges[q + 1] = newranges[q] + counts[q];
-  for (PetscInt i = 0; i < sc->nowned; i++) moved += KergsRangeOwner(newranges, size, newidx[i]) != rank;
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &moved, 1, MPIU_INT, MPI_SUM, sc->comm));
-  if (ct) PetscCall(MigrateContacts(ct, newidx, newranges, rank, size)); /* reads the owned disks before they move */
+  for (PetscInt i = 0; i < D.nowned; i++) moved += KergsRangeOwner(newranges, size, newidx[i]) != rank;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &moved, 1, MPIU_INT, MPI_SUM, sccomm));
+  if (ct) PetscCall(KergsContactsMigrate(ct, newidx, newranges)); /* reads the owned disks before they move */
   PetscCall(KergsSceneMigrate(sc, newidx, counts));
   if (nmoved) *nmoved = moved;
   PetscCall(PetscFree(newranges));
@@ -353,14 +325,18 @@ static PetscErrorCode MigrateOwned(KergsScene sc, KergsContacts ct, const PetscI
 
 PetscErrorCode KergsPartitionRenumber(KergsScene sc, KergsContacts ct, const PetscInt order[], const PetscInt counts[], PetscInt *nmoved)
 {
+  KergsDisks D;
+  MPI_Comm sccomm;
   PetscMPIInt size;
   PetscInt   *old2new, *newidx;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
-  PetscCall(PetscMalloc2(sc->ndisks + 1, &old2new, sc->nowned + 1, &newidx));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetComm(sc, &sccomm));
+  PetscCallMPI(MPI_Comm_size(sccomm, &size));
+  PetscCall(PetscMalloc2(D.ndisks + 1, &old2new, D.nowned + 1, &newidx));
   PetscCall(CheckRenumbering(sc, order, counts, size, old2new));
-  for (PetscInt i = 0; i < sc->nowned; i++) newidx[i] = old2new[sc->dstart + i];
+  for (PetscInt i = 0; i < D.nowned; i++) newidx[i] = old2new[D.dstart + i];
   PetscCall(MigrateOwned(sc, ct, newidx, counts, nmoved));
   PetscCall(PetscFree2(old2new, newidx));
   PetscFunctionReturn(0);
@@ -389,26 +365,31 @@ static PetscErrorCode GrainGraphDestroy(GrainGraph *g)
 /* Centres and ids of every disk, in global-index order, on rank 0. */
 static PetscErrorCode GatherGrains(KergsScene sc, GrainGraph *g)
 {
-  PetscMPIInt rank, size, *counts = NULL, *displs = NULL, mine = (PetscMPIInt)sc->nowned;
+  KergsDisks  D;
+  MPI_Comm    sccomm;
+  PetscMPIInt rank, size, *counts = NULL, *displs = NULL, mine;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
-  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  mine = (PetscMPIInt)D.nowned;
+  PetscCall(KergsSceneGetComm(sc, &sccomm));
+  PetscCallMPI(MPI_Comm_rank(sccomm, &rank));
+  PetscCallMPI(MPI_Comm_size(sccomm, &size));
   if (rank == 0) PetscCall(PetscMalloc2(size, &counts, size, &displs));
-  PetscCall(PetscMalloc2(rank == 0 ? KERGS_DIM * sc->ndisks + 1 : 1, &g->x, rank == 0 ? sc->ndisks + 1 : 1, &g->id));
-  PetscCallMPI(MPI_Gather(&mine, 1, MPI_INT, counts, 1, MPI_INT, 0, sc->comm));
+  PetscCall(PetscMalloc2(rank == 0 ? KERGS_DIM * D.ndisks + 1 : 1, &g->x, rank == 0 ? D.ndisks + 1 : 1, &g->id));
+  PetscCallMPI(MPI_Gather(&mine, 1, MPI_INT, counts, 1, MPI_INT, 0, sccomm));
   if (rank == 0) {
     displs[0] = 0;
     for (PetscMPIInt q = 1; q < size; q++) displs[q] = displs[q - 1] + counts[q - 1];
   }
-  PetscCallMPI(MPI_Gatherv(sc->id, mine, MPIU_INT, g->id, counts, displs, MPIU_INT, 0, sc->comm));
+  PetscCallMPI(MPI_Gatherv(D.id, mine, MPIU_INT, g->id, counts, displs, MPIU_INT, 0, sccomm));
   if (rank == 0)
     for (PetscMPIInt q = 0; q < size; q++) {
       counts[q] *= KERGS_DIM;
       displs[q] *= KERGS_DIM;
     }
   mine *= KERGS_DIM;
-  PetscCallMPI(MPI_Gatherv(sc->x, mine, MPIU_REAL, g->x, counts, displs, MPIU_REAL, 0, sc->comm));
+  PetscCallMPI(MPI_Gatherv(D.x, mine, MPIU_REAL, g->x, counts, displs, MPIU_REAL, 0, sccomm));
   if (rank == 0) PetscCall(PetscFree2(counts, displs));
   PetscFunctionReturn(0);
 }
@@ -417,27 +398,38 @@ static PetscErrorCode GatherGrains(KergsScene sc, GrainGraph *g)
    the ids to rank 0 and build the graph there. */
 static PetscErrorCode GatherGrainGraph(KergsPartition p, KergsScene sc, KergsContacts ct, GrainGraph *g)
 {
-  PetscMPIInt rank, size, nmine = (PetscMPIInt)(3 * ct->n), *counts = NULL, *displs = NULL;
+  PetscInt nct; KergsContact *cts;
+  KergsDisks D;
+  const char *scname;
+  MPI_Comm sccomm;
+  PetscMPIInt rank, size, nmine, *counts = NULL, *displs = NULL;
   PetscInt   *mine, *all = NULL, nall = 0, *fill;
+  KergsActivity act;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
-  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(KergsContactsGetLocal(ct, &nct, &cts));
+  PetscCall(KergsContactsGetActivity(ct, sc, &act));
+  nmine = (PetscMPIInt)(3 * nct);
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetName(sc, &scname));
+  PetscCall(KergsSceneGetComm(sc, &sccomm));
+  PetscCallMPI(MPI_Comm_rank(sccomm, &rank));
+  PetscCallMPI(MPI_Comm_size(sccomm, &size));
   PetscCall(PetscMemzero(g, sizeof(*g)));
   PetscCall(PetscMalloc1(nmine + 1, &mine));
-  for (PetscInt k = 0; k < ct->n; k++) {
-    PetscCheck(ct->c[k].kind != KERGS_CONTACT_DISK_DISK || (ct->c[k].b >= 0 && ct->c[k].b < sc->nlocal), PETSC_COMM_SELF,
-               PETSC_ERR_ARG_WRONGSTATE, "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT, sc->name, k,
-               ct->c[k].b, sc->nlocal);
-    mine[3 * k]     = sc->gidx[ct->c[k].a];
-    mine[3 * k + 1] = ct->c[k].kind == KERGS_CONTACT_DISK_DISK ? sc->gidx[ct->c[k].b] : -1;
+  for (PetscInt k = 0; k < nct; k++) {
+    PetscCheck(cts[k].kind != KERGS_CONTACT_DISK_DISK || (cts[k].b >= 0 && cts[k].b < D.nlocal), PETSC_COMM_SELF,
+               PETSC_ERR_ARG_WRONGSTATE, "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT, scname, k,
+               cts[k].b, D.nlocal);
+    mine[3 * k]     = D.gidx[cts[k].a];
+    mine[3 * k + 1] = cts[k].kind == KERGS_CONTACT_DISK_DISK ? D.gidx[cts[k].b] : -1;
     /* measured work: the model in tenths, times this rank's factor (time per modelled unit, relative to the mean) */
-    mine[3 * k + 2] = p->work == KERGS_PARTITION_WORK_MEASURED ? PetscMax(1, (PetscInt)(10.0 * p->work_scale * ContactWork(sc, &ct->c[k]) + 0.5))
-                                                                : ContactWork(sc, &ct->c[k]);
+    mine[3 * k + 2] = p->work == KERGS_PARTITION_WORK_MEASURED ? PetscMax(1, (PetscInt)(10.0 * p->work_scale * ContactWork(&act, &cts[k]) + 0.5))
+                                                                : ContactWork(&act, &cts[k]);
   }
   PetscCall(GatherGrains(sc, g));
   if (rank == 0) PetscCall(PetscMalloc2(size, &counts, size, &displs));
-  PetscCallMPI(MPI_Gather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, 0, sc->comm));
+  PetscCallMPI(MPI_Gather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, 0, sccomm));
   if (rank == 0) {
     for (PetscMPIInt q = 0; q < size; q++) {
       displs[q] = (PetscMPIInt)nall;
@@ -445,10 +437,10 @@ static PetscErrorCode GatherGrainGraph(KergsPartition p, KergsScene sc, KergsCon
     }
   }
   PetscCall(PetscMalloc1(nall + 1, &all));
-  PetscCallMPI(MPI_Gatherv(mine, nmine, MPIU_INT, all, counts, displs, MPIU_INT, 0, sc->comm));
+  PetscCallMPI(MPI_Gatherv(mine, nmine, MPIU_INT, all, counts, displs, MPIU_INT, 0, sccomm));
   PetscCall(PetscFree(mine));
   if (rank == 0) {
-    const PetscInt n = sc->ndisks;
+    const PetscInt n = D.ndisks;
 
     g->n = n;
     for (PetscInt k = 0; k < nall / 3; k++) g->nedges += all[3 * k + 1] >= 0;
@@ -457,7 +449,7 @@ static PetscErrorCode GatherGrainGraph(KergsPartition p, KergsScene sc, KergsCon
     for (PetscInt k = 0; k < nall / 3; k++) {
       const PetscInt a = all[3 * k], b = all[3 * k + 1];
       PetscCheck(a >= 0 && a < n && b < n, PETSC_COMM_SELF, PETSC_ERR_PLIB,
-                 "Contact (%" PetscInt_FMT ", %" PetscInt_FMT ") outside the %" PetscInt_FMT " disks of scene %s", a, b, n, sc->name);
+                 "Contact (%" PetscInt_FMT ", %" PetscInt_FMT ") outside the %" PetscInt_FMT " disks of scene %s", a, b, n, scname);
       g->work[a] += all[3 * k + 2];
       if (b < 0) continue;
       g->work[b] += all[3 * k + 2];
@@ -759,10 +751,10 @@ typedef struct {
 #define KERGS_OUTCOME_LEN 4
 
 /* part (and seq, the order within the parts) by one method. */
-static PetscErrorCode ComputeParts(KergsPartition p, KergsScene sc, const GrainGraph *g, KergsPartitionType method, PetscMPIInt size,
+static PetscErrorCode ComputeParts(KergsPartition p, const GrainGraph *g, KergsPartitionType method, PetscMPIInt size,
                                    PetscInt part[], PetscInt seq[], PetscInt *status)
 {
-  const PetscInt n = sc->ndisks;
+  const PetscInt n = g->n;
 
   PetscFunctionBeginUser;
   *status = METIS_OK;
@@ -808,10 +800,10 @@ static PetscErrorCode FinishParts(const GrainGraph *g, KergsPartitionType method
    parts and the new order. METIS can miss the balance on tiny graphs (it may leave a part empty): when its
    imbalance exceeds the tolerance, the geometric partition is taken instead if it is within the tolerance, or if
    METIS left a part empty and the geometric partition does not. */
-static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, KergsScene sc, const GrainGraph *g, const PetscInt oldranges[],
+static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, const GrainGraph *g, const PetscInt oldranges[],
                                              PetscMPIInt size, PetscInt order[], PetscInt counts[], PartitionOutcome *out)
 {
-  const PetscInt     n      = sc->ndisks;
+  const PetscInt     n      = g->n;
   PetscBool          dense  = (PetscBool)(2.0 * g->nedges >= KERGS_PARTITION_MIN_DEGREE * n && g->nedges > 0);
   KergsPartitionType method = p->type;
   PetscInt          *part, *seq, status;
@@ -819,7 +811,7 @@ static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, KergsScene sc, co
   PetscFunctionBeginUser;
   PetscCall(PetscMalloc2(n + 1, &part, n + 1, &seq));
   if (method == KERGS_PARTITION_METIS && (!dense || n < size)) method = KERGS_PARTITION_GEOMETRIC;
-  PetscCall(ComputeParts(p, sc, g, method, size, part, seq, &status));
+  PetscCall(ComputeParts(p, g, method, size, part, seq, &status));
   out->method      = method;
   out->status      = status;
   out->metis_tried = method == KERGS_PARTITION_METIS;
@@ -830,7 +822,7 @@ static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, KergsScene sc, co
     PetscBool        emptymetis = PETSC_FALSE, emptyalt = PETSC_FALSE;
 
     PetscCall(PetscMalloc2(n + 1, &order2, 2 * size, &counts2));
-    PetscCall(ComputeParts(p, sc, g, KERGS_PARTITION_GEOMETRIC, size, part, seq, &status));
+    PetscCall(ComputeParts(p, g, KERGS_PARTITION_GEOMETRIC, size, part, seq, &status));
     PetscCall(FinishParts(g, KERGS_PARTITION_GEOMETRIC, size, oldranges, part, seq, order2, counts2, &alt));
     alt.metis_tried = PETSC_TRUE;
     for (PetscMPIInt q = 0; q < size; q++) {
@@ -855,22 +847,26 @@ static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, KergsScene sc, co
    index of each of its owned disks (*newidx, PetscFree): O(owned disks) per rank, not the whole order. */
 static PetscErrorCode ScatterNewIndices(KergsScene sc, const PetscInt oldranges[], const PetscInt order[], PetscInt **newidx)
 {
+  KergsDisks D;
+  MPI_Comm sccomm;
   PetscMPIInt rank, size, *counts = NULL, *displs = NULL;
   PetscInt   *old2new = NULL;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
-  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetComm(sc, &sccomm));
+  PetscCallMPI(MPI_Comm_rank(sccomm, &rank));
+  PetscCallMPI(MPI_Comm_size(sccomm, &size));
   if (rank == 0) {
-    PetscCall(PetscMalloc3(sc->ndisks + 1, &old2new, size, &counts, size, &displs));
-    for (PetscInt k = 0; k < sc->ndisks; k++) old2new[order[k]] = k;
+    PetscCall(PetscMalloc3(D.ndisks + 1, &old2new, size, &counts, size, &displs));
+    for (PetscInt k = 0; k < D.ndisks; k++) old2new[order[k]] = k;
     for (PetscMPIInt q = 0; q < size; q++) {
       counts[q] = (PetscMPIInt)(oldranges[q + 1] - oldranges[q]);
       displs[q] = (PetscMPIInt)oldranges[q];
     }
   }
-  PetscCall(PetscMalloc1(sc->nowned + 1, newidx));
-  PetscCallMPI(MPI_Scatterv(old2new, counts, displs, MPIU_INT, *newidx, (PetscMPIInt)sc->nowned, MPIU_INT, 0, sc->comm));
+  PetscCall(PetscMalloc1(D.nowned + 1, newidx));
+  PetscCallMPI(MPI_Scatterv(old2new, counts, displs, MPIU_INT, *newidx, (PetscMPIInt)D.nowned, MPIU_INT, 0, sccomm));
   if (rank == 0) PetscCall(PetscFree3(old2new, counts, displs));
   PetscFunctionReturn(0);
 }
@@ -878,6 +874,9 @@ static PetscErrorCode ScatterNewIndices(KergsScene sc, const PetscInt oldranges[
 /* Compute a partition with the object's type from the current contacts and renumber (collective). */
 static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts ct)
 {
+  KergsDisks D;
+  const char *scname;
+  PetscInt scstep;
   PetscMPIInt      rank, size;
   PetscInt        *order, *counts, *oldranges, *newidx, moved;
   GrainGraph       g;
@@ -885,14 +884,17 @@ static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts
   PetscLogDouble   t0, t1;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetName(sc, &scname));
+  PetscCall(KergsSceneGetStep(sc, &scstep, NULL, NULL));
   PetscCall(PetscTime(&t0));
   PetscCall(PetscLogEventBegin(KERGS_Partition, 0, 0, 0, 0));
   PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
   PetscCallMPI(MPI_Comm_size(p->comm, &size));
   PetscCall(GetRanges(sc, &oldranges));
-  PetscCall(PetscMalloc2(rank == 0 ? sc->ndisks + 1 : 1, &order, 2 * size, &counts));
+  PetscCall(PetscMalloc2(rank == 0 ? D.ndisks + 1 : 1, &order, 2 * size, &counts));
   PetscCall(GatherGrainGraph(p, sc, ct, &g));
-  if (rank == 0) PetscCall(ComputePartitionOnRoot(p, sc, &g, oldranges, size, order, counts, &out));
+  if (rank == 0) PetscCall(ComputePartitionOnRoot(p, &g, oldranges, size, order, counts, &out));
   PetscCall(GrainGraphDestroy(&g));
   {
     PetscInt v[KERGS_OUTCOME_LEN] = {out.method, out.edgecut, out.status, out.metis_tried};
@@ -905,7 +907,7 @@ static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts
   PetscCallMPI(MPI_Bcast(&out.imbalance, 1, MPIU_REAL, 0, p->comm));
   PetscCheck(out.status == METIS_OK, p->comm, PETSC_ERR_LIB,
              "METIS_PartGraphKway failed (status %" PetscInt_FMT ") partitioning the %" PetscInt_FMT " grains of scene %s into %d parts",
-             out.status, sc->ndisks, sc->name, size);
+             out.status, D.ndisks, scname, size);
   PetscCallMPI(MPI_Bcast(counts, size, MPIU_INT, 0, p->comm));
   PetscCall(ScatterNewIndices(sc, oldranges, order, &newidx));
   PetscCall(MigrateOwned(sc, ct, newidx, counts, &moved));
@@ -923,7 +925,7 @@ static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts
   PetscCall(PetscInfo(NULL,
                       "Scene %s step %" PetscInt_FMT ": %s partition, edge cut %" PetscInt_FMT ", imbalance %g, %" PetscInt_FMT
                       " grains moved, %.3g s\n",
-                      sc->name, sc->step, KergsPartitionTypes[out.method], out.edgecut, (double)out.imbalance, moved, (double)(t1 - t0)));
+                      scname, scstep, KergsPartitionTypes[out.method], out.edgecut, (double)out.imbalance, moved, (double)(t1 - t0)));
   PetscFunctionReturn(0);
 }
 
@@ -940,11 +942,17 @@ PetscErrorCode KergsPartitionApply(KergsPartition p, KergsScene sc, KergsContact
 
 PetscErrorCode KergsPartitionUpdate(KergsPartition p, KergsScene sc, KergsContacts ct, PetscBool *repartitioned)
 {
+  KergsDisks D;
+  const char *scname;
+  PetscInt scstep;
   KergsPartitionMeasures m;
   PetscMPIInt            size;
   PetscBool              dense, due, unbalanced;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetName(sc, &scname));
+  PetscCall(KergsSceneGetStep(sc, &scstep, NULL, NULL));
   if (repartitioned) *repartitioned = PETSC_FALSE;
   PetscCallMPI(MPI_Comm_size(p->comm, &size));
   if (size == 1 || p->type == KERGS_PARTITION_CONTIGUOUS) {
@@ -957,10 +965,10 @@ PetscErrorCode KergsPartitionUpdate(KergsPartition p, KergsScene sc, KergsContac
     if (repartitioned) *repartitioned = PETSC_TRUE;
     PetscFunctionReturn(0);
   }
-  if (p->check_every == 0 || sc->step % p->check_every != 0) PetscFunctionReturn(0);
+  if (p->check_every == 0 || scstep % p->check_every != 0) PetscFunctionReturn(0);
   PetscCall(KergsPartitionMeasure(p, sc, ct, &m));
   if (p->edgecut_base < 0) p->edgecut_base = m.edgecut; /* the last partition saw no edges: its first measured cut */
-  dense = (PetscBool)(2.0 * m.edges >= KERGS_PARTITION_MIN_DEGREE * sc->ndisks && m.edges > 0 && sc->ndisks >= size);
+  dense = (PetscBool)(2.0 * m.edges >= KERGS_PARTITION_MIN_DEGREE * D.ndisks && m.edges > 0 && D.ndisks >= size);
   /* an imbalance past the tolerance that is no worse than right after the last partition is what the partitioner
      could do (a few grains of uneven work): repartitioning again would change nothing, unless forced by tol = 1 */
   unbalanced =
@@ -971,7 +979,7 @@ PetscErrorCode KergsPartitionUpdate(KergsPartition p, KergsScene sc, KergsContac
   PetscCall(PetscInfo(NULL,
                       "Scene %s step %" PetscInt_FMT ": repartition (imbalance %g, bound %g; edge cut %" PetscInt_FMT
                       ", after the last partition %" PetscInt_FMT "%s)\n",
-                      sc->name, sc->step, (double)m.imbalance, (double)m.imbalance_bound, m.edgecut, p->edgecut_base,
+                      scname, scstep, (double)m.imbalance, (double)m.imbalance_bound, m.edgecut, p->edgecut_base,
                       p->provisional ? "; provisional" : ""));
   PetscCall(Repartition(p, sc, ct));
   p->nrepartitions++;

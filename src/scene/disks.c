@@ -1,14 +1,7 @@
 /* kergs scene: where the disks come from (-disks_source): an explicit list, a lattice, a random
    non-overlapping sample, or a sample file of an earlier run. The generators are deterministic, so every rank
    builds the same disk set and KergsSceneSetDisks keeps its slice (O(N) per rank at the start of a run only). */
-#include <kergs/scene.h>
-#include <kergs/sample.h>
-
-/* Defined in src/scene.c. */
-PETSC_INTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscReal **, PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsIntList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscInt **, PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsReals(PetscOptionItems *, const char[], const char[], PetscInt, PetscReal[], PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsVector(PetscOptionItems *, const char[], const char[], PetscReal[], PetscBool *);
+#include <kergs/private/sceneimpl.h>
 
 typedef enum { DISKS_LIST, DISKS_LATTICE, DISKS_RANDOM, DISKS_FILE } DiskSource;
 static const char *const DiskSources[] = {"list", "lattice", "random", "file"};
@@ -229,7 +222,7 @@ static PetscErrorCode DisksFromFile(KergsScene scene, const DiskOptions *o)
 }
 
 /* The disk options block (-disks_source and the options of every source) and the generation of the disks. */
-PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
+PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
 {
   DiskOptions o;
 

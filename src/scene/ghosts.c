@@ -19,7 +19,7 @@
    when a disk moved more than skin / 2 since the last build (one max-reduction per step decides) and after a
    migration. Migration moves whole disk records (KergsExchangeRecords). Disk records travel as bytes: the ranks of
    a run share one binary representation. */
-#include <kergs/scene.h>
+#include <kergs/private/sceneimpl.h>
 
 /* Everything a disk carries. */
 typedef struct {

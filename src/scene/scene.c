@@ -1,18 +1,17 @@
-/* kergs scene: bodies, materials, loading programs and numerical settings, read from the options database.
-   The disks themselves come from src/scene_generate.c (list, lattice, random, sample file). */
-#include <kergs/scene.h>
+/* kergs scene: bodies, materials, loading programs and numerical settings, read from the options database, and
+   the accessors through which the other components read them. The disks themselves come from src/scene/disks.c
+   (list, lattice, random) and src/scene/sample_read.c (sample file); the distributed state from
+   src/scene/ghosts.c. */
+#include <kergs/private/sceneimpl.h>
 #include <petscviewer.h>
 
 const char *const KergsWallKinds[] = {"driven", "free", "KergsWallKind", "KERGS_WALL_", NULL};
 const char *const KergsGapRules[]  = {"paper", "lmgc90", "KergsGapRule", "KERGS_GAP_", NULL};
 
-/* Defined in src/scene_generate.c: the disk block of the options (-disks_source and its generators). */
-PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene);
-
 #define KERGS_WALL_PREFIX_LEN 128
 
 /* ------------------------------------------------------------------------------------------------ */
-/* Options helpers, shared with src/scene_generate.c                                               */
+/* Options helpers, shared with src/scene/disks.c                                                  */
 
 /* Number of comma-separated values given to option opt (under the block's prefix), 0 when absent. */
 static PetscErrorCode OptionsCountValues(PetscOptionItems *PetscOptionsObject, const char opt[], PetscInt *count)
@@ -337,6 +336,132 @@ PetscErrorCode KergsSceneKineticEnergy(KergsScene scene, PetscReal *ek, PetscRea
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &vm, 1, MPIU_REAL, MPIU_MAX, scene->comm));
   if (ek) *ek = e;
   if (vmax) *vmax = vm;
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Accessors                                                                                        */
+
+PetscErrorCode KergsSceneGetDisks(KergsScene scene, KergsDisks *d)
+{
+  PetscFunctionBeginUser;
+  d->ndisks      = scene->ndisks;
+  d->nowned      = scene->nowned;
+  d->nlocal      = scene->nlocal;
+  d->dstart      = scene->dstart;
+  d->dend        = scene->dend;
+  d->gidx        = scene->gidx;
+  d->id          = scene->id;
+  d->material    = scene->material;
+  d->ghost_owner = scene->ghost_owner;
+  d->x           = scene->x;
+  d->v           = scene->v;
+  d->rot         = scene->rot;
+  d->omega       = scene->omega;
+  d->radius      = scene->radius;
+  d->mass        = scene->mass;
+  d->inertia     = scene->inertia;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetWalls(KergsScene scene, PetscInt *nwalls, const KergsWall **walls)
+{
+  PetscFunctionBeginUser;
+  if (nwalls) *nwalls = scene->nwalls;
+  if (walls) *walls = scene->walls;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetName(KergsScene scene, const char **name)
+{
+  PetscFunctionBeginUser;
+  *name = scene->name;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetComm(KergsScene scene, MPI_Comm *comm)
+{
+  PetscFunctionBeginUser;
+  *comm = scene->comm;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetTimeStep(KergsScene scene, PetscReal *dt, PetscReal *theta)
+{
+  PetscFunctionBeginUser;
+  if (dt) *dt = scene->dt;
+  if (theta) *theta = scene->theta;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetStep(KergsScene scene, PetscInt *step, PetscReal *time, PetscInt *nsteps)
+{
+  PetscFunctionBeginUser;
+  if (step) *step = scene->step;
+  if (time) *time = scene->time;
+  if (nsteps) *nsteps = scene->nsteps;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetGravity(KergsScene scene, PetscReal gravity[])
+{
+  PetscFunctionBeginUser;
+  for (PetscInt d = 0; d < KERGS_DIM; d++) gravity[d] = scene->gravity[d];
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetMaterials(KergsScene scene, PetscInt *nmaterials, const PetscReal **mu)
+{
+  PetscFunctionBeginUser;
+  if (nmaterials) *nmaterials = scene->nmaterials;
+  if (mu) *mu = scene->mu;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetContactRule(KergsScene scene, PetscReal *alert, KergsGapRule *rule)
+{
+  PetscFunctionBeginUser;
+  if (alert) *alert = scene->alert;
+  if (rule) *rule = scene->gaprule;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetModel(KergsScene scene, PetscBool *frictional, PetscBool *rotating)
+{
+  PetscFunctionBeginUser;
+  if (frictional) *frictional = scene->frictional;
+  if (rotating) *rotating = (PetscBool)(scene->frictional && !scene->lock_rotation);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneSetWallVelocity(KergsScene scene, PetscInt w, const PetscReal v[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(w >= 0 && w < scene->nwalls, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) scene->walls[w].v[d] = v[d];
+  PetscFunctionReturn(0);
+}
+
+/* x+ = x- + dt (theta V+ + (1 - theta) V-) for the owned disks and the free walls (a driven wall moves with its given
+   velocity of the step), then the clock. */
+PetscErrorCode KergsSceneAdvance(KergsScene sc, const PetscReal vold[], const PetscReal wold[], const PetscReal wvold[])
+{
+  const PetscReal th = sc->theta, dt = sc->dt;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < KERGS_DIM * sc->nowned; i++) sc->x[i] += dt * (th * sc->v[i] + (1 - th) * vold[i]);
+  for (PetscInt i = 0; i < KERGS_NROT * sc->nowned; i++) sc->rot[i] += dt * (th * sc->omega[i] + (1 - th) * wold[i]);
+  for (PetscInt w = 0; w < sc->nwalls; w++) {
+    KergsWall *wall = &sc->walls[w];
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      PetscReal dx = wall->kind == KERGS_WALL_DRIVEN ? dt * wall->v[d] : dt * (th * wall->v[d] + (1 - th) * wvold[KERGS_DIM * w + d]);
+      wall->a[d] += dx;
+      wall->b[d] += dx;
+      wall->disp[d] += dx;
+    }
+  }
+  sc->time += sc->dt;
+  sc->step++;
   PetscFunctionReturn(0);
 }
 

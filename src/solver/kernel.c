@@ -22,7 +22,7 @@
 
    P x = 0 on the peeled components, and xr - Hr y with A y = Hr^T xr on the kept ones: a generalized inverse
    from the null-pivot fixation gives the same Hr y, since Hr^T xr lies in range(A). */
-#include <kergs/kernel.h>
+#include <kergs/private/kernelimpl.h>
 #include <petscmat.h>
 
 const char *const KergsKernelDiags[] = {"exact", "bound", "KergsKernelDiag", "KERGS_KERNEL_DIAG_", NULL};
@@ -152,46 +152,71 @@ PetscErrorCode KergsKernelDestroy(KergsKernel *k)
 /* ------------------------------------------------------------------------------------------------ */
 /* Elimination: floating bodies and peeling                                                          */
 
-/* Bodies: disks 0..ndisks-1, then the free walls; -1 for a driven wall (not a DOF of H_f). */
-static PetscInt BodyOfWall(KergsOperators ops, KergsScene scene, PetscInt w)
+/* What the kernel reads from the scene, the contacts and the operators, through their accessors. */
+typedef struct {
+  KergsDisks       D;
+  const KergsWall *walls;
+  PetscInt         ncontacts, nglobal, start;
+  KergsContact    *c;
+  KergsDofLayout   L;
+  Mat              HfT;
+  Vec              r, Vf;
+} KernelInput;
+
+static PetscErrorCode GetKernelInput(KergsScene scene, KergsContacts contacts, KergsOperators ops, KernelInput *in)
 {
-  if (scene->walls[w].kind != KERGS_WALL_FREE) return -1;
-  return scene->ndisks + (ops->wall_dof[w] - scene->ndisks * ops->ndof_disk) / KERGS_DIM;
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(scene, &in->D));
+  PetscCall(KergsSceneGetWalls(scene, NULL, &in->walls));
+  PetscCall(KergsContactsGetLocal(contacts, &in->ncontacts, &in->c));
+  PetscCall(KergsContactsGetGlobalRange(contacts, &in->start, &in->nglobal));
+  PetscCall(KergsOperatorsGetLayout(ops, &in->L));
+  PetscCall(KergsOperatorsGetH(ops, &in->HfT, NULL));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &in->r, NULL, NULL));
+  PetscCall(KergsOperatorsGetDofVectors(ops, &in->Vf, NULL, NULL, NULL));
+  PetscFunctionReturn(0);
 }
 
-static PetscInt BodyOfDof(KergsOperators ops, KergsScene scene, PetscInt dof)
+/* Bodies: disks 0..ndisks-1, then the free walls; -1 for a driven wall (not a DOF of H_f). */
+static PetscInt BodyOfWall(const KernelInput *in, PetscInt w)
 {
-  PetscInt ndisk_dofs = scene->ndisks * ops->ndof_disk;
-  return dof < ndisk_dofs ? dof / ops->ndof_disk : scene->ndisks + (dof - ndisk_dofs) / KERGS_DIM;
+  if (in->walls[w].kind != KERGS_WALL_FREE) return -1;
+  return in->D.ndisks + (in->L.wall_dof[w] - in->D.ndisks * in->L.ndof_disk) / KERGS_DIM;
+}
+
+static PetscInt BodyOfDof(const KernelInput *in, PetscInt dof)
+{
+  PetscInt ndisk_dofs = in->D.ndisks * in->L.ndof_disk;
+  return dof < ndisk_dofs ? dof / in->L.ndof_disk : in->D.ndisks + (dof - ndisk_dofs) / KERGS_DIM;
 }
 
 /* Both bodies (global indices) of every contact of every rank, in global contact order (2 per contact). Peeling
    runs on this replicated graph (2 integers per contact on every rank): at hundreds of ranks it would have to
    become a distributed peeling. */
-static PetscErrorCode GatherContactBodies(KergsKernel k, KergsScene scene, KergsContacts contacts, KergsOperators ops, PetscInt **ends)
+static PetscErrorCode GatherContactBodies(KergsKernel k, const KernelInput *in, PetscInt **ends)
 {
-  PetscMPIInt size, nmine = (PetscMPIInt)(2 * contacts->n), *counts, *displs;
+  PetscMPIInt size, nmine = (PetscMPIInt)(2 * in->ncontacts), *counts, *displs;
   PetscInt   *mine;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(k->comm, &size));
-  PetscCall(PetscMalloc1(2 * contacts->n + 1, &mine));
-  PetscCall(PetscMalloc1(2 * contacts->nglobal + 1, ends));
-  for (PetscInt c = 0; c < contacts->n; c++) {
-    const KergsContact *ct = &contacts->c[c];
+  PetscCall(PetscMalloc1(2 * in->ncontacts + 1, &mine));
+  PetscCall(PetscMalloc1(2 * in->nglobal + 1, ends));
+  for (PetscInt c = 0; c < in->ncontacts; c++) {
+    const KergsContact *ct = &in->c[c];
     if (k->active_only && k->active && !k->active[c]) { /* an inactive contact has no ends: it never takes part */
       mine[2 * c] = mine[2 * c + 1] = -1;
       continue;
     }
-    mine[2 * c]     = scene->gidx[ct->a];
-    mine[2 * c + 1] = ct->kind == KERGS_CONTACT_DISK_DISK ? scene->gidx[ct->b] : BodyOfWall(ops, scene, ct->b);
+    mine[2 * c]     = in->D.gidx[ct->a];
+    mine[2 * c + 1] = ct->kind == KERGS_CONTACT_DISK_DISK ? in->D.gidx[ct->b] : BodyOfWall(in, ct->b);
   }
   PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
   PetscCallMPI(MPI_Allgather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, k->comm));
   displs[0] = 0;
   for (PetscMPIInt p = 0; p < size; p++) displs[p + 1] = displs[p] + counts[p];
-  PetscCheck(displs[size] == 2 * contacts->nglobal, k->comm, PETSC_ERR_PLIB,
-             "Kernel: %d contact ends gathered for %" PetscInt_FMT " contacts", displs[size], contacts->nglobal);
+  PetscCheck(displs[size] == 2 * in->nglobal, k->comm, PETSC_ERR_PLIB,
+             "Kernel: %d contact ends gathered for %" PetscInt_FMT " contacts", displs[size], in->nglobal);
   PetscCallMPI(MPI_Allgatherv(mine, nmine, MPIU_INT, *ends, counts, displs, MPIU_INT, k->comm));
   PetscCall(PetscFree2(counts, displs));
   PetscCall(PetscFree(mine));
@@ -241,28 +266,28 @@ static PetscErrorCode PeelContacts(PetscInt nbodies, PetscInt ncontacts, const P
 
 /* Kept DOFs (this rank's, global free DOF numbers) and kept contact components (this rank's), and the
    statistics of the elimination. */
-static PetscErrorCode Eliminate(KergsKernel k, KergsScene scene, KergsContacts contacts, KergsOperators ops)
+static PetscErrorCode Eliminate(KergsKernel k, const KernelInput *in)
 {
-  PetscInt   nbodies = scene->ndisks + ops->nfreewalls, nc = ops->ncomp, *ends, *count0, *count, lo, hi, nkeep = 0, *idx;
+  PetscInt   nbodies = in->D.ndisks + in->L.nfreewalls, nc = in->L.ncomp, *ends, *count0, *count, lo, hi, nkeep = 0, *idx;
   PetscBool *alive;
   PetscInt   peeled_dofs = 0;
 
   PetscFunctionBeginUser;
-  PetscCall(GatherContactBodies(k, scene, contacts, ops, &ends));
-  PetscCall(PetscMalloc3(contacts->nglobal + 1, &alive, nbodies + 1, &count0, nbodies + 1, &count));
-  PetscCall(PeelContacts(nbodies, contacts->nglobal, ends, alive, count0, count));
+  PetscCall(GatherContactBodies(k, in, &ends));
+  PetscCall(PetscMalloc3(in->nglobal + 1, &alive, nbodies + 1, &count0, nbodies + 1, &count));
+  PetscCall(PeelContacts(nbodies, in->nglobal, ends, alive, count0, count));
   k->floating_grains = k->floating_dofs = k->single_contact_grains = k->peeled_contacts = 0;
   for (PetscInt b = 0; b < nbodies; b++) {
-    PetscInt ndof = b < scene->ndisks ? ops->ndof_disk : KERGS_DIM;
+    PetscInt ndof = b < in->D.ndisks ? in->L.ndof_disk : KERGS_DIM;
     if (count0[b] == 0) {
       k->floating_dofs += ndof;
-      if (b < scene->ndisks) k->floating_grains++;
+      if (b < in->D.ndisks) k->floating_grains++;
     } else if (count[b] == 0)
       peeled_dofs += ndof;
-    if (b < scene->ndisks && count0[b] == 1) k->single_contact_grains++;
+    if (b < in->D.ndisks && count0[b] == 1) k->single_contact_grains++;
   }
   k->inactive_contacts = 0;
-  for (PetscInt c = 0; c < contacts->nglobal; c++) {
+  for (PetscInt c = 0; c < in->nglobal; c++) {
     if (ends[2 * c] < 0) k->inactive_contacts++;
     else if (!alive[c]) k->peeled_contacts++;
   }
@@ -270,18 +295,18 @@ static PetscErrorCode Eliminate(KergsKernel k, KergsScene scene, KergsContacts c
   k->deficiency_peeled = peeled_dofs - nc * k->peeled_contacts;
 
   /* kept DOFs: those of bodies with a live contact */
-  PetscCall(VecGetOwnershipRange(ops->Vf, &lo, &hi));
+  PetscCall(VecGetOwnershipRange(in->Vf, &lo, &hi));
   PetscCall(PetscMalloc1(hi - lo + 1, &idx));
   for (PetscInt g = lo; g < hi; g++)
-    if (count[BodyOfDof(ops, scene, g)] > 0) idx[nkeep++] = g;
+    if (count[BodyOfDof(in, g)] > 0) idx[nkeep++] = g;
   PetscCall(ISCreateGeneral(k->comm, nkeep, idx, PETSC_OWN_POINTER, &k->keep_rows));
 
   /* kept contact components, and where each local contact's components sit in the reduced vectors */
-  PetscCall(PetscMalloc1(contacts->n + 1, &k->kept_offset));
-  PetscCall(PetscMalloc1(contacts->n * nc + 1, &idx));
+  PetscCall(PetscMalloc1(in->ncontacts + 1, &k->kept_offset));
+  PetscCall(PetscMalloc1(in->ncontacts * nc + 1, &idx));
   nkeep = 0;
-  for (PetscInt c = 0; c < contacts->n; c++) {
-    PetscInt gc       = contacts->start + c;
+  for (PetscInt c = 0; c < in->ncontacts; c++) {
+    PetscInt gc       = in->start + c;
     k->kept_offset[c] = alive[gc] ? nkeep : -1;
     if (alive[gc])
       for (PetscInt j = 0; j < nc; j++) idx[nkeep++] = gc * nc + j;
@@ -296,14 +321,14 @@ static PetscErrorCode Eliminate(KergsKernel k, KergsScene scene, KergsContacts c
 /* Reduced system and factorization                                                                 */
 
 /* Hr = kept rows (components) and columns (DOFs) of H_f^T; rotational columns scaled by 1/radius. */
-static PetscErrorCode BuildReducedOperator(KergsKernel k, KergsScene scene, KergsOperators ops)
+static PetscErrorCode BuildReducedOperator(KergsKernel k, const KernelInput *in)
 {
   const PetscInt *dofs;
   PetscScalar    *s;
   PetscInt        n;
 
   PetscFunctionBeginUser;
-  PetscCall(MatCreateSubMatrix(ops->HfT, k->keep_cols, k->keep_rows, MAT_INITIAL_MATRIX, &k->Hr));
+  PetscCall(MatCreateSubMatrix(in->HfT, k->keep_cols, k->keep_rows, MAT_INITIAL_MATRIX, &k->Hr));
   PetscCall(MatCreateVecs(k->Hr, &k->ar, &k->xr));
   PetscCall(VecDuplicate(k->ar, &k->br));
   PetscCall(VecDuplicate(k->xr, &k->yr));
@@ -311,9 +336,9 @@ static PetscErrorCode BuildReducedOperator(KergsKernel k, KergsScene scene, Kerg
   PetscCall(ISGetIndices(k->keep_rows, &dofs));
   PetscCall(VecGetArray(k->ar, &s));
   for (PetscInt i = 0; i < n; i++) {
-    PetscInt b = BodyOfDof(ops, scene, dofs[i]);
+    PetscInt b = BodyOfDof(in, dofs[i]);
     /* a local DOF belongs to an owned disk (local index b - dstart) or to a free wall */
-    s[i] = (b < scene->ndisks && dofs[i] - KergsOperatorsDiskDof(ops, b) >= KERGS_DIM) ? 1.0 / scene->radius[b - scene->dstart] : 1.0;
+    s[i] = (b < in->D.ndisks && dofs[i] - KergsDiskDof(&in->L, b) >= KERGS_DIM) ? 1.0 / in->D.radius[b - in->D.dstart] : 1.0;
   }
   PetscCall(VecRestoreArray(k->ar, &s));
   PetscCall(ISRestoreIndices(k->keep_rows, &dofs));
@@ -322,7 +347,7 @@ static PetscErrorCode BuildReducedOperator(KergsKernel k, KergsScene scene, Kerg
   /* symmetric, but not MAT_SPD: MUMPS would then skip its null-pivot detection */
   PetscCall(MatSetOption(k->A, MAT_SYMMETRIC, PETSC_TRUE));
   PetscCall(MatSetOptionsPrefixFactor(k->A, KERGS_KERNEL_FACTOR_PREFIX));
-  PetscCall(VecScatterCreate(ops->r, k->keep_cols, k->xr, NULL, &k->to_reduced));
+  PetscCall(VecScatterCreate(in->r, k->keep_cols, k->xr, NULL, &k->to_reduced));
   PetscCall(MatGetSize(k->A, &k->kept_dofs, NULL));
   PetscCall(MatGetSize(k->Hr, &k->kept_comps, NULL));
   PetscFunctionReturn(0);
@@ -718,16 +743,16 @@ PetscErrorCode KergsKernelGetZ(KergsKernel k, Mat *Z)
 
 /* Z as a shell over contact components, with W's ncomp x ncomp block size, so that an explicit Z (nlkergs)
    can be stored by the same blocks as W. */
-static PetscErrorCode CreateShell(KergsKernel k, KergsOperators ops)
+static PetscErrorCode CreateShell(KergsKernel k, const KernelInput *in)
 {
   PetscInt n, N;
 
   PetscFunctionBeginUser;
-  PetscCall(VecGetLocalSize(ops->r, &n));
-  PetscCall(VecGetSize(ops->r, &N));
+  PetscCall(VecGetLocalSize(in->r, &n));
+  PetscCall(VecGetSize(in->r, &N));
   PetscCall(MatCreate(k->comm, &k->Z));
   PetscCall(MatSetSizes(k->Z, n, n, N, N));
-  PetscCall(MatSetBlockSize(k->Z, ops->ncomp));
+  PetscCall(MatSetBlockSize(k->Z, in->L.ncomp));
   PetscCall(MatSetType(k->Z, MATSHELL));
   PetscCall(MatShellSetContext(k->Z, k));
   PetscCall(MatSetUp(k->Z));
@@ -743,17 +768,19 @@ static PetscErrorCode CreateShell(KergsKernel k, KergsOperators ops)
 PetscErrorCode KergsKernelSetUp(KergsKernel k, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
   PetscLogDouble t0, t1;
+  KernelInput    input, *in = &input;
 
   PetscFunctionBeginUser;
-  PetscCheck(ops->HfT && ops->r, k->comm, PETSC_ERR_ARG_WRONGSTATE,
+  PetscCall(GetKernelInput(scene, contacts, ops, in));
+  PetscCheck(in->HfT && in->r, k->comm, PETSC_ERR_ARG_WRONGSTATE,
              "Kernel: assemble the operators (KergsOperatorsAssemble) before KergsKernelSetUp");
   PetscCall(PetscLogEventBegin(KERGS_Factor, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   PetscCall(DestroyStepObjects(k));
-  k->ncomp       = ops->ncomp;
-  k->nlocal      = contacts->n;
-  k->ncols       = contacts->nglobal * ops->ncomp;
-  k->nrows       = ops->nfree;
+  k->ncomp       = in->L.ncomp;
+  k->nlocal      = in->ncontacts;
+  k->ncols       = in->nglobal * in->L.ncomp;
+  k->nrows       = in->L.nfree;
   k->null_pivots = k->nnz_factor = 0;
   k->kept_dofs = k->kept_comps = 0;
   k->check_error = k->cond_estimate = 0;
@@ -762,14 +789,14 @@ PetscErrorCode KergsKernelSetUp(KergsKernel k, KergsScene scene, KergsContacts c
   k->apply_seconds                  = 0;
   k->diag_seconds                   = 0;
   k->nsetups++;
-  PetscCall(Eliminate(k, scene, contacts, ops));
+  PetscCall(Eliminate(k, in));
   k->ncols -= k->inactive_contacts * k->ncomp; /* H_f over the active contacts */
   if (k->ncols - k->peeled_contacts * k->ncomp > 0) {
-    PetscCall(BuildReducedOperator(k, scene, ops));
+    PetscCall(BuildReducedOperator(k, in));
     PetscCall(Factor(k));
   } /* else nothing is left: P = 0, and the last factor is kept for a later step of its pattern */
   k->rank = k->ncomp * k->peeled_contacts + k->kept_dofs - k->null_pivots;
-  PetscCall(CreateShell(k, ops));
+  PetscCall(CreateShell(k, in));
   PetscCall(PetscTime(&t1));
   k->factor_seconds = t1 - t0;
   PetscCall(PetscLogEventEnd(KERGS_Factor, 0, 0, 0, 0));
@@ -956,5 +983,30 @@ PetscErrorCode KergsKernelView(KergsKernel k, PetscViewer viewer)
         k->nsetups, k->symbolic_reuses, k->fallbacks));
   }
   PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsKernelGetDiagonalBlocks(KergsKernel k, const PetscReal **Zdiag)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(k->Zdiag, k->comm, PETSC_ERR_ORDER, "KergsKernelGetDiagonalBlocks: call KergsKernelComputeDiagonalBlocks first");
+  *Zdiag = k->Zdiag;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsKernelGetStats(KergsKernel k, KergsKernelStats *st)
+{
+  PetscFunctionBeginUser;
+  st->ncols           = k->ncols;
+  st->nrows           = k->nrows;
+  st->rank            = k->rank;
+  st->floating_grains = k->floating_grains;
+  st->peeled_contacts = k->peeled_contacts;
+  st->null_pivots     = k->null_pivots;
+  st->nnz_factor      = k->nnz_factor;
+  st->factor_seconds  = k->factor_seconds;
+  st->diag_seconds    = k->diag_seconds;
+  st->check_error     = k->check_error;
+  st->package         = k->used;
   PetscFunctionReturn(0);
 }

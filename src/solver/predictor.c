@@ -1,7 +1,7 @@
 /* kergs predictor: the prediction r~ of NLKerGS-P (Algorithm 3), by a type chosen by name (-predictor_type),
    the way PETSc chooses a KSP. This file holds what the types share: the registry, the options, the active
    set, the scaling of eta and epsilon, and the DOF-space solve of Algorithms 4 and 5. */
-#include <kergs/predictor.h>
+#include <kergs/private/predictorimpl.h>
 
 static PetscFunctionList KergsPredictorList = NULL;
 
@@ -93,7 +93,7 @@ PetscErrorCode KergsPredictorSetFromOptions(KergsPredictor p)
   PetscCall(PetscOptionsBool("-predictor_relative",
                              "linear, elastic: eta and epsilon relative to the mean W_nn of the active contacts (else absolute)", "",
                              p->relative, &p->relative, NULL));
-  if (p->ops.setfromoptions) PetscCall((*p->ops.setfromoptions)(p, PetscOptionsObject));
+  if (p->ops.setfromoptions) PetscCall((*p->ops.setfromoptions)(PetscOptionsObject, p));
   PetscOptionsEnd();
   PetscCheck(p->eta > 0 && PetscIsNormalReal(p->eta), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-predictor_eta %g must be a positive finite number", (double)p->eta);
@@ -129,25 +129,25 @@ PetscErrorCode KergsPredictorCreateKSP(KergsPredictor p)
   PetscFunctionReturn(0);
 }
 
-/* Local offsets (into the layout of ops->r) of the normal components of the active local contacts. */
-static PetscErrorCode ActiveNormalOffsets(KergsContacts contacts, KergsOperators ops, const PetscBool *active, PetscInt *nact,
+/* Local offsets (into the layout of in->r) of the normal components of the active local contacts. */
+static PetscErrorCode ActiveNormalOffsets(const KergsPredictorInput *in, const PetscBool *active, PetscInt *nact,
                                           PetscInt **offsets)
 {
   PetscFunctionBeginUser;
   *nact = 0;
-  for (PetscInt k = 0; k < contacts->n; k++)
+  for (PetscInt k = 0; k < in->ncontacts; k++)
     if (active[k]) (*nact)++;
   PetscCall(PetscMalloc1(*nact, offsets));
   *nact = 0;
-  for (PetscInt k = 0; k < contacts->n; k++)
-    if (active[k]) (*offsets)[(*nact)++] = k * ops->ncomp;
+  for (PetscInt k = 0; k < in->ncontacts; k++)
+    if (active[k]) (*offsets)[(*nact)++] = k * in->L.ncomp;
   PetscFunctionReturn(0);
 }
 
 /* K = M + c A^T A over the free DOFs. A^T A = H_f D H_f^T since D is a 0/1 selector (D^1/2 = D). DOFs that
    no active contact touches have no diagonal entry in A^T A: M is added as a matrix of its own
    (DIFFERENT_NONZERO_PATTERN), so that every row gets its diagonal. */
-static PetscErrorCode AssembleK(KergsOperators ops, Mat A, PetscReal c, Vec Mdiag, Mat *K)
+static PetscErrorCode AssembleK(const KergsPredictorInput *in, Mat A, PetscReal c, Vec Mdiag, Mat *K)
 {
   Mat      Mmat;
   PetscInt lo, hi;
@@ -155,7 +155,7 @@ static PetscErrorCode AssembleK(KergsOperators ops, Mat A, PetscReal c, Vec Mdia
   PetscFunctionBeginUser;
   PetscCall(MatTransposeMatMult(A, A, MAT_INITIAL_MATRIX, PETSC_DEFAULT, K));
   PetscCall(MatScale(*K, c));
-  PetscCall(MatCreateAIJ(ops->comm, ops->nfree_local, ops->nfree_local, ops->nfree, ops->nfree, 1, NULL, 0, NULL, &Mmat));
+  PetscCall(MatCreateAIJ(PetscObjectComm((PetscObject)A), in->L.nfree_local, in->L.nfree_local, in->L.nfree, in->L.nfree, 1, NULL, 0, NULL, &Mmat));
   PetscCall(VecGetOwnershipRange(Mdiag, &lo, &hi));
   {
     const PetscScalar *m;
@@ -226,7 +226,7 @@ static PetscErrorCode SolveK(KergsPredictor p, Mat K, Vec b, Vec x)
 /* Algorithms 4 and 5 in one form (predictor.h): with A = D H_f^T restricted to the active normal rows,
      (M + c A^T A) V~ = R^d + M V_f^- - A^T q,   r~_n = -(q + c A V~).
    Linear: c = dt/eta, q = c H_g^T V_g^+; elastic: c = theta dt^2/eps, q = (dt/eps)(g^- + ...) (elastic.c). */
-PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor p, KergsContacts contacts, KergsOperators ops, const PetscBool *active,
+PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor p, const KergsPredictorInput *in, const PetscBool *active,
                                               PetscReal c, Vec q, Vec rtilde)
 {
   PetscInt           nact, *off, cstart, cend, *rows;
@@ -239,21 +239,21 @@ PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor p, KergsContacts co
   PetscFunctionBeginUser;
   PetscCheck(p->ksp, p->comm, PETSC_ERR_ORDER, "predictor (%s): no KSP; call KergsPredictorCreateKSP in the type's create", p->type);
   /* A = the active normal rows of H_f^T, all (local) columns */
-  PetscCall(ActiveNormalOffsets(contacts, ops, active, &nact, &off));
+  PetscCall(ActiveNormalOffsets(in, active, &nact, &off));
   PetscCall(PetscMalloc1(nact, &rows));
-  for (PetscInt i = 0; i < nact; i++) rows[i] = contacts->start * ops->ncomp + off[i];
+  for (PetscInt i = 0; i < nact; i++) rows[i] = in->start * in->L.ncomp + off[i];
   PetscCall(ISCreateGeneral(p->comm, nact, rows, PETSC_OWN_POINTER, &isrow));
-  PetscCall(VecGetOwnershipRange(ops->Vf, &cstart, &cend));
+  PetscCall(VecGetOwnershipRange(in->Vf, &cstart, &cend));
   PetscCall(ISCreateStride(p->comm, cend - cstart, cstart, 1, &iscol));
-  PetscCall(MatCreateSubMatrix(ops->HfT, isrow, iscol, MAT_INITIAL_MATRIX, &A));
+  PetscCall(MatCreateSubMatrix(in->HfT, isrow, iscol, MAT_INITIAL_MATRIX, &A));
   PetscCall(ISDestroy(&isrow));
   PetscCall(ISDestroy(&iscol));
 
   /* K and b = R^d + M V_f^- - A^T q */
-  PetscCall(VecDuplicate(ops->Minv, &Mdiag));
-  PetscCall(VecCopy(ops->Minv, Mdiag));
+  PetscCall(VecDuplicate(in->Minv, &Mdiag));
+  PetscCall(VecCopy(in->Minv, Mdiag));
   PetscCall(VecReciprocal(Mdiag));
-  PetscCall(AssembleK(ops, A, c, Mdiag, &K));
+  PetscCall(AssembleK(in, A, c, Mdiag, &K));
   PetscCall(MatCreateVecs(A, NULL, &qa));
   PetscCall(VecDuplicate(qa, &ra));
   PetscCall(VecGetArrayRead(q, &qf));
@@ -261,14 +261,14 @@ PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor p, KergsContacts co
   for (PetscInt i = 0; i < nact; i++) a[i] = qf[off[i]];
   PetscCall(VecRestoreArray(qa, &a));
   PetscCall(VecRestoreArrayRead(q, &qf));
-  PetscCall(VecDuplicate(ops->Vf, &b));
+  PetscCall(VecDuplicate(in->Vf, &b));
   PetscCall(MatMultTranspose(A, qa, b));
   PetscCall(VecScale(b, -1.0));
-  PetscCall(VecPointwiseMult(Mdiag, Mdiag, ops->Vf)); /* Mdiag <- M V_f^- */
-  PetscCall(VecAXPBYPCZ(b, 1.0, 1.0, 1.0, ops->Rd, Mdiag));
+  PetscCall(VecPointwiseMult(Mdiag, Mdiag, in->Vf)); /* Mdiag <- M V_f^- */
+  PetscCall(VecAXPBYPCZ(b, 1.0, 1.0, 1.0, in->Rd, Mdiag));
 
   PetscCall(VecDestroy(&p->Vtilde));
-  PetscCall(VecDuplicate(ops->Vf, &p->Vtilde));
+  PetscCall(VecDuplicate(in->Vf, &p->Vtilde));
   PetscCall(SolveK(p, K, b, p->Vtilde));
 
   /* r~_n = -(q + c A V~) on the active normal components */
@@ -292,7 +292,7 @@ PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor p, KergsContacts co
 
 /* Active set (the caller's, or g^- <= 0), its global count, and the mean W_nn over it, which scales
    relative eta and epsilon (predictor.h). */
-static PetscErrorCode ActiveAndScale(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+static PetscErrorCode ActiveAndScale(KergsPredictor p, const KergsPredictorInput *in,
                                      const PetscBool *active, PetscBool *act)
 {
   Vec                diag;
@@ -300,13 +300,13 @@ static PetscErrorCode ActiveAndScale(KergsPredictor p, KergsScene scene, KergsCo
   PetscReal          sums[2] = {0, 0};
 
   PetscFunctionBeginUser;
-  PetscCall(MatCreateVecs(ops->W, &diag, NULL));
-  PetscCall(MatGetDiagonal(ops->W, diag));
+  PetscCall(MatCreateVecs(in->W, &diag, NULL));
+  PetscCall(MatGetDiagonal(in->W, diag));
   PetscCall(VecGetArrayRead(diag, &d));
-  for (PetscInt k = 0; k < contacts->n; k++) {
-    act[k] = active ? active[k] : (PetscBool)(contacts->c[k].gap <= 0.0);
+  for (PetscInt k = 0; k < in->ncontacts; k++) {
+    act[k] = active ? active[k] : (PetscBool)(in->c[k].gap <= 0.0);
     if (!act[k]) continue;
-    sums[0] += PetscRealPart(d[k * ops->ncomp]);
+    sums[0] += PetscRealPart(d[k * in->L.ncomp]);
     sums[1] += 1.0;
   }
   PetscCall(VecRestoreArrayRead(diag, &d));
@@ -314,25 +314,40 @@ static PetscErrorCode ActiveAndScale(KergsPredictor p, KergsScene scene, KergsCo
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, p->comm));
   p->nactive     = (PetscInt)sums[1];
   p->wmean       = sums[1] > 0 && sums[0] > 0 ? sums[0] / sums[1] : 1.0;
-  p->eta_abs     = p->relative ? p->eta * scene->dt * p->wmean : p->eta;
-  p->epsilon_abs = p->relative ? p->epsilon * scene->dt * scene->dt * p->wmean : p->epsilon;
+  p->eta_abs     = p->relative ? p->eta * in->dt * p->wmean : p->eta;
+  p->epsilon_abs = p->relative ? p->epsilon * in->dt * in->dt * p->wmean : p->epsilon;
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsPredictorPredict(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops,
-                                     const PetscBool *active, Vec rtilde)
+static PetscErrorCode GetPredictorInput(KergsScene scene, KergsContacts contacts, KergsOperators ops, KergsPredictorInput *in)
 {
-  PetscLogDouble t0, t1;
-  PetscInt       m;
-  PetscBool     *act;
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetTimeStep(scene, &in->dt, &in->theta));
+  PetscCall(KergsContactsGetLocal(contacts, &in->ncontacts, &in->c));
+  PetscCall(KergsContactsGetGlobalRange(contacts, &in->start, NULL));
+  PetscCall(KergsOperatorsGetLayout(ops, &in->L));
+  PetscCall(KergsOperatorsGetH(ops, &in->HfT, &in->HgT));
+  PetscCall(KergsOperatorsGetW(ops, &in->W, NULL));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &in->r, NULL, &in->vd));
+  PetscCall(KergsOperatorsGetDofVectors(ops, &in->Vf, &in->Minv, &in->Rd, &in->Vg));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPredictorPredict(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops, const PetscBool *active, Vec rtilde)
+{
+  PetscLogDouble      t0, t1;
+  PetscInt            m;
+  PetscBool          *act;
+  KergsPredictorInput input, *in = &input;
 
   PetscFunctionBeginUser;
+  PetscCall(GetPredictorInput(scene, contacts, ops, in));
   PetscCheck(p->ops.predict, p->comm, PETSC_ERR_ORDER, "Call KergsPredictorSetFromOptions() or KergsPredictorSetType() first");
   PetscCall(VecGetLocalSize(rtilde, &m));
-  PetscCheck(m == contacts->n * ops->ncomp, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ,
+  PetscCheck(m == in->ncontacts * in->L.ncomp, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ,
              "KergsPredictorPredict: r~ has %" PetscInt_FMT " local entries, expected %" PetscInt_FMT " contacts x %" PetscInt_FMT
              " components",
-             m, contacts->n, ops->ncomp);
+             m, in->ncontacts, in->L.ncomp);
   PetscCall(PetscLogEventBegin(KERGS_Predict, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   PetscCall(VecDestroy(&p->Vtilde));
@@ -340,9 +355,9 @@ PetscErrorCode KergsPredictorPredict(KergsPredictor p, KergsScene scene, KergsCo
   p->sweeps    = 0;
   p->converged = PETSC_TRUE;
   PetscCall(VecZeroEntries(rtilde)); /* tangential and inactive components stay zero */
-  PetscCall(PetscMalloc1(contacts->n, &act));
-  PetscCall(ActiveAndScale(p, scene, contacts, ops, active, act));
-  if (p->nactive > 0) PetscCall((*p->ops.predict)(p, scene, contacts, ops, act, rtilde));
+  PetscCall(PetscMalloc1(in->ncontacts, &act));
+  PetscCall(ActiveAndScale(p, in, active, act));
+  if (p->nactive > 0) PetscCall((*p->ops.predict)(p, in, act, rtilde));
   PetscCall(PetscFree(act));
   PetscCall(PetscTime(&t1));
   p->seconds = t1 - t0;
@@ -376,5 +391,19 @@ PetscErrorCode KergsPredictorDestroy(KergsPredictor *p)
   PetscCall(KSPDestroy(&(*p)->ksp));
   PetscCall(VecDestroy(&(*p)->Vtilde));
   PetscCall(PetscFree(*p));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPredictorGetStats(KergsPredictor p, KergsPredictorStats *st)
+{
+  PetscFunctionBeginUser;
+  st->type        = p->type;
+  st->seconds     = p->seconds;
+  st->ksp_its     = p->ksp_its;
+  st->sweeps      = p->sweeps;
+  st->converged   = p->converged;
+  st->nactive     = p->nactive;
+  st->eta_abs     = p->eta_abs;
+  st->epsilon_abs = p->epsilon_abs;
   PetscFunctionReturn(0);
 }

@@ -1,23 +1,37 @@
 /* kergs solver: the per-step problem W r - v = -v^d with the contact law (eq. 1, 2), solved by a type
    chosen by name (-solver_type), the way PETSc chooses a KSP. This file holds what the types share:
    the registry, the options, which contacts are active, and the loop of sweeps with its stopping test. */
-#include <kergs/solver.h>
+#include <kergs/private/solverimpl.h>
 
 const char *const KergsCriteria[] = {"quad", "maxm", "natural", "KergsCriterion", "KERGS_CRITERION_", NULL};
 
 static PetscFunctionList KergsSolverList = NULL;
+#define KERGS_SOLVER_MAXTYPES 16
+static char     KergsSolverNames[KERGS_SOLVER_MAXTYPES][64]; /* the registered names, in order, for -help */
+static PetscInt KergsSolverNumTypes = 0;
 
 PetscErrorCode KergsSolverRegister(const char name[], PetscErrorCode (*create)(KergsSolver))
 {
   PetscFunctionBeginUser;
   PetscCall(PetscFunctionListAdd(&KergsSolverList, name, create));
+  if (KergsSolverNumTypes < KERGS_SOLVER_MAXTYPES) PetscCall(PetscStrncpy(KergsSolverNames[KergsSolverNumTypes++], name, sizeof(KergsSolverNames[0])));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverRegisterAll(void)
+/* Forget the registry at PetscFinalize (PETSc may be initialized again). */
+static PetscErrorCode SolverFinalizePackage(void)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFunctionListDestroy(&KergsSolverList));
+  KergsSolverNumTypes = 0;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverRegisterAll(void)
 {
   PetscFunctionBeginUser;
   if (KergsSolverList) PetscFunctionReturn(0);
+  PetscCall(PetscRegisterFinalize(SolverFinalizePackage));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGS, KergsSolverCreate_NLGS));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLKERGS, KergsSolverCreate_NLKerGS));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGSJAC, KergsSolverCreate_NLGSJac));
@@ -29,7 +43,7 @@ PetscErrorCode KergsSolverCreate(MPI_Comm comm, KergsSolver *solver)
   KergsSolver s;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsSolverRegisterAll());
+  PetscCall(SolverRegisterAll());
   PetscCall(PetscNew(&s));
   s->comm      = comm;
   s->max_it    = 150; /* the paper's cap */
@@ -69,8 +83,8 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
   PetscCall(PetscOptionsReal("-solver_tol", "Tolerance of the convergence criterion", "", s->tol, &s->tol, NULL));
   PetscCall(PetscOptionsEnum("-solver_criterion", "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, LMGC90 Maxm), natural (natural-map residual, Siconos)", "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
   if (!s->ops.solve || set) PetscCall(KergsSolverSetType(s, type));
+  if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
   PetscOptionsEnd();
-  if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(s, NULL));
   PetscCheck(s->max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_max_it %" PetscInt_FMT " must be at least 1", s->max_it);
   PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number", (double)s->tol);
   PetscFunctionReturn(0);
@@ -81,23 +95,35 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
    feel an impulse the law is about to cancel (and W over active pairs gives the same iterates as the whole W). */
 PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
-  PetscScalar *r;
+  PetscScalar   *r;
+  KergsContact  *c;
+  KergsActivity  act;
+  KergsDofLayout layout;
+  PetscInt       n, nc;
+  Vec            rv;
+  Mat            W;
 
   PetscFunctionBeginUser;
-  if (contacts->n > s->nalloc) {
+  PetscCall(KergsContactsGetLocal(contacts, &n, &c));
+  PetscCall(KergsContactsGetActivity(contacts, scene, &act));
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &rv, NULL, NULL));
+  PetscCall(KergsOperatorsGetW(ops, &W, NULL));
+  nc = layout.ncomp;
+  if (n > s->nalloc) {
     PetscCall(PetscFree2(s->mu, s->active));
-    s->nalloc = PetscMax(contacts->n, 2 * s->nalloc);
+    s->nalloc = PetscMax(n, 2 * s->nalloc);
     PetscCall(PetscMalloc2(s->nalloc, &s->mu, s->nalloc, &s->active));
   }
-  PetscCall(VecGetArray(ops->r, &r));
-  for (PetscInt k = 0; k < contacts->n; k++) {
-    s->active[k] = KergsContactIsActive(scene, &contacts->c[k]);
-    s->mu[k]     = contacts->c[k].mu;
+  PetscCall(VecGetArray(rv, &r));
+  for (PetscInt k = 0; k < n; k++) {
+    s->active[k] = KergsContactIsActive(&act, &c[k]);
+    s->mu[k]     = c[k].mu;
     if (!s->active[k])
-      for (PetscInt c = 0; c < ops->ncomp; c++) r[k * ops->ncomp + c] = 0.0;
+      for (PetscInt j = 0; j < nc; j++) r[k * nc + j] = 0.0;
   }
-  PetscCall(VecRestoreArray(ops->r, &r));
-  PetscCall(KergsSweepSetUp(s->sweep, ops->W, ops->ncomp, s->mu, s->active));
+  PetscCall(VecRestoreArray(rv, &r));
+  PetscCall(KergsSweepSetUp(s->sweep, W, nc, s->mu, s->active));
   PetscFunctionReturn(0);
 }
 
@@ -109,17 +135,19 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
   PetscReal          value = 0.0;
   PetscLogDouble     t0, t1;
   PetscInt           nglobal;
+  Vec                r, v, vd;
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&t0));
-  PetscCall(VecGetSize(ops->r, &nglobal));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &r, &v, &vd));
+  PetscCall(VecGetSize(r, &nglobal));
   stats->iterations = 0;
   stats->converged  = PETSC_TRUE;
   if (nglobal > 0) {
     stats->converged = PETSC_FALSE;
     for (PetscInt k = 1; k <= s->max_it; k++) {
       if (s->ops.presweep) PetscCall((*s->ops.presweep)(s, ops, extra));
-      PetscCall(KergsSweepRun(s->iterate_sweep ? s->iterate_sweep : s->sweep, ops->r, ops->vd, extra, Wdiag, &m));
+      PetscCall(KergsSweepRun(s->iterate_sweep ? s->iterate_sweep : s->sweep, r, vd, extra, Wdiag, &m));
       stats->iterations = k;
       switch (s->criterion) {
       case KERGS_CRITERION_QUAD:
@@ -129,7 +157,7 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
         value = m.maxm;
         break;
       case KERGS_CRITERION_NATURAL:
-        PetscCall(KergsSweepNaturalResidual(s->sweep, ops->r, ops->vd, ops->v, &value));
+        PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &value));
         break;
       }
       if (value < s->tol) {
@@ -140,11 +168,15 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
   }
   PetscCall(PetscTime(&t1));
   stats->sweep_seconds   = t1 - t0;
-  stats->compute_seconds = (s->iterate_sweep ? s->iterate_sweep : s->sweep)->compute_seconds;
+  {
+    PetscLogDouble compute;
+    PetscCall(KergsSweepGetComputeSeconds(s->iterate_sweep ? s->iterate_sweep : s->sweep, &compute));
+    stats->compute_seconds = compute;
+  }
   stats->criterion     = value;
   /* the natural criterion has just computed the residual (and v) of the final r */
   if (s->criterion == KERGS_CRITERION_NATURAL && stats->iterations > 0) stats->residual = value;
-  else PetscCall(KergsSweepNaturalResidual(s->sweep, ops->r, ops->vd, ops->v, &stats->residual));
+  else PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &stats->residual));
   PetscFunctionReturn(0);
 }
 
@@ -159,21 +191,13 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscCall(PetscTime(&t0));
   if (s->ops.setup) PetscCall((*s->ops.setup)(s, scene, contacts, ops));
   PetscCall((*s->ops.solve)(s, scene, contacts, ops, stats));
+  if (s->ops.stats) PetscCall((*s->ops.stats)(s, stats));
   /* the sweep lives for one solve: drop its reference to this step's W, so that W is freed at the start of the
      next assembly instead of coexisting with the next step's W (the peak memory) */
   PetscCall(KergsSweepReset(s->sweep));
   PetscCall(PetscTime(&t1));
   stats->seconds = t1 - t0;
   PetscCall(PetscLogEventEnd(KERGS_Solve, 0, 0, 0, 0));
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode KergsSolverRecordStats(KergsSolver s, KergsOperators ops, KergsResults res)
-{
-  PetscFunctionBeginUser;
-  PetscCall(KergsResultsRecord(res, "nnz_Hf", ops->nnz_Hf));
-  PetscCall(KergsResultsRecord(res, "nnz_W", ops->nnz_W));
-  if (s->ops.record) PetscCall((*s->ops.record)(s, res));
   PetscFunctionReturn(0);
 }
 
@@ -197,5 +221,71 @@ PetscErrorCode KergsSolverDestroy(KergsSolver *s)
   PetscCall(KergsSweepDestroy(&(*s)->sweep));
   PetscCall(PetscFree2((*s)->mu, (*s)->active));
   PetscCall(PetscFree(*s));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverPrintHelpAllTypes(MPI_Comm comm)
+{
+  PetscFunctionBeginUser;
+  PetscCall(SolverRegisterAll());
+  for (PetscInt t = 0; t < KergsSolverNumTypes; t++) {
+    KergsSolver s;
+    PetscCall(KergsSolverCreate(comm, &s));
+    PetscCall(KergsSolverSetType(s, KergsSolverNames[t]));
+    if (s->ops.setfromoptions) {
+      PetscOptionsBegin(comm, NULL, "Contact solver type options", NULL);
+      PetscOptionsHeadBegin(PetscOptionsObject, KergsSolverNames[t]);
+      PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
+      PetscOptionsEnd();
+    }
+    PetscCall(KergsSolverDestroy(&s));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolveStatsAdd(KergsSolveStats *st, const char name[], PetscReal value)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(st->nextra < KERGS_SOLVE_MAXEXTRA, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KergsSolveStatsAdd: more than %d figures (%s)", KERGS_SOLVE_MAXEXTRA, name);
+  PetscCall(PetscStrncpy(st->extra[st->nextra].name, name, sizeof(st->extra[0].name)));
+  st->extra[st->nextra++].value = value;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolveStatsAddText(KergsSolveStats *st, const char name[], const char value[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(st->ntext < KERGS_SOLVE_MAXTEXT, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KergsSolveStatsAddText: more than %d texts (%s)", KERGS_SOLVE_MAXTEXT, name);
+  PetscCall(PetscStrncpy(st->text[st->ntext].name, name, sizeof(st->text[0].name)));
+  PetscCall(PetscStrncpy(st->text[st->ntext++].value, value, sizeof(st->text[0].value)));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverGetType(KergsSolver s, KergsSolverType *type)
+{
+  PetscFunctionBeginUser;
+  *type = s->type;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverGetActive(KergsSolver s, const PetscBool **active)
+{
+  PetscFunctionBeginUser;
+  *active = s->active;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverNeedsH(KergsSolver s, PetscBool *needs)
+{
+  PetscFunctionBeginUser;
+  *needs = s->needs_H;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverGetTolerances(KergsSolver s, PetscReal *tol, PetscInt *max_it)
+{
+  PetscFunctionBeginUser;
+  if (tol) *tol = s->tol;
+  if (max_it) *max_it = s->max_it;
   PetscFunctionReturn(0);
 }

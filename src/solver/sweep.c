@@ -12,7 +12,7 @@
    computed on those ranks and added back through the same scatter reversed.
    For Algorithm 6 (NLGS-Jac) the caller passes the extra right-hand side and the regularised diagonal
    blocks W_aa + Z_aa; both are used as given. */
-#include <kergs/sweep.h>
+#include <kergs/private/sweepimpl.h>
 
 /* The block kernels are specialised by inlining with a constant number of components (1 or 2); the compiler's
    heuristics alone do not inline the sweep loop into its two call sites. */
@@ -634,5 +634,12 @@ PetscErrorCode KergsSweepNaturalResidual(KergsSweep s, Vec r, Vec vd, Vec v, Pet
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, s->comm));
   /* relative to |r|; absolute when r = 0, so that the zero solution of an all-open problem gives 0 */
   *res = sums[1] > 0 ? PetscSqrtReal(sums[0]) / PetscMax(PetscSqrtReal(sums[1]), 1e-300) : PetscSqrtReal(sums[0]);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSweepGetComputeSeconds(KergsSweep s, PetscLogDouble *seconds)
+{
+  PetscFunctionBeginUser;
+  *seconds = s->compute_seconds;
   PetscFunctionReturn(0);
 }

@@ -11,12 +11,12 @@
    with v^- = H_f^T V_f^- + H_g^T V_g^+ and v~ = H_f^T V~_f + H_g^T V_g^+. The paper uses theta = 1,
    where this is Algorithm 5 exactly; for theta < 1 the system is
      (M + theta (dt^2/eps) H_f D H_f^T) V~ = R^d + M V^- - (dt/eps) H_f D (g^- + (1 - theta) dt v^- + theta dt H_g^T V_g^+). */
-#include <kergs/predictor.h>
+#include <kergs/private/predictorimpl.h>
 
-static PetscErrorCode KergsPredictorPredict_Elastic(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+static PetscErrorCode KergsPredictorPredict_Elastic(KergsPredictor p, const KergsPredictorInput *in,
                                                     const PetscBool *active, Vec rtilde)
 {
-  const PetscReal    dt = scene->dt, th = scene->theta, k = dt / p->epsilon_abs;
+  const PetscReal    dt = in->dt, th = in->theta, k = dt / p->epsilon_abs;
   Vec                q, vminus;
   PetscScalar       *qa;
   const PetscScalar *vm;
@@ -25,21 +25,21 @@ static PetscErrorCode KergsPredictorPredict_Elastic(KergsPredictor p, KergsScene
   /* q = (dt/eps) (g^- + (1 - theta) dt v^- + theta dt H_g^T V_g^+) on the normal components */
   PetscCall(VecDuplicate(rtilde, &q));
   PetscCall(VecDuplicate(rtilde, &vminus));
-  if (ops->HgT)
-    PetscCall(MatMult(ops->HgT, ops->Vg, q));
+  if (in->HgT)
+    PetscCall(MatMult(in->HgT, in->Vg, q));
   else
     PetscCall(VecZeroEntries(q));
-  PetscCall(MatMultAdd(ops->HfT, ops->Vf, q, vminus)); /* v^- = H_f^T V_f^- + H_g^T V_g^+ */
+  PetscCall(MatMultAdd(in->HfT, in->Vf, q, vminus)); /* v^- = H_f^T V_f^- + H_g^T V_g^+ */
   PetscCall(VecGetArray(q, &qa));
   PetscCall(VecGetArrayRead(vminus, &vm));
-  for (PetscInt a = 0; a < contacts->n; a++) {
-    const PetscInt i = a * ops->ncomp;
-    qa[i]            = k * (contacts->c[a].gap + (1.0 - th) * dt * vm[i] + th * dt * qa[i]);
+  for (PetscInt a = 0; a < in->ncontacts; a++) {
+    const PetscInt i = a * in->L.ncomp;
+    qa[i]            = k * (in->c[a].gap + (1.0 - th) * dt * vm[i] + th * dt * qa[i]);
   }
   PetscCall(VecRestoreArrayRead(vminus, &vm));
   PetscCall(VecRestoreArray(q, &qa));
   PetscCall(VecDestroy(&vminus));
-  PetscCall(KergsPredictorSolveRegularised(p, contacts, ops, active, th * dt * k, q, rtilde));
+  PetscCall(KergsPredictorSolveRegularised(p, in, active, th * dt * k, q, rtilde));
   PetscCall(VecDestroy(&q));
   PetscFunctionReturn(0);
 }

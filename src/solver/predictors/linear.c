@@ -3,23 +3,23 @@
      (M + (dt/eta) H_f D H_f^T) V~_f = R^d + M V_f^- - (dt/eta) H_f D H_g^T V_g^+
      r^lin = -(dt/eta) D (H_f^T V~_f + H_g^T V_g^+)
    Units: eta in s/kg, so that dt/eta is a mass (predictor.h); by default -predictor_eta is relative. */
-#include <kergs/predictor.h>
+#include <kergs/private/predictorimpl.h>
 
-static PetscErrorCode KergsPredictorPredict_Linear(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+static PetscErrorCode KergsPredictorPredict_Linear(KergsPredictor p, const KergsPredictorInput *in,
                                                    const PetscBool *active, Vec rtilde)
 {
-  const PetscReal c = scene->dt / p->eta_abs;
+  const PetscReal c = in->dt / p->eta_abs;
   Vec             q;
 
   PetscFunctionBeginUser;
   /* q = (dt/eta) H_g^T V_g^+ (the driven walls' part of v~), zero without driven walls */
   PetscCall(VecDuplicate(rtilde, &q));
-  if (ops->HgT) {
-    PetscCall(MatMult(ops->HgT, ops->Vg, q));
+  if (in->HgT) {
+    PetscCall(MatMult(in->HgT, in->Vg, q));
     PetscCall(VecScale(q, c));
   } else
     PetscCall(VecZeroEntries(q));
-  PetscCall(KergsPredictorSolveRegularised(p, contacts, ops, active, c, q, rtilde));
+  PetscCall(KergsPredictorSolveRegularised(p, in, active, c, q, rtilde));
   PetscCall(VecDestroy(&q));
   PetscFunctionReturn(0);
 }

@@ -1,15 +1,13 @@
 /* kergs predictor type "none": r~ = 0 (Algorithm 3 without prediction; the correction then pins the kernel
    part of r to zero). */
-#include <kergs/predictor.h>
+#include <kergs/private/predictorimpl.h>
 
-static PetscErrorCode KergsPredictorPredict_None(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+static PetscErrorCode KergsPredictorPredict_None(KergsPredictor p, const KergsPredictorInput *in,
                                                  const PetscBool *active, Vec rtilde)
 {
   PetscFunctionBeginUser;
   (void)p;
-  (void)scene;
-  (void)contacts;
-  (void)ops;
+  (void)in;
   (void)active;
   PetscCall(VecZeroEntries(rtilde));
   PetscFunctionReturn(0);

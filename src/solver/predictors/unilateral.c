@@ -4,7 +4,7 @@
    by NLGS sweeps (include/kergs/sweep.h, one component per contact, mu = 0) on the normal sub-block W_nn of W,
    warm-started from the contacts' impulses, until the W-weighted change quad < -predictor_unilateral_tol or
    -predictor_unilateral_max_it sweeps. Without friction in the scene W_nn is W itself. */
-#include <kergs/predictor.h>
+#include <kergs/private/predictorimpl.h>
 #include <kergs/sweep.h>
 
 typedef struct {
@@ -14,7 +14,7 @@ typedef struct {
   PetscReal  quad; /* last sweep's quad */
 } Predictor_Unilateral;
 
-static PetscErrorCode KergsPredictorSetFromOptions_Unilateral(KergsPredictor p, PetscOptionItems *PetscOptionsObject)
+static PetscErrorCode KergsPredictorSetFromOptions_Unilateral(PetscOptionItems *PetscOptionsObject, KergsPredictor p)
 {
   Predictor_Unilateral *u = (Predictor_Unilateral *)p->data;
 
@@ -61,26 +61,26 @@ static PetscErrorCode NormalEntries(Mat W, PetscInt nc, Mat Wnn, PetscInt *dnz, 
 
 /* W_nn, the normal components' sub-block, contact alpha being row and column alpha; stored like W: by its upper
    triangle (SBAIJ, block size 1) when W is, so that the sweep streams half of it, AIJ otherwise. */
-static PetscErrorCode NormalSubmatrix(KergsOperators ops, Mat *Wnn)
+static PetscErrorCode NormalSubmatrix(const KergsPredictorInput *in, Mat *Wnn)
 {
-  const PetscInt nc = ops->ncomp;
+  const PetscInt nc = in->L.ncomp;
   PetscInt       m, n, *dnz, *onz;
   PetscBool      upper;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscObjectTypeCompareAny((PetscObject)ops->W, &upper, MATSEQSBAIJ, MATMPISBAIJ, ""));
-  PetscCall(MatGetLocalSize(ops->W, &m, NULL));
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)in->W, &upper, MATSEQSBAIJ, MATMPISBAIJ, ""));
+  PetscCall(MatGetLocalSize(in->W, &m, NULL));
   n = m / nc;
   PetscCall(PetscCalloc2(n + 1, &dnz, n + 1, &onz));
-  PetscCall(MatGetRowUpperTriangular(ops->W)); /* MatGetRow on SBAIJ: the stored (upper) part of each row */
-  PetscCall(NormalEntries(ops->W, nc, NULL, dnz, onz));
-  PetscCall(MatCreate(PetscObjectComm((PetscObject)ops->W), Wnn));
+  PetscCall(MatGetRowUpperTriangular(in->W)); /* MatGetRow on SBAIJ: the stored (upper) part of each row */
+  PetscCall(NormalEntries(in->W, nc, NULL, dnz, onz));
+  PetscCall(MatCreate(PetscObjectComm((PetscObject)in->W), Wnn));
   PetscCall(MatSetSizes(*Wnn, n, n, PETSC_DETERMINE, PETSC_DETERMINE));
   PetscCall(MatSetType(*Wnn, upper ? MATSBAIJ : MATAIJ));
   PetscCall(MatXAIJSetPreallocation(*Wnn, 1, dnz, onz, dnz, onz));
   PetscCall(MatSetOption(*Wnn, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
-  PetscCall(NormalEntries(ops->W, nc, *Wnn, NULL, NULL));
-  PetscCall(MatRestoreRowUpperTriangular(ops->W));
+  PetscCall(NormalEntries(in->W, nc, *Wnn, NULL, NULL));
+  PetscCall(MatRestoreRowUpperTriangular(in->W));
   PetscCall(MatAssemblyBegin(*Wnn, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*Wnn, MAT_FINAL_ASSEMBLY));
   PetscCall(PetscFree2(dnz, onz));
@@ -89,36 +89,36 @@ static PetscErrorCode NormalSubmatrix(KergsOperators ops, Mat *Wnn)
 
 /* W_nn, v^d_n and a warm start r_n (the contacts' normal impulses, >= 0, zero when inactive). With one
    component per contact they are W, v^d and rtilde themselves; otherwise the normal sub-block is extracted. */
-static PetscErrorCode NormalProblem(KergsContacts contacts, KergsOperators ops, const PetscBool *active, Vec rtilde,
+static PetscErrorCode NormalProblem(const KergsPredictorInput *in, const PetscBool *active, Vec rtilde,
                                     Mat *Wnn, Vec *vdn, Vec *rn)
 {
   PetscScalar       *r;
   const PetscScalar *vd;
 
   PetscFunctionBeginUser;
-  if (ops->ncomp == 1) {
-    PetscCall(PetscObjectReference((PetscObject)ops->W));
-    PetscCall(PetscObjectReference((PetscObject)ops->vd));
+  if (in->L.ncomp == 1) {
+    PetscCall(PetscObjectReference((PetscObject)in->W));
+    PetscCall(PetscObjectReference((PetscObject)in->vd));
     PetscCall(PetscObjectReference((PetscObject)rtilde));
-    *Wnn = ops->W;
-    *vdn = ops->vd;
+    *Wnn = in->W;
+    *vdn = in->vd;
     *rn  = rtilde;
   } else {
-    PetscCall(NormalSubmatrix(ops, Wnn));
+    PetscCall(NormalSubmatrix(in, Wnn));
     PetscCall(MatCreateVecs(*Wnn, rn, vdn));
     PetscCall(VecGetArray(*vdn, &r));
-    PetscCall(VecGetArrayRead(ops->vd, &vd));
-    for (PetscInt k = 0; k < contacts->n; k++) r[k] = vd[k * ops->ncomp];
-    PetscCall(VecRestoreArrayRead(ops->vd, &vd));
+    PetscCall(VecGetArrayRead(in->vd, &vd));
+    for (PetscInt k = 0; k < in->ncontacts; k++) r[k] = vd[k * in->L.ncomp];
+    PetscCall(VecRestoreArrayRead(in->vd, &vd));
     PetscCall(VecRestoreArray(*vdn, &r));
   }
   PetscCall(VecGetArray(*rn, &r));
-  for (PetscInt k = 0; k < contacts->n; k++) r[k] = active[k] ? PetscMax(contacts->c[k].r[0], 0.0) : 0.0;
+  for (PetscInt k = 0; k < in->ncontacts; k++) r[k] = active[k] ? PetscMax(in->c[k].r[0], 0.0) : 0.0;
   PetscCall(VecRestoreArray(*rn, &r));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsPredictorPredict_Unilateral(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+static PetscErrorCode KergsPredictorPredict_Unilateral(KergsPredictor p, const KergsPredictorInput *in,
                                                        const PetscBool *active, Vec rtilde)
 {
   Predictor_Unilateral *u = (Predictor_Unilateral *)p->data;
@@ -127,8 +127,7 @@ static PetscErrorCode KergsPredictorPredict_Unilateral(KergsPredictor p, KergsSc
   Vec                   vdn, rn;
 
   PetscFunctionBeginUser;
-  (void)scene;
-  PetscCall(NormalProblem(contacts, ops, active, rtilde, &Wnn, &vdn, &rn));
+  PetscCall(NormalProblem(in, active, rtilde, &Wnn, &vdn, &rn));
   PetscCall(KergsSweepSetUp(u->sweep, Wnn, 1, NULL, active));
   p->converged = PETSC_FALSE;
   for (p->sweeps = 1; p->sweeps <= u->max_it; p->sweeps++) {
@@ -144,12 +143,12 @@ static PetscErrorCode KergsPredictorPredict_Unilateral(KergsPredictor p, KergsSc
     PetscCall(PetscInfo(NULL, "unilateral predictor: %" PetscInt_FMT " sweeps without reaching quad < %g (last %g)\n", u->max_it,
                         (double)u->tol, (double)m.quad));
   PetscCall(KergsSweepReset(u->sweep)); /* drop the references to W_nn and to the caller's active array */
-  if (ops->ncomp > 1) {
+  if (in->L.ncomp > 1) {
     PetscScalar       *rt;
     const PetscScalar *r;
     PetscCall(VecGetArray(rtilde, &rt));
     PetscCall(VecGetArrayRead(rn, &r));
-    for (PetscInt k = 0; k < contacts->n; k++) rt[k * ops->ncomp] = r[k];
+    for (PetscInt k = 0; k < in->ncontacts; k++) rt[k * in->L.ncomp] = r[k];
     PetscCall(VecRestoreArrayRead(rn, &r));
     PetscCall(VecRestoreArray(rtilde, &rt));
   }

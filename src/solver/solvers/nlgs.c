@@ -1,6 +1,6 @@
 /* kergs solver type "nlgs": Algorithm 2, plain non-linear Gauss-Seidel on W with the exact one-contact law,
    warm-started from the previous step's impulses. */
-#include <kergs/solver.h>
+#include <kergs/private/solverimpl.h>
 
 static PetscErrorCode KergsSolverSetUp_NLGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {

@@ -5,11 +5,10 @@
    the last bracket being the extra right-hand side updated before each sweep. */
 #include "regularised.h"
 
-static PetscErrorCode KergsSolverSetFromOptions_NLGSJac(KergsSolver s, PetscOptionItems *unused)
+static PetscErrorCode SolverSetFromOptions_NLGSJac(PetscOptionItems *PetscOptionsObject, KergsSolver s)
 {
   PetscFunctionBeginUser;
-  (void)unused;
-  PetscCall(KergsRegularisedSetFromOptions(s, (KergsRegularised *)s->data));
+  PetscCall(KergsRegularisedSetFromOptions(PetscOptionsObject, s, (KergsRegularised *)s->data));
   PetscFunctionReturn(0);
 }
 
@@ -17,13 +16,18 @@ static PetscErrorCode KergsSolverSetFromOptions_NLGSJac(KergsSolver s, PetscOpti
 static PetscErrorCode KergsSolverSetUp_NLGSJac(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
   KergsRegularised *reg = (KergsRegularised *)s->data;
-  PetscInt          nb  = ops->ncomp * ops->ncomp;
+  KergsDofLayout    layout;
+  const PetscReal  *Zdiag;
+  PetscInt          n;
 
   PetscFunctionBeginUser;
   PetscCall(KergsRegularisedSetUp(s, reg, scene, contacts, ops));
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
   PetscCall(KergsKernelComputeDiagonalBlocks(reg->kernel));
+  PetscCall(KergsKernelGetDiagonalBlocks(reg->kernel, &Zdiag));
   PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, reg->Wdiag));
-  for (PetscInt i = 0; i < contacts->n * nb; i++) reg->Wdiag[i] += reg->kernel->Zdiag[i];
+  for (PetscInt i = 0; i < n * layout.ncomp * layout.ncomp; i++) reg->Wdiag[i] += Zdiag[i];
   PetscFunctionReturn(0);
 }
 
@@ -31,18 +35,24 @@ static PetscErrorCode KergsSolverSetUp_NLGSJac(KergsSolver s, KergsScene scene, 
 static PetscErrorCode KergsSolverPreSweep_NLGSJac(KergsSolver s, KergsOperators ops, PetscReal *extra)
 {
   KergsRegularised  *reg = (KergsRegularised *)s->data;
-  PetscInt           nc = ops->ncomp, n;
+  KergsDofLayout     layout;
+  PetscInt           nc, n;
   const PetscScalar *z, *zt, *r;
-  const PetscReal   *Zd = reg->kernel->Zdiag;
+  const PetscReal   *Zd;
   Mat                Z;
+  Vec                rv;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &rv, NULL, NULL));
+  PetscCall(KergsKernelGetDiagonalBlocks(reg->kernel, &Zd));
+  nc = layout.ncomp;
   PetscCall(KergsKernelGetZ(reg->kernel, &Z));
-  PetscCall(MatMult(Z, ops->r, reg->z));
-  PetscCall(VecGetLocalSize(ops->r, &n));
+  PetscCall(MatMult(Z, rv, reg->z));
+  PetscCall(VecGetLocalSize(rv, &n));
   PetscCall(VecGetArrayRead(reg->z, &z));
   PetscCall(VecGetArrayRead(reg->ztilde, &zt));
-  PetscCall(VecGetArrayRead(ops->r, &r));
+  PetscCall(VecGetArrayRead(rv, &r));
   for (PetscInt k = 0; k < n / nc; k++)
     for (PetscInt i = 0; i < nc; i++) {
       PetscReal zr = 0;
@@ -51,7 +61,7 @@ static PetscErrorCode KergsSolverPreSweep_NLGSJac(KergsSolver s, KergsOperators 
     }
   PetscCall(VecRestoreArrayRead(reg->z, &z));
   PetscCall(VecRestoreArrayRead(reg->ztilde, &zt));
-  PetscCall(VecRestoreArrayRead(ops->r, &r));
+  PetscCall(VecRestoreArrayRead(rv, &r));
   PetscFunctionReturn(0);
 }
 
@@ -66,10 +76,10 @@ static PetscErrorCode KergsSolverSolve_NLGSJac(KergsSolver s, KergsScene scene, 
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverRecord_NLGSJac(KergsSolver s, KergsResults res)
+static PetscErrorCode SolverStats_NLGSJac(KergsSolver s, KergsSolveStats *st)
 {
   PetscFunctionBeginUser;
-  PetscCall(KergsRegularisedRecord((KergsRegularised *)s->data, res));
+  PetscCall(KergsRegularisedStats((KergsRegularised *)s->data, st));
   PetscFunctionReturn(0);
 }
 
@@ -99,11 +109,11 @@ PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver s)
   PetscCall(KergsRegularisedCreate(s->comm, &reg));
   s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */
   s->data               = reg;
-  s->ops.setfromoptions = KergsSolverSetFromOptions_NLGSJac;
+  s->ops.setfromoptions = SolverSetFromOptions_NLGSJac;
   s->ops.setup          = KergsSolverSetUp_NLGSJac;
   s->ops.solve          = KergsSolverSolve_NLGSJac;
   s->ops.presweep       = KergsSolverPreSweep_NLGSJac;
-  s->ops.record         = KergsSolverRecord_NLGSJac;
+  s->ops.stats          = SolverStats_NLGSJac;
   s->ops.view           = KergsSolverView_NLGSJac;
   s->ops.destroy        = KergsSolverDestroy_NLGSJac;
   PetscFunctionReturn(0);

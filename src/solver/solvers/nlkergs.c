@@ -13,16 +13,14 @@ typedef struct {
   PetscInt          nnz_Wt;
 } NLKerGS;
 
-static PetscErrorCode KergsSolverSetFromOptions_NLKerGS(KergsSolver s, PetscOptionItems *unused)
+static PetscErrorCode SolverSetFromOptions_NLKerGS(PetscOptionItems *PetscOptionsObject, KergsSolver s)
 {
   NLKerGS *nk = (NLKerGS *)s->data;
 
   PetscFunctionBeginUser;
-  (void)unused;
-  PetscOptionsBegin(s->comm, NULL, "NLKerGS-P on a stored W~ (verification)", NULL);
+  PetscOptionsHeadBegin(PetscOptionsObject, "NLKerGS-P on a stored W~ (verification)");
   PetscCall(PetscOptionsInt("-solver_nlkergs_max_size", "Largest number of contact components for which W~ is stored densely", "", nk->max_size, &nk->max_size, NULL));
-  PetscOptionsEnd();
-  PetscCall(KergsRegularisedSetFromOptions(s, nk->reg));
+  PetscCall(KergsRegularisedSetFromOptions(PetscOptionsObject, s, nk->reg));
   PetscFunctionReturn(0);
 }
 
@@ -34,16 +32,20 @@ static PetscErrorCode KergsSolverSetUp_NLKerGS(KergsSolver s, KergsScene scene, 
   PetscInt          N, n;
   MatInfo           info;
   const PetscScalar *zt;
+  KergsDofLayout    layout;
+  Vec               r;
 
   PetscFunctionBeginUser;
-  PetscCall(VecGetSize(ops->r, &N));
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
+  PetscCall(VecGetSize(r, &N));
   PetscCheck(N <= nk->max_size, s->comm, PETSC_ERR_SUP, "-solver_type nlkergs stores W + omega N N^T densely (%" PetscInt_FMT " x %" PetscInt_FMT "): above -solver_nlkergs_max_size %" PetscInt_FMT "; use -solver_type nlgsjac", N, N, nk->max_size);
   PetscCall(KergsRegularisedSetUp(s, reg, scene, contacts, ops));
   PetscCall(MatDestroy(&nk->Wt));
   PetscCall(KergsKernelGetZ(reg->kernel, &Z));
   /* explicit Z stored like W, by ncomp x ncomp blocks (Z carries W's block size), so that W~ = Z + W is one
      block row per contact for the sweep */
-  PetscCall(MatComputeOperator(Z, ops->ncomp > 1 ? MATBAIJ : MATAIJ, &nk->Wt));
+  PetscCall(MatComputeOperator(Z, layout.ncomp > 1 ? MATBAIJ : MATAIJ, &nk->Wt));
   {
     Mat Wfull; /* W is stored by its upper triangle: Z + W needs both */
     PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
@@ -52,9 +54,9 @@ static PetscErrorCode KergsSolverSetUp_NLKerGS(KergsSolver s, KergsScene scene, 
   }
   PetscCall(MatGetInfo(nk->Wt, MAT_GLOBAL_SUM, &info));
   nk->nnz_Wt = (PetscInt)info.nz_used;
-  PetscCall(KergsSweepSetUp(nk->sweep, nk->Wt, ops->ncomp, s->mu, s->active));
+  PetscCall(KergsSweepSetUp(nk->sweep, nk->Wt, layout.ncomp, s->mu, s->active));
   /* the regularised right-hand side: v~ = W~ r + v^d - Z r~ */
-  PetscCall(VecGetLocalSize(ops->r, &n));
+  PetscCall(VecGetLocalSize(r, &n));
   PetscCall(VecGetArrayRead(reg->ztilde, &zt));
   for (PetscInt i = 0; i < n; i++) reg->extra[i] = -zt[i];
   PetscCall(VecRestoreArrayRead(reg->ztilde, &zt));
@@ -74,13 +76,13 @@ static PetscErrorCode KergsSolverSolve_NLKerGS(KergsSolver s, KergsScene scene, 
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverRecord_NLKerGS(KergsSolver s, KergsResults res)
+static PetscErrorCode SolverStats_NLKerGS(KergsSolver s, KergsSolveStats *st)
 {
   NLKerGS *nk = (NLKerGS *)s->data;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsRegularisedRecord(nk->reg, res));
-  PetscCall(KergsResultsRecord(res, "nnz_Wtilde", (PetscReal)nk->nnz_Wt));
+  PetscCall(KergsRegularisedStats(nk->reg, st));
+  PetscCall(KergsSolveStatsAdd(st, "nnz_Wtilde", (PetscReal)nk->nnz_Wt));
   PetscFunctionReturn(0);
 }
 
@@ -118,10 +120,10 @@ PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver s)
   PetscCall(KergsSweepCreate(s->comm, &nk->sweep));
   s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */
   s->data               = nk;
-  s->ops.setfromoptions = KergsSolverSetFromOptions_NLKerGS;
+  s->ops.setfromoptions = SolverSetFromOptions_NLKerGS;
   s->ops.setup          = KergsSolverSetUp_NLKerGS;
   s->ops.solve          = KergsSolverSolve_NLKerGS;
-  s->ops.record         = KergsSolverRecord_NLKerGS;
+  s->ops.stats          = SolverStats_NLKerGS;
   s->ops.view           = KergsSolverView_NLKerGS;
   s->ops.destroy        = KergsSolverDestroy_NLKerGS;
   PetscFunctionReturn(0);

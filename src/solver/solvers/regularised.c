@@ -12,14 +12,13 @@ PetscErrorCode KergsRegularisedCreate(MPI_Comm comm, KergsRegularised **reg)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsRegularisedSetFromOptions(KergsSolver s, KergsRegularised *reg)
+PetscErrorCode KergsRegularisedSetFromOptions(PetscOptionItems *PetscOptionsObject, KergsSolver s, KergsRegularised *reg)
 {
   PetscFunctionBeginUser;
-  PetscOptionsBegin(s->comm, NULL, "Kernel-regularised solver options (nlkergs, nlgsjac)", NULL);
+  PetscOptionsHeadBegin(PetscOptionsObject, "Kernel-regularised solver options (nlkergs, nlgsjac)");
   PetscCall(PetscOptionsReal("-solver_omega", "omega of W + omega N N^T (0: automatic, -solver_omega_factor * ||W||_2)", "", reg->omega_fixed, &reg->omega_fixed, NULL));
   PetscCall(PetscOptionsReal("-solver_omega_factor", "Automatic omega as this fraction of ||W||_2 (the paper: 1/20)", "", reg->omega_factor, &reg->omega_factor, NULL));
   PetscCall(PetscOptionsInt("-solver_omega_power_its", "Power iterations estimating ||W||_2", "", reg->power_its, &reg->power_its, NULL));
-  PetscOptionsEnd();
   PetscCheck(reg->omega_fixed >= 0 && PetscIsNormalReal(reg->omega_fixed + 1), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_omega %g must be a finite number >= 0", (double)reg->omega_fixed);
   PetscCheck(reg->omega_factor > 0 && PetscIsNormalReal(reg->omega_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_omega_factor %g must be positive", (double)reg->omega_factor);
   PetscCheck(reg->power_its >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_omega_power_its %" PetscInt_FMT " must be at least 1", reg->power_its);
@@ -60,15 +59,20 @@ static PetscErrorCode EstimateNormW(Mat W, PetscInt its, PetscReal *norm)
 
 static PetscErrorCode EnsureWork(KergsRegularised *reg, KergsOperators ops, PetscInt nlocal)
 {
-  PetscInt ncomp = ops->ncomp;
+  KergsDofLayout layout;
+  PetscInt       ncomp;
+  Vec            r;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
+  ncomp = layout.ncomp;
   PetscCall(VecDestroy(&reg->rtilde));
   PetscCall(VecDestroy(&reg->ztilde));
   PetscCall(VecDestroy(&reg->z));
-  PetscCall(VecDuplicate(ops->r, &reg->rtilde));
-  PetscCall(VecDuplicate(ops->r, &reg->ztilde));
-  PetscCall(VecDuplicate(ops->r, &reg->z));
+  PetscCall(VecDuplicate(r, &reg->rtilde));
+  PetscCall(VecDuplicate(r, &reg->ztilde));
+  PetscCall(VecDuplicate(r, &reg->z));
   if (nlocal * ncomp * ncomp > reg->nalloc) {
     PetscCall(PetscFree2(reg->extra, reg->Wdiag));
     reg->nalloc = PetscMax(nlocal * ncomp * ncomp, 2 * reg->nalloc);
@@ -79,13 +83,16 @@ static PetscErrorCode EnsureWork(KergsRegularised *reg, KergsOperators ops, Pets
 
 PetscErrorCode KergsRegularisedSetUp(KergsSolver s, KergsRegularised *reg, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
-  Mat            Z;
+  Mat            Z, W;
   PetscLogDouble t0, t1;
+  PetscInt       n;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSolverSetUpSweep(s, scene, contacts, ops));
-  PetscCall(EnsureWork(reg, ops, contacts->n));
-  PetscCall(EstimateNormW(ops->W, reg->power_its, &reg->normW));
+  PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
+  PetscCall(KergsOperatorsGetW(ops, &W, NULL));
+  PetscCall(EnsureWork(reg, ops, n));
+  PetscCall(EstimateNormW(W, reg->power_its, &reg->normW));
   reg->omega = reg->omega_fixed > 0 ? reg->omega_fixed : reg->omega_factor * reg->normW;
   if (reg->omega <= 0) reg->omega = 1.0; /* no contact carries anything: any omega will do */
   PetscCall(KergsKernelSetActive(reg->kernel, s->active)); /* the unknowns: active contacts only */
@@ -97,34 +104,30 @@ PetscErrorCode KergsRegularisedSetUp(KergsSolver s, KergsRegularised *reg, Kergs
   reg->predict_seconds = t1 - t0;
   PetscCall(KergsKernelGetZ(reg->kernel, &Z));
   PetscCall(MatMult(Z, reg->rtilde, reg->ztilde));
-  PetscCall(PetscInfo(NULL, "omega %g (||W||_2 ~ %g), predictor %s\n", (double)reg->omega, (double)reg->normW, reg->predictor->type));
+  PetscCall(PetscInfo(NULL, "omega %g (||W||_2 ~ %g)\n", (double)reg->omega, (double)reg->normW));
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsRegularisedRecord(KergsRegularised *reg, KergsResults res)
+PetscErrorCode KergsRegularisedStats(KergsRegularised *reg, KergsSolveStats *st)
 {
-  KergsKernel k = reg->kernel;
-  PetscInt    code = 0;
-  const char *names[] = {KERGS_PREDICTOR_NONE, KERGS_PREDICTOR_LINEAR, KERGS_PREDICTOR_UNILATERAL, KERGS_PREDICTOR_ELASTIC};
+  KergsKernelStats    k;
+  KergsPredictorStats p;
 
   PetscFunctionBeginUser;
-  for (PetscInt i = 0; i < 4; i++) {
-    PetscBool same;
-    PetscCall(PetscStrcmp(reg->predictor->type, names[i], &same));
-    if (same) code = i;
-  }
-  PetscCall(KergsResultsRecord(res, "omega", reg->omega));
-  PetscCall(KergsResultsRecord(res, "norm_W", reg->normW));
-  PetscCall(KergsResultsRecord(res, "predictor", (PetscReal)code));
-  PetscCall(KergsResultsRecord(res, "kernel_dimension", (PetscReal)(k->ncols - k->rank)));
-  PetscCall(KergsResultsRecord(res, "rank_Hf", (PetscReal)k->rank));
-  PetscCall(KergsResultsRecord(res, "floating_grains", (PetscReal)k->floating_grains));
-  PetscCall(KergsResultsRecord(res, "peeled_contacts", (PetscReal)k->peeled_contacts));
-  PetscCall(KergsResultsRecord(res, "null_pivots", (PetscReal)k->null_pivots));
-  PetscCall(KergsResultsRecord(res, "nnz_factor", (PetscReal)k->nnz_factor));
-  PetscCall(KergsResultsRecord(res, "factor_seconds", k->factor_seconds));
-  PetscCall(KergsResultsRecord(res, "diag_seconds", k->diag_seconds));
-  PetscCall(KergsResultsRecord(res, "predict_seconds", reg->predict_seconds));
+  PetscCall(KergsKernelGetStats(reg->kernel, &k));
+  PetscCall(KergsPredictorGetStats(reg->predictor, &p));
+  PetscCall(KergsSolveStatsAdd(st, "omega", reg->omega));
+  PetscCall(KergsSolveStatsAdd(st, "norm_W", reg->normW));
+  PetscCall(KergsSolveStatsAddText(st, "predictor_type", p.type));
+  PetscCall(KergsSolveStatsAdd(st, "kernel_dimension", (PetscReal)(k.ncols - k.rank)));
+  PetscCall(KergsSolveStatsAdd(st, "rank_Hf", (PetscReal)k.rank));
+  PetscCall(KergsSolveStatsAdd(st, "floating_grains", (PetscReal)k.floating_grains));
+  PetscCall(KergsSolveStatsAdd(st, "peeled_contacts", (PetscReal)k.peeled_contacts));
+  PetscCall(KergsSolveStatsAdd(st, "null_pivots", (PetscReal)k.null_pivots));
+  PetscCall(KergsSolveStatsAdd(st, "nnz_factor", (PetscReal)k.nnz_factor));
+  PetscCall(KergsSolveStatsAdd(st, "factor_seconds", k.factor_seconds));
+  PetscCall(KergsSolveStatsAdd(st, "diag_seconds", k.diag_seconds));
+  PetscCall(KergsSolveStatsAdd(st, "predict_seconds", reg->predict_seconds));
   PetscFunctionReturn(0);
 }
 

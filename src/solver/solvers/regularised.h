@@ -1,9 +1,9 @@
 /* kergs: what the kernel-regularised solver types (nlkergs, nlgsjac) share: the kernel projector, the
-   predictor r~, omega, z~ = Z r~ (Algorithm 3 and 6). Private to src/solvers/. */
+   predictor r~, omega, z~ = Z r~ (Algorithm 3 and 6). Private to src/solver/solvers/. */
 #ifndef KERGS_REGULARISED_H
 #define KERGS_REGULARISED_H
 
-#include <kergs/solver.h>
+#include <kergs/private/solverimpl.h>
 #include <kergs/kernel.h>
 #include <kergs/predictor.h>
 
@@ -21,10 +21,11 @@ typedef struct {
 } KergsRegularised;
 
 PETSC_INTERN PetscErrorCode KergsRegularisedCreate(MPI_Comm, KergsRegularised **);
-PETSC_INTERN PetscErrorCode KergsRegularisedSetFromOptions(KergsSolver, KergsRegularised *);
+PETSC_INTERN PetscErrorCode KergsRegularisedSetFromOptions(PetscOptionItems *, KergsSolver, KergsRegularised *);
 /* Active contacts and the sweep on W, omega, the kernel of this step's H_f, r~ and z~ = Z r~. */
 PETSC_INTERN PetscErrorCode KergsRegularisedSetUp(KergsSolver, KergsRegularised *, KergsScene, KergsContacts, KergsOperators);
-PETSC_INTERN PetscErrorCode KergsRegularisedRecord(KergsRegularised *, KergsResults);
+/* omega, ||W||_2, the predictor's type and cost, and the kernel's figures of the step */
+PETSC_INTERN PetscErrorCode KergsRegularisedStats(KergsRegularised *, KergsSolveStats *);
 PETSC_INTERN PetscErrorCode KergsRegularisedView(KergsRegularised *, PetscViewer);
 PETSC_INTERN PetscErrorCode KergsRegularisedDestroy(KergsRegularised **);
 

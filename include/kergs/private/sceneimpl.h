@@ -1,0 +1,62 @@
+/* kergs scene, private: the scene object's fields, for the scene's own files (src/scene/) only; every other
+   component goes through the accessors of kergs/scene.h. */
+#ifndef KERGS_SCENEIMPL_H
+#define KERGS_SCENEIMPL_H
+
+#include <kergs/scene.h>
+
+struct _p_KergsScene {
+  MPI_Comm comm;
+  char     name[PETSC_MAX_PATH_LEN];
+  /* disks: local structure of arrays, owned disks [0, nowned) then ghosts [nowned, nlocal) */
+  PetscInt   ndisks;           /* global number of disks */
+  PetscInt   nowned, nlocal;   /* disks owned here; owned + ghosts */
+  PetscInt   nalloc;           /* capacity of the local arrays */
+  PetscInt  *gidx;     /* global index (owned disk i: dstart + i) */
+  PetscInt  *id;       /* persistent grain id */
+  PetscReal *x;        /* KERGS_DIM * ndisks positions */
+  PetscReal *rot;      /* KERGS_NROT * ndisks orientations */
+  PetscReal *v;        /* KERGS_DIM * ndisks velocities */
+  PetscReal *omega;    /* KERGS_NROT * ndisks angular velocities */
+  PetscReal *radius, *mass, *inertia;
+  PetscInt  *material;
+  PetscInt   dstart, dend; /* global indices of the disks owned by this rank */
+  /* ghost layer (src/scene/ghosts.c) */
+  PetscSF    ghost_sf;       /* roots: owned disks, leaves: ghosts (NULL: no valid ghost layer) */
+  PetscInt  *ghost_owner;    /* per ghost: the rank that owns it */
+  PetscReal  ghost_skin;     /* -ghost_skin: the layer is rebuilt once some disk moved more than half of it */
+  PetscReal *xref;           /* owned positions when the layer was built */
+  PetscInt   ghost_rebuilds; /* layers built so far */
+  /* walls (replicated) */
+  PetscInt   nwalls;
+  KergsWall *walls;
+  /* materials */
+  PetscInt   nmaterials;
+  PetscReal *density; /* per material (mass per unit area in 2D) */
+  PetscReal *mu;      /* friction coefficient, nmaterials x nmaterials, symmetric */
+  PetscBool  frictional; /* some pair has mu > 0: contacts carry tangential components, disks rotate */
+  PetscBool  lock_rotation; /* -disks_lock_rotation: disks translate only (sliding blocks), no rotation DOFs */
+  /* loading and numerics */
+  PetscReal    gravity[KERGS_DIM];
+  PetscReal    dt, theta;
+  PetscInt     nsteps;
+  KergsGapRule gaprule;
+  PetscReal    alert; /* alert distance: potential contacts have gap < alert */
+  /* clock */
+  PetscInt  step;
+  PetscReal time;
+};
+
+/* Shared by the scene's files. */
+/* Reads the disk source options (-disks_source list|lattice|random|file and theirs) and sets the disks
+   (src/scene/disks.c). */
+PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene);
+
+
+/* Options holding lists of numbers, with the number of values checked (src/scene/scene.c). */
+PETSC_INTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscReal **, PetscBool *);
+PETSC_INTERN PetscErrorCode KergsOptionsIntList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscInt **, PetscBool *);
+PETSC_INTERN PetscErrorCode KergsOptionsReals(PetscOptionItems *, const char[], const char[], PetscInt, PetscReal[], PetscBool *);
+PETSC_INTERN PetscErrorCode KergsOptionsVector(PetscOptionItems *, const char[], const char[], PetscReal[], PetscBool *);
+
+#endif

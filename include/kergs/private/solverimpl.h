@@ -1,0 +1,48 @@
+/* kergs solver, private: the solver object and its operations, for src/solver/solver.c and the types in
+   src/solver/solvers/ (as PETSc's KSP types use kspimpl.h); other components go through kergs/solver.h. */
+#ifndef KERGS_SOLVERIMPL_H
+#define KERGS_SOLVERIMPL_H
+
+#include <kergs/solver.h>
+#include <kergs/sweep.h>
+
+typedef struct {
+  PetscErrorCode (*setfromoptions)(PetscOptionItems *, KergsSolver); /* inside the solver's options block, as PETSc's types */
+  PetscErrorCode (*setup)(KergsSolver, KergsScene, KergsContacts, KergsOperators);
+  PetscErrorCode (*solve)(KergsSolver, KergsScene, KergsContacts, KergsOperators, KergsSolveStats *);
+  PetscErrorCode (*view)(KergsSolver, PetscViewer);
+  PetscErrorCode (*destroy)(KergsSolver);
+  /* optional: before every sweep, update the extra right-hand side from the current r (NLGS-Jac's Jacobi part) */
+  PetscErrorCode (*presweep)(KergsSolver, KergsOperators, PetscReal *extra);
+  /* optional: add the type's own figures of the step to its statistics (KergsSolveStatsAdd) */
+  PetscErrorCode (*stats)(KergsSolver, KergsSolveStats *);
+} KergsSolverOps;
+
+struct _p_KergsSolver {
+  MPI_Comm       comm;
+  char           type[64];
+  KergsSolverOps ops;
+  void          *data;
+  PetscInt       max_it;
+  PetscReal      tol;
+  KergsCriterion criterion;
+  KergsSweep     sweep;         /* Gauss-Seidel on W; also computes the physical residual */
+  KergsSweep     iterate_sweep; /* when set, the sweeps run on this one instead (nlkergs: on W~) */
+  PetscBool      needs_H;       /* the type reads H_f, H_g during its solve (kernel projector, predictors), and W over all
+                                   pairs of contacts: the time step keeps H alive from assembly to the velocity update and
+                                   assembles the whole W (otherwise W couples the active contacts only) */
+  PetscReal     *mu;     /* per local contact */
+  PetscBool     *active; /* per local contact */
+  PetscInt       nalloc;
+};
+
+/* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */
+PETSC_INTERN PetscErrorCode KergsSolverSetUpSweep(KergsSolver, KergsScene, KergsContacts, KergsOperators);
+/* Shared by the types: run sweeps until the criterion or max_it, extra/diag as in KergsSweepRun; when the type
+   has a presweep hook, extra (one entry per local component) is updated by it before every sweep. */
+PETSC_INTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *);
+PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGS(KergsSolver);
+PETSC_INTERN PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver);
+PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver);
+
+#endif
