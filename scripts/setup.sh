@@ -5,6 +5,7 @@ KERGS_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 KERGS_BUILD=${KERGS_BUILD:-$KERGS_ROOT/build}
 KERGS_PACKAGES="petsc-dev libmetis-dev libhdf5-openmpi-dev openmpi-bin cmake pkg-config make gcc libopenblas0-pthread
   libfclib-dev python3-h5py python3-matplotlib python3-numpy python3-scipy python3-siconos"
+KERGS_PACKAGES="$KERGS_PACKAGES clang-format" # tests/check_format.sh
 
 kergs_install() {
   local missing=""
@@ -21,7 +22,7 @@ kergs_install() {
 
 kergs_build() {
   if [ ! -f "$KERGS_BUILD/CMakeCache.txt" ]; then
-    cmake -S "$KERGS_ROOT" -B "$KERGS_BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
+    cmake -S "$KERGS_ROOT" -B "$KERGS_BUILD" -DCMAKE_BUILD_TYPE=Release -DKERGS_WERROR=ON >/dev/null
   fi
   cmake --build "$KERGS_BUILD" -j "$(nproc)" -- --no-print-directory | grep -E "warning|error|Error" || true
   test -x "$KERGS_BUILD/kergs"

@@ -2,20 +2,31 @@
    allocator's policy. */
 #include <kergs/base.h>
 #if defined(__GLIBC__)
-  #include <malloc.h>
+#include <malloc.h>
 #endif
 
 PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO, KERGS_Exchange;
 PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
 
+static PetscBool PackageInitialized = PETSC_FALSE;
+
+/* At PetscFinalize: PETSc may be initialized again in the same process (the tests do), and the events then need
+   registering again. */
+static PetscErrorCode FinalizePackage(void)
+{
+  PetscFunctionBeginUser;
+  PackageInitialized = PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsInitializePackage(void)
 {
-  static PetscBool initialized = PETSC_FALSE;
-  PetscClassId     classid;
+  PetscClassId classid;
 
   PetscFunctionBeginUser;
-  if (initialized) PetscFunctionReturn(0);
-  initialized = PETSC_TRUE;
+  if (PackageInitialized) PetscFunctionReturn(0);
+  PackageInitialized = PETSC_TRUE;
+  PetscCall(PetscRegisterFinalize(FinalizePackage));
   PetscCall(PetscClassIdRegister("kergs", &classid));
   PetscCall(PetscLogEventRegister("KergsDetect", classid, &KERGS_Detect));
   PetscCall(PetscLogEventRegister("KergsAssemble", classid, &KERGS_Assemble));
@@ -32,8 +43,8 @@ PetscErrorCode KergsInitializePackage(void)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsExchangeRecords(MPI_Comm comm, size_t size, const PetscMPIInt sendcount[], const void *send, PetscMPIInt recvcount[], void *recv,
-                                    PetscInt *nrecv)
+PetscErrorCode KergsExchangeRecords(MPI_Comm comm, size_t size, const PetscMPIInt sendcount[], const void *send, PetscMPIInt recvcount[],
+                                    void *recv, PetscInt *nrecv)
 {
   PetscMPIInt  nranks, *sdispl, *rcount, *rdispl;
   MPI_Datatype record;
@@ -64,10 +75,9 @@ void KergsReturnFreedMemory(void)
 #if defined(__GLIBC__)
   /* Debian's libsuperlu_dist (loaded with PETSc; kergs does not use it) sets M_MMAP_MAX = 0 and M_TRIM_THRESHOLD = -1
      when it is loaded: every block then comes from the heap and nothing freed is ever returned to the system, so a
-     step's peak resident memory is the sum of everything its phases ever held, fragmented. Measured on biaxial 20k:
-     1.83 KB per grain above the baseline with glibc's initial settings, 2.39 KB without. Blocks of 128 KB or more
+     step's peak resident memory is the sum of everything its phases ever held, fragmented. Blocks of 128 KB or more
      are mapped on their own again and heap tops above 128 KB trimmed (glibc's initial values, now fixed). The price
-     is the page faults of a step's new blocks (about 18 ms per step at 20k, in the assembly). */
+     is the page faults of a step's new blocks, in the assembly (both measured in docs/scaling.md, "Memory"). */
   (void)mallopt(M_MMAP_MAX, 65536);
   (void)mallopt(M_MMAP_THRESHOLD, 128 * 1024);
   (void)mallopt(M_TRIM_THRESHOLD, 128 * 1024);

@@ -1,13 +1,42 @@
-static const char help[] = "kergs: Non-Smooth Contact Dynamics of dense, confined granular media (Moreau-Jean time stepping, NLGS).\n"
-                           "Usage: mpirun -n N kergs -options_file cases/X.opts [options]\n"
-                           "Every option of the scene, the solver, the output and the time loop is listed below; docs/ describes the files.\n\n";
+static const char help[] =
+    "kergs: Non-Smooth Contact Dynamics of dense, confined granular media (Moreau-Jean time stepping, NLGS).\n"
+    "Usage: mpirun -n N kergs -options_file cases/X.opts [options]\n"
+    "Every option of the scene, the solver, the output and the time loop is listed below; docs/ describes the files.\n\n";
 
 #include <kergs/kergs.h>
 
 /* Options that PETSc itself reads late (at finalize) or that tune PETSc, and so may legitimately look unused. */
 static PetscBool IsPetscOption(const char *name)
 {
-  static const char *prefixes[] = {"log", "malloc", "options_", "help", "info", "on_error", "objects_", "history", "memory", "fp_trap", "check_pointer", "no_signal", "viewer", "skip_petscrc", "mat_mumps", "mat_", "ksp_", "pc_", "mpi", "debugger", "start_in_debugger", "stop_for_debugger", "nox", "display", "petsc", "version", "use_gpu", "device", NULL};
+  static const char *prefixes[] = {"log",
+                                   "malloc",
+                                   "options_",
+                                   "help",
+                                   "info",
+                                   "on_error",
+                                   "objects_",
+                                   "history",
+                                   "memory",
+                                   "fp_trap",
+                                   "check_pointer",
+                                   "no_signal",
+                                   "viewer",
+                                   "skip_petscrc",
+                                   "mat_mumps",
+                                   "mat_",
+                                   "ksp_",
+                                   "pc_",
+                                   "mpi",
+                                   "debugger",
+                                   "start_in_debugger",
+                                   "stop_for_debugger",
+                                   "nox",
+                                   "display",
+                                   "petsc",
+                                   "version",
+                                   "use_gpu",
+                                   "device",
+                                   NULL};
   for (PetscInt i = 0; prefixes[i]; i++) {
     size_t n = strlen(prefixes[i]);
     if (!strncmp(name, prefixes[i], n) && (prefixes[i][n - 1] == '_' || name[n] == '\0' || name[n] == '_')) return PETSC_TRUE;
@@ -31,7 +60,8 @@ static PetscErrorCode CheckUnusedOptions(MPI_Comm comm)
     bad = PETSC_TRUE;
   }
   PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
-  PetscCheck(!bad || allow, comm, PETSC_ERR_USER_INPUT, "Unknown option(s) listed above: misspelled? kergs -help lists every option (-allow_unused_options to accept them)");
+  PetscCheck(!bad || allow, comm, PETSC_ERR_USER_INPUT,
+             "Unknown option(s) listed above: misspelled? kergs -help lists every option (-allow_unused_options to accept them)");
   PetscFunctionReturn(0);
 }
 
@@ -51,7 +81,8 @@ int main(int argc, char **argv)
   PetscCall(KergsStepperGetScene(stepper, &scene));
   PetscCall(KergsStepperGetSolver(stepper, &solver));
   /* with -help, the options of every solver type, not only of the chosen one */
-  if (want_help) PetscCall(KergsSolverPrintHelpAllTypes(PETSC_COMM_WORLD));
+  if (want_help)
+    PetscCall(KergsSolverPrintHelpAllTypes(PETSC_COMM_WORLD));
   else {
     PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
     PetscCall(KergsSceneView(scene, PETSC_VIEWER_STDOUT_WORLD));

@@ -17,15 +17,15 @@ PETSC_EXTERN PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Swee
 /* Communication between ranks: the ghost impulses of each sweep, the velocities gathered after each step. */
 PETSC_EXTERN PetscLogEvent KERGS_Exchange;
 /* The kernel projector (factorization, diagonal blocks of Z, applications), the predictor, the partition. */
-PETSC_EXTERN PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
+PETSC_EXTERN PetscLogEvent  KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
 PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
 
 /* Collective: personalised exchange of records of `size` bytes. send[] holds sendcount[q] records for rank q, grouped
    by destination in rank order. On return *(void **)recv (PetscFree) holds the records received, grouped by source
    in rank order, *nrecv their number, and recvcount[q] (may be NULL) how many came from rank q. The ranks of a run
    share one binary representation. */
-PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const PetscMPIInt sendcount[], const void *send, PetscMPIInt recvcount[],
-                                                 void *recv, PetscInt *nrecv);
+PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const PetscMPIInt sendcount[], const void *send,
+                                                 PetscMPIInt recvcount[], void *recv, PetscInt *nrecv);
 /* Let the C library return freed blocks to the system (glibc: large blocks mapped on their own, heap tops trimmed),
    undoing a process-wide setting of a library PETSc loads; no-op elsewhere. Call it once, first thing in main. */
 PETSC_EXTERN void KergsReturnFreedMemory(void);
@@ -37,8 +37,10 @@ static inline PetscMPIInt KergsRangeOwner(const PetscInt ranges[], PetscMPIInt s
 
   while (lo < hi) { /* the last rank q with ranges[q] <= i */
     PetscMPIInt mid = (lo + hi + 1) / 2;
-    if (ranges[mid] <= i) lo = mid;
-    else hi = mid - 1;
+    if (ranges[mid] <= i)
+      lo = mid;
+    else
+      hi = mid - 1;
   }
   return lo;
 }

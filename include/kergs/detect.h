@@ -7,10 +7,7 @@
 
 #include <kergs/scene.h>
 
-typedef enum {
-  KERGS_CONTACT_DISK_DISK,
-  KERGS_CONTACT_DISK_WALL
-} KergsContactKind;
+typedef enum { KERGS_CONTACT_DISK_DISK, KERGS_CONTACT_DISK_WALL } KergsContactKind;
 
 /* One contact. Body a is always a disk owned by this rank (a local disk index); body b is a disk (a local index,
    owned or ghost) of larger grain id, or a wall (its index). The normal n points from b towards a, the tangent is
@@ -21,13 +18,13 @@ typedef enum {
 typedef struct {
   KergsContactKind kind;
   PetscInt         a, b;
-  PetscInt         idb;                 /* persistent identity of b: its grain id, or the wall index */
+  PetscInt         idb; /* persistent identity of b: its grain id, or the wall index */
   PetscReal        n[KERGS_DIM], t[KERGS_DIM];
   PetscReal        ra, rb;
-  PetscReal        gap;                 /* g^- : gap at the start of the step (negative = interpenetration) */
-  PetscReal        mu;                  /* friction coefficient of the material pair */
-  PetscReal        r[KERGS_MAXCOMP];    /* impulse (n, t): warm start in, solution out */
-  PetscBool        persistent;          /* the pair touched at the previous detection too */
+  PetscReal        gap;              /* g^- : gap at the start of the step (negative = interpenetration) */
+  PetscReal        mu;               /* friction coefficient of the material pair */
+  PetscReal        r[KERGS_MAXCOMP]; /* impulse (n, t): warm start in, solution out */
+  PetscBool        persistent;       /* the pair touched at the previous detection too */
 } KergsContact;
 
 /* What a contact leaves to the next detection (warm start): its key (a, kind, idb) and its impulse. */
@@ -38,9 +35,11 @@ typedef struct {
 } KergsContactHistory;
 
 /* Order of contacts and of their histories (any records with a, kind, idb): -1, 0 or 1. */
-#define KERGS_COMPARE_KEYS(p, q) \
-  ((p)->a != (q)->a ? ((p)->a < (q)->a ? -1 : 1) : \
-   (p)->kind != (q)->kind ? ((p)->kind < (q)->kind ? -1 : 1) : (p)->idb != (q)->idb ? ((p)->idb < (q)->idb ? -1 : 1) : 0)
+#define KERGS_COMPARE_KEYS(p, q)                                                                                                           \
+  ((p)->a != (q)->a         ? ((p)->a < (q)->a ? -1 : 1)                                                                                   \
+   : (p)->kind != (q)->kind ? ((p)->kind < (q)->kind ? -1 : 1)                                                                             \
+   : (p)->idb != (q)->idb   ? ((p)->idb < (q)->idb ? -1 : 1)                                                                               \
+                            : 0)
 /* qsort comparator of KergsContactHistory records by key */
 PETSC_EXTERN int KergsContactHistoryCompare(const void *, const void *);
 
@@ -48,8 +47,8 @@ typedef struct _p_KergsContacts *KergsContacts;
 
 PETSC_EXTERN PetscErrorCode KergsContactsCreate(MPI_Comm, KergsContacts *);
 /* Find every potential contact (gap < scene->alert) owned by this rank, among its owned disks and their ghosts
-   (it first calls KergsSceneUpdateGhosts, which rebuilds the ghost layer when needed), carry impulses over from the previous call for persistent pairs (zero for new
-   ones), and set nglobal and start (collective). O(local disks). */
+   (it first calls KergsSceneUpdateGhosts, which rebuilds the ghost layer when needed), carry impulses over from the previous call for
+   persistent pairs (zero for new ones), and set nglobal and start (collective). O(local disks). */
 PETSC_EXTERN PetscErrorCode KergsContactsDetect(KergsContacts, KergsScene);
 PETSC_EXTERN PetscErrorCode KergsContactsDestroy(KergsContacts *);
 /* Accessors. The owned contacts, sorted by key (a, kind, idb); their impulses r may be written (the solve's result). */
@@ -73,8 +72,8 @@ PETSC_EXTERN PetscErrorCode KergsContactsMigrate(KergsContacts, const PetscInt n
    one contact, owned or foreign. */
 typedef struct {
   KergsGapRule     rule;
-  PetscReal        lead;  /* (1 - theta) dt */
-  const PetscReal *v;     /* disk velocities (local indices) */
+  PetscReal        lead; /* (1 - theta) dt */
+  const PetscReal *v;    /* disk velocities (local indices) */
   const KergsWall *walls;
 } KergsActivity;
 PETSC_EXTERN PetscErrorCode KergsContactsGetActivity(KergsContacts, KergsScene, KergsActivity *);

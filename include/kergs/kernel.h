@@ -1,4 +1,4 @@
-/* kergs kernel: the orthogonal projector onto ker H_f without a basis (DESIGN.md section 5),
+/* kergs kernel: the orthogonal projector onto ker H_f without a basis (docs/design.md: the kernel projector),
      P = I - H_f^T (H_f H_f^T)^+ H_f,   Z = omega P,
    applied matrix-free (a MATSHELL over contact components) through one sparse Cholesky factorization of
    A = H_f H_f^T per step: CHOLMOD on one rank, MUMPS on several (-kernel_solver auto|cholmod|mumps).
@@ -16,10 +16,7 @@
 
 #include <kergs/operators.h>
 
-typedef enum {
-  KERGS_KERNEL_DIAG_EXACT,
-  KERGS_KERNEL_DIAG_BOUND
-} KergsKernelDiag;
+typedef enum { KERGS_KERNEL_DIAG_EXACT, KERGS_KERNEL_DIAG_BOUND } KergsKernelDiag;
 PETSC_EXTERN const char *const KergsKernelDiags[];
 
 typedef struct _p_KergsKernel *KergsKernel;
@@ -44,16 +41,16 @@ PETSC_EXTERN PetscErrorCode KergsKernelGetDiagonalBlocks(KergsKernel, const Pets
 
 /* What the kernel found and cost at its last set-up (KergsKernelGetStats). */
 typedef struct {
-  PetscInt  ncols;             /* contact components (columns of H_f) */
-  PetscInt  nrows;             /* free DOFs (rows of H_f) */
-  PetscInt  rank;              /* rank of H_f: kernel dimension = ncols - rank */
-  PetscInt  floating_grains;   /* grains without contact */
-  PetscInt  peeled_contacts;   /* contacts removed because they end on a single-contact grain */
-  PetscInt  null_pivots;       /* remaining deficiency found by the factorization */
-  PetscInt  nnz_factor;        /* entries of the factor (0 when the package does not tell) */
-  PetscReal factor_seconds;    /* elimination, assembly and factorization of H_f H_f^T */
-  PetscReal diag_seconds;      /* diagonal blocks of Z */
-  PetscReal check_error;       /* |H_f P x| / |H_f x| on a pseudo-random x */
+  PetscInt    ncols;           /* contact components (columns of H_f) */
+  PetscInt    nrows;           /* free DOFs (rows of H_f) */
+  PetscInt    rank;            /* rank of H_f: kernel dimension = ncols - rank */
+  PetscInt    floating_grains; /* grains without contact */
+  PetscInt    peeled_contacts; /* contacts removed because they end on a single-contact grain */
+  PetscInt    null_pivots;     /* remaining deficiency found by the factorization */
+  PetscInt    nnz_factor;      /* entries of the factor (0 when the package does not tell) */
+  PetscReal   factor_seconds;  /* elimination, assembly and factorization of H_f H_f^T */
+  PetscReal   diag_seconds;    /* diagonal blocks of Z */
+  PetscReal   check_error;     /* |H_f P x| / |H_f x| on a pseudo-random x */
   const char *package;         /* factorization package used (cholmod, mumps) */
 } KergsKernelStats;
 PETSC_EXTERN PetscErrorCode KergsKernelGetStats(KergsKernel, KergsKernelStats *);

@@ -1,4 +1,4 @@
-/* kergs law: the exact one-contact solve of the 2D Signorini-Coulomb law (DESIGN.md section 3).
+/* kergs law: the exact one-contact solve of the 2D Signorini-Coulomb law (docs/design.md: the per-step problem).
    Problem: v = Waa r + b, with Waa the contact's diagonal block (ncomp x ncomp, row-major, symmetric
    positive definite), b the rest of the local velocity. Unknown r = (r_n, r_t):
      inactive (predicted gap > 0):  r = 0
@@ -18,11 +18,13 @@ typedef enum {
 } KergsLawStatus;
 
 /* Exact solve; ncomp is 1 (frictionless, normal only) or 2. */
-PETSC_EXTERN KergsLawStatus KergsLawSolve(PetscInt ncomp, const PetscReal Waa[], const PetscReal b[], PetscReal mu, PetscBool active, PetscReal r[]);
+PETSC_EXTERN KergsLawStatus KergsLawSolve(PetscInt ncomp, const PetscReal Waa[], const PetscReal b[], PetscReal mu, PetscBool active,
+                                          PetscReal r[]);
 
 /* Squared norm of the natural-map residual of one contact,
      r - proj_K(r - rho (v + mu |v_t| e_n))    (De Saxce's modified velocity; K: Coulomb cone),
    or r itself when inactive. rho > 0 converts velocities to impulses (kergs uses rho = 1 / Waa_nn). */
-PETSC_EXTERN PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active);
+PETSC_EXTERN PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho,
+                                                PetscBool active);
 
 #endif

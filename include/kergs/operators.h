@@ -20,9 +20,9 @@ typedef struct _p_KergsOperators *KergsOperators;
    (KergsOperatorsDiskDof), then KERGS_DIM per free wall (on the last rank); wall_dof[w] is wall w's first free DOF
    (free wall) or first given DOF (driven wall). Contact components: ncomp per contact, contacts in global order. */
 typedef struct {
-  PetscInt        ncomp;          /* components per contact: 1 (frictionless) or KERGS_DIM */
-  PetscInt        ndof_disk;      /* free DOFs per disk: KERGS_DIM (+ KERGS_NROT when the disks rotate) */
-  PetscInt        ndisks;         /* disks (the first ndisks * ndof_disk free DOFs) */
+  PetscInt        ncomp;     /* components per contact: 1 (frictionless) or KERGS_DIM */
+  PetscInt        ndof_disk; /* free DOFs per disk: KERGS_DIM (+ KERGS_NROT when the disks rotate) */
+  PetscInt        ndisks;    /* disks (the first ndisks * ndof_disk free DOFs) */
   PetscInt        nfreewalls, ndrivenwalls;
   PetscInt        nfree, nfree_local, ngiven; /* free DOFs (global, this rank's), given DOFs */
   const PetscInt *wall_dof;

@@ -1,4 +1,4 @@
-/* kergs partition: which rank owns which grain (DESIGN.md section 6, issue 4).
+/* kergs partition: which rank owns which grain (docs/design.md: parallel layout).
 
    Rank p owns the disks of the contiguous global index range [dstart, dend), so a partition is a new numbering of
    the disks: the grains of part 0 first, then those of part 1, and so on; the disks then MIGRATE to their new
@@ -18,18 +18,16 @@
                  (so that a graph that changed little gets a similar partition), and with light edges along the
                  Hilbert curve (-partition_metis_curve) so that grains without contacts stay with their neighbours.
                  When METIS misses the imbalance tolerance (tiny graphs) and the geometric partition meets it, or
-                 METIS leaves a rank without grains and the geometric partition does not, the geometric one is used. Parts are matched to the ranks that own most of their grains already.
-   On one rank nothing is ever renumbered (every type is then the contiguous one).
+                 METIS leaves a rank without grains and the geometric partition does not, the geometric one is used. Parts are matched to
+   the ranks that own most of their grains already. On one rank nothing is ever renumbered (every type is then the contiguous one).
 
    Measures: the work of a grain is 1 + the work of each of its contacts (disk-disk and disk-wall), 6 for an active
    contact and 1 for an inactive one (src/partition/partition.c, ContactWork: their costs in a sweep); the work of a
-   rank is the sum over the grains it owns (-partition_work model, the default). With -partition_work measured the work of a rank is instead its
-   time in the sweeps' arithmetic at the last step (messages and reductions excluded), once every rank has timed
-   some, and METIS weighs each grain by the model times its rank's time per modelled unit: what the model misses
-   (measured on biaxial 20k: an active contact costs 38 ns per sweep in one half of the box, 48 in the other) is
-   balanced at the next check. imbalance = max over ranks of the work / mean work. The edge cut is the
-   number of disk-disk contacts whose grains are owned by different ranks. The ghosts of a rank are those of its
-   current ghost layer (src/scene/ghosts.c). */
+   rank is the sum over the grains it owns (-partition_work model, the default). With -partition_work measured the work of a rank is instead
+   its time in the sweeps' arithmetic at the last step (messages and reductions excluded), once every rank has timed some, and METIS weighs
+   each grain by the model times its rank's time per modelled unit: what the model misses (docs/scaling.md, "Partition work") is balanced at
+   the next check. imbalance = max over ranks of the work / mean work. The edge cut is the number of disk-disk contacts whose grains are
+   owned by different ranks. The ghosts of a rank are those of its current ghost layer (src/scene/ghosts.c). */
 #ifndef KERGS_PARTITION_H
 #define KERGS_PARTITION_H
 
@@ -61,8 +59,8 @@ typedef struct {
   PetscInt  edges; /* disk-disk contacts (edges of the grain graph) */
   /* this rank */
   PetscInt  my_grains, my_contacts, my_ghosts;
-  PetscReal my_work;    /* modelled */
-  PetscReal my_seconds; /* measured: time in the sweeps' arithmetic at the last step */
+  PetscReal my_work;      /* modelled */
+  PetscReal my_seconds;   /* measured: time in the sweeps' arithmetic at the last step */
   PetscInt  repartitions; /* partitions computed after the initial one, so far */
 } KergsPartitionMeasures;
 
@@ -92,7 +90,8 @@ PETSC_EXTERN PetscErrorCode KergsPartitionMeasure(KergsPartition, KergsScene, Ke
    sweeps' arithmetic (compute_seconds, for -partition_work measured), and with -partition_view print one line per
    rank (grains, ghosts, contacts, work, sweep_seconds: this rank's sweep time, compute_seconds: its arithmetic in
    them) and one summary line. */
-PETSC_EXTERN PetscErrorCode KergsPartitionObserve(KergsPartition, KergsScene, KergsContacts, PetscReal sweep_seconds, PetscReal compute_seconds, KergsPartitionMeasures *m);
+PETSC_EXTERN PetscErrorCode KergsPartitionObserve(KergsPartition, KergsScene, KergsContacts, PetscReal sweep_seconds,
+                                                  PetscReal compute_seconds, KergsPartitionMeasures *m);
 /* Whether -partition_view was given */
 PETSC_EXTERN PetscErrorCode KergsPartitionGetView(KergsPartition, PetscBool *);
 PETSC_EXTERN PetscErrorCode KergsPartitionView(KergsPartition, PetscViewer);

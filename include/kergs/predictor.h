@@ -32,13 +32,12 @@
 #include <petscksp.h>
 
 typedef const char *KergsPredictorType;
-#define KERGS_PREDICTOR_NONE       "none"
-#define KERGS_PREDICTOR_LINEAR     "linear"
+#define KERGS_PREDICTOR_NONE "none"
+#define KERGS_PREDICTOR_LINEAR "linear"
 #define KERGS_PREDICTOR_UNILATERAL "unilateral"
-#define KERGS_PREDICTOR_ELASTIC    "elastic"
+#define KERGS_PREDICTOR_ELASTIC "elastic"
 
 typedef struct _p_KergsPredictor *KergsPredictor;
-
 
 PETSC_EXTERN PetscErrorCode KergsPredictorRegister(const char[], PetscErrorCode (*)(KergsPredictor));
 PETSC_EXTERN PetscErrorCode KergsPredictorCreate(MPI_Comm, KergsPredictor *);

@@ -55,7 +55,8 @@ PETSC_EXTERN PetscErrorCode KergsFileMakeParentDir(MPI_Comm, const char path[]);
 PETSC_EXTERN PetscErrorCode KergsFileCommit(MPI_Comm, const char tmp[], const char path[]);
 /* Shared by the HDF5 writers (results, samples): one dataset from the nlocal blocks of bs values this rank holds,
    stacked in rank order; integers are stored as reals (exact up to 2^53). Collective. */
-PETSC_EXTERN PetscErrorCode KergsViewBlocks(PetscViewer, MPI_Comm, const char name[], PetscInt nlocal, PetscInt bs, const PetscReal *values);
+PETSC_EXTERN PetscErrorCode KergsViewBlocks(PetscViewer, MPI_Comm, const char name[], PetscInt nlocal, PetscInt bs,
+                                            const PetscReal *values);
 PETSC_EXTERN PetscErrorCode KergsViewIntegers(PetscViewer, MPI_Comm, const char name[], PetscInt nlocal, const PetscInt *values);
 
 #endif

@@ -56,9 +56,9 @@ typedef struct {
   const PetscInt  *gidx;           /* global index (owned disk i: dstart + i) */
   const PetscInt  *id;             /* persistent grain id */
   const PetscInt  *material;
-  const PetscInt  *ghost_owner;    /* per ghost (local index nowned + g): the rank that owns it */
-  PetscReal       *x, *v;          /* KERGS_DIM per disk: centre, velocity */
-  PetscReal       *rot, *omega;    /* KERGS_NROT per disk: orientation, angular velocity */
+  const PetscInt  *ghost_owner; /* per ghost (local index nowned + g): the rank that owns it */
+  PetscReal       *x, *v;       /* KERGS_DIM per disk: centre, velocity */
+  PetscReal       *rot, *omega; /* KERGS_NROT per disk: orientation, angular velocity */
   const PetscReal *radius, *mass, *inertia;
 } KergsDisks;
 
@@ -71,7 +71,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneSetFromOptions(KergsScene);
    material and v may be NULL (material 0, at rest). Each rank keeps its slice of the even contiguous split as its
    owned disks (no ghosts yet). Sets id = global index, rot = omega = 0, mass and inertia from the densities,
    recomputes frictional, and sets alert = 0.1 * mean radius if alert is still automatic (negative). */
-PETSC_EXTERN PetscErrorCode KergsSceneSetDisks(KergsScene, PetscInt n, const PetscReal *x, const PetscReal *r, const PetscInt *material, const PetscReal *v);
+PETSC_EXTERN PetscErrorCode KergsSceneSetDisks(KergsScene, PetscInt n, const PetscReal *x, const PetscReal *r, const PetscInt *material,
+                                               const PetscReal *v);
 /* Errors naming the grain, wall, material pair or option at fault; overlaps are not checked here. */
 PETSC_EXTERN PetscErrorCode KergsSceneCheck(KergsScene);
 PETSC_EXTERN PetscErrorCode KergsSceneView(KergsScene, PetscViewer);

@@ -11,15 +11,11 @@
 #include <kergs/operators.h>
 
 typedef const char *KergsSolverType;
-#define KERGS_SOLVER_NLGS    "nlgs"
+#define KERGS_SOLVER_NLGS "nlgs"
 #define KERGS_SOLVER_NLKERGS "nlkergs"
 #define KERGS_SOLVER_NLGSJAC "nlgsjac"
 
-typedef enum {
-  KERGS_CRITERION_QUAD,
-  KERGS_CRITERION_MAXM,
-  KERGS_CRITERION_NATURAL
-} KergsCriterion;
+typedef enum { KERGS_CRITERION_QUAD, KERGS_CRITERION_MAXM, KERGS_CRITERION_NATURAL } KergsCriterion;
 PETSC_EXTERN const char *const KergsCriteria[];
 
 /* A named figure of a solve (KergsSolveStats): the time step hands them to the results file as statistics. */
@@ -37,16 +33,16 @@ typedef struct {
 
 /* What a solve found and cost (KergsSolverSolve). */
 typedef struct {
-  PetscInt  iterations;
-  PetscBool converged;       /* the chosen criterion fell below -solver_tol before -solver_max_it */
-  PetscReal criterion;       /* value of the chosen criterion at exit */
-  PetscReal residual;        /* natural-map residual of the original problem, recomputed from r at exit */
-  PetscReal seconds;         /* whole solve: set-up, sweeps, final residual */
-  PetscReal sweep_seconds;   /* the sweeps alone */
-  PetscReal compute_seconds; /* this rank's arithmetic in the sweeps (no waiting for messages or reductions) */
-  PetscInt        nextra;    /* the type's own figures of the step (kernel, predictor, omega, ...) */
+  PetscInt        iterations;
+  PetscBool       converged;       /* the chosen criterion fell below -solver_tol before -solver_max_it */
+  PetscReal       criterion;       /* value of the chosen criterion at exit */
+  PetscReal       residual;        /* natural-map residual of the original problem, recomputed from r at exit */
+  PetscReal       seconds;         /* whole solve: set-up, sweeps, final residual */
+  PetscReal       sweep_seconds;   /* the sweeps alone */
+  PetscReal       compute_seconds; /* this rank's arithmetic in the sweeps (no waiting for messages or reductions) */
+  PetscInt        nextra;          /* the type's own figures of the step (kernel, predictor, omega, ...) */
   KergsNamedValue extra[KERGS_SOLVE_MAXEXTRA];
-  PetscInt        ntext;     /* the type's own texts (predictor type, ...) */
+  PetscInt        ntext; /* the type's own texts (predictor type, ...) */
   KergsNamedText  text[KERGS_SOLVE_MAXTEXT];
 } KergsSolveStats;
 /* Add a named figure or text to the statistics of a solve (for the types). */
@@ -54,7 +50,6 @@ PETSC_EXTERN PetscErrorCode KergsSolveStatsAdd(KergsSolveStats *, const char nam
 PETSC_EXTERN PetscErrorCode KergsSolveStatsAddText(KergsSolveStats *, const char name[], const char value[]);
 
 typedef struct _p_KergsSolver *KergsSolver;
-
 
 PETSC_EXTERN PetscErrorCode KergsSolverRegister(const char[], PetscErrorCode (*)(KergsSolver));
 PETSC_EXTERN PetscErrorCode KergsSolverCreate(MPI_Comm, KergsSolver *);

@@ -1,7 +1,7 @@
 /* kergs sweep: the non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2), reading W's block
    CSR arrays directly (one block row of ncomp x ncomp blocks per contact), whole (AIJ, BAIJ) or upper block
    triangle only (SBAIJ). Gauss-Seidel inside a rank, Jacobi across ranks: the impulses of other ranks'
-   contacts are scattered once per sweep (DESIGN.md section 6).
+   contacts are scattered once per sweep (docs/design.md: parallel layout).
    Regularised variants (Algorithm 6, NLGS-Jac) pass an extra right-hand side per component and
    replacement diagonal blocks. */
 #ifndef KERGS_SWEEP_H
@@ -22,17 +22,18 @@ typedef struct {
 } KergsSweepMeasures;
 
 PETSC_EXTERN PetscErrorCode KergsSweepCreate(MPI_Comm, KergsSweep *);
-/* Take W (assembled (seq|mpi)sbaij or (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when ncomp = 1, for the current contacts, row and column layouts
-   equal, ncomp rows per local contact) and per-contact mu and activity. Keeps a reference to W and its CSR arrays, and the pointers mu and
-   active (owned by the caller, read at every sweep). Calling it again resets first; if W's values change,
-   call it again. */
+/* Take W (assembled (seq|mpi)sbaij or (seq|mpi)baij with block size ncomp, or (seq|mpi)aij when ncomp = 1, for the current contacts, row
+   and column layouts equal, ncomp rows per local contact) and per-contact mu and activity. Keeps a reference to W and its CSR arrays, and
+   the pointers mu and active (owned by the caller, read at every sweep). Calling it again resets first; if W's values change, call it
+   again. */
 PETSC_EXTERN PetscErrorCode KergsSweepSetUp(KergsSweep, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active);
 /* The diagonal blocks W_aa of the local contacts, n blocks of ncomp x ncomp row-major, into blocks (the caller's). */
 PETSC_EXTERN PetscErrorCode KergsSweepGetDiagonalBlocks(KergsSweep, PetscReal *blocks);
 /* One sweep: r (local array, updated in place) for v = W r + vd (+ extra). Collective.
    extra (optional): n*ncomp values added to each contact's right-hand side, fixed during the sweep.
    Wdiag_override (optional): n blocks of ncomp x ncomp used by the law instead of W_aa (NLGS-Jac: W_aa + Z_aa). */
-PETSC_EXTERN PetscErrorCode KergsSweepRun(KergsSweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wdiag_override, KergsSweepMeasures *);
+PETSC_EXTERN PetscErrorCode KergsSweepRun(KergsSweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wdiag_override,
+                                          KergsSweepMeasures *);
 /* Natural-map residual sqrt(sum_a |r_a - proj(...)|^2) / max(|r|, tiny), with v = W r + vd; also returns v. Collective.
    rho = 1 / W_aa,nn per contact (law.h). When r = 0 it is the absolute value (0 for the zero solution of an open problem). */
 PETSC_EXTERN PetscErrorCode KergsSweepNaturalResidual(KergsSweep, Vec r, Vec vd, Vec v, PetscReal *res);

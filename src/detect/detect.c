@@ -1,9 +1,9 @@
-/* kergs detect: contact detection (DESIGN.md sections 4 and 6, the "detect" step of Algorithm 1).
+/* kergs detect: contact detection (docs/design.md: the "detect" step of Algorithm 1, parallel layout).
 
    Broad phase: a cell list over the bounding box of the disk centres, with cells at least as wide as the
    largest reach 2 max(R) + alert, so that every potential pair lies in the same or an adjacent cell.
    Narrow phase: disk-disk and disk-wall gaps, local frames (n from b towards a, t = (-n_y, n_x)).
-   The search runs over this rank's owned disks and their ghosts (DESIGN.md section 6): O(local disks).
+   The search runs over this rank's owned disks and their ghosts (docs/design.md: parallel layout): O(local disks).
    Ownership: a disk-disk contact belongs to the owner of its disk of smaller grain id (body a), a disk-wall
    contact to the owner of the disk. The ghost layer is symmetric, so both ranks of a cut pair see it, and
    exactly one keeps it.
@@ -92,16 +92,14 @@ static PetscErrorCode CheckScene(KergsContacts ct, const SceneData *sd)
   PetscFunctionBeginUser;
   PetscCheck(sd->D.ndisks >= 0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: negative number of disks %" PetscInt_FMT, sd->name,
              sd->D.ndisks);
-  PetscCheck(0 <= sd->D.dstart && sd->D.dstart <= sd->D.dend && sd->D.dend <= sd->D.ndisks &&
-                 sd->D.nowned == sd->D.dend - sd->D.dstart && sd->D.nlocal >= sd->D.nowned,
+  PetscCheck(0 <= sd->D.dstart && sd->D.dstart <= sd->D.dend && sd->D.dend <= sd->D.ndisks && sd->D.nowned == sd->D.dend - sd->D.dstart &&
+                 sd->D.nlocal >= sd->D.nowned,
              PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
              "Scene %s: owned disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") of %" PetscInt_FMT " disks does not match %" PetscInt_FMT
              " owned and %" PetscInt_FMT " local disks",
              sd->name, sd->D.dstart, sd->D.dend, sd->D.ndisks, sd->D.nowned, sd->D.nlocal);
-  PetscCheck(sd->alert >= 0.0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance %g must be >= 0", sd->name,
-             (double)sd->alert);
-  PetscCheck(sd->nmaterials > 0 && sd->mu, ct->comm, PETSC_ERR_ARG_WRONGSTATE, "Scene %s: no materials (friction table missing)",
-             sd->name);
+  PetscCheck(sd->alert >= 0.0, ct->comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance %g must be >= 0", sd->name, (double)sd->alert);
+  PetscCheck(sd->nmaterials > 0 && sd->mu, ct->comm, PETSC_ERR_ARG_WRONGSTATE, "Scene %s: no materials (friction table missing)", sd->name);
   PetscFunctionReturn(0);
 }
 
@@ -116,8 +114,8 @@ static PetscErrorCode ReportBadDisk(KergsContacts ct, const SceneData *sd)
     PetscCheck(!PetscIsInfOrNanReal(x[KERGS_DIM * i]) && !PetscIsInfOrNanReal(x[KERGS_DIM * i + 1]), ct->comm, PETSC_ERR_FP,
                "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has a non-finite centre", sd->name, sd->D.id[i], sd->D.gidx[i]);
     PetscCheck(rad[i] > 0.0 && !PetscIsInfOrNanReal(rad[i]), ct->comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has radius %g, not positive and finite", sd->name,
-               sd->D.id[i], sd->D.gidx[i], (double)rad[i]);
+               "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has radius %g, not positive and finite", sd->name, sd->D.id[i],
+               sd->D.gidx[i], (double)rad[i]);
     PetscCheck(0 <= sd->D.material[i] && sd->D.material[i] < sd->nmaterials, ct->comm, PETSC_ERR_ARG_OUTOFRANGE,
                "Scene %s: grain %" PetscInt_FMT " (disk %" PetscInt_FMT ") has material %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")",
                sd->name, sd->D.id[i], sd->D.gidx[i], sd->D.material[i], sd->nmaterials);
@@ -272,7 +270,7 @@ static PetscErrorCode ForeignReserve(KergsContacts ct, PetscInt needed)
    b's owner), appended to ct->foreign as the pair (b, a). */
 static PetscErrorCode DetectDiskDisk(KergsContacts ct, const SceneData *sd, PetscInt a)
 {
-  const PetscReal *x = sd->D.x;
+  const PetscReal *x    = sd->D.x;
   const PetscInt  *next = ct->next, *head = ct->cellhead, nx = ct->ncellx, ny = ct->ncelly;
   const PetscReal  xa = x[KERGS_DIM * a], ya = x[KERGS_DIM * a + 1], inv = 1.0 / ct->cellsize;
   const PetscInt   first = ct->n, *id = sd->D.id, ida = id[a];
@@ -464,15 +462,16 @@ static PetscErrorCode NumberForeignContacts(KergsContacts ct, const SceneData *s
   PetscCall(KergsExchangeRecords(ct->comm, sizeof(ForeignKey), scount, send, NULL, &recv, &nrecv));
   PetscCall(PetscMalloc1(ct->nforeign + 1, &mine));
   PetscCheck(nrecv == ct->nforeign, PETSC_COMM_SELF, PETSC_ERR_PLIB,
-             "Scene %s: %" PetscInt_FMT " contacts of other ranks touch this rank's disks, but %" PetscInt_FMT " were found here (ghost layer incomplete)",
+             "Scene %s: %" PetscInt_FMT " contacts of other ranks touch this rank's disks, but %" PetscInt_FMT
+             " were found here (ghost layer incomplete)",
              sd->name, nrecv, ct->nforeign);
   for (PetscInt f = 0; f < ct->nforeign; f++) mine[f] = (ForeignKey){sd->D.id[ct->foreign[f].a], ct->foreign[f].idb, f};
   qsort(recv, (size_t)nrecv, sizeof(ForeignKey), CompareForeignKeys);
   qsort(mine, (size_t)ct->nforeign, sizeof(ForeignKey), CompareForeignKeys);
   for (PetscInt f = 0; f < ct->nforeign; f++) {
     PetscCheck(CompareForeignKeys(&recv[f], &mine[f]) == 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
-               "Scene %s: the pair of grains %" PetscInt_FMT " and %" PetscInt_FMT " is a contact on one rank and not on the other", sd->name,
-               recv[f].ida, recv[f].idb);
+               "Scene %s: the pair of grains %" PetscInt_FMT " and %" PetscInt_FMT " is a contact on one rank and not on the other",
+               sd->name, recv[f].ida, recv[f].idb);
     ct->foreign_index[mine[f].index] = recv[f].index;
   }
   PetscCall(PetscFree(recv));
@@ -484,7 +483,7 @@ static PetscErrorCode NumberForeignContacts(KergsContacts ct, const SceneData *s
 
 static PetscErrorCode DetectContacts(KergsContacts ct, KergsScene scene)
 {
-  WallFrame *frames = NULL;
+  WallFrame *frames      = NULL;
   PetscInt   npersistent = 0;
   SceneData  scenedata, *sd = &scenedata;
 
@@ -610,9 +609,9 @@ PetscErrorCode KergsContactsMigrate(KergsContacts ct, const PetscInt newidx[], c
   for (PetscMPIInt q = 1; q < size; q++) fill[q] = fill[q - 1] + scount[q - 1];
   for (PetscInt k = 0; k < ct->n; k++) {
     KergsContactHistory *m = &sendbuf[fill[dest[k]]++];
-    m->a             = newidx[ct->c[k].a];
-    m->idb           = ct->c[k].idb;
-    m->kind          = ct->c[k].kind;
+    m->a                   = newidx[ct->c[k].a];
+    m->idb                 = ct->c[k].idb;
+    m->kind                = ct->c[k].kind;
     for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) m->r[j] = ct->c[k].r[j];
   }
   PetscCall(KergsExchangeRecords(ct->comm, sizeof(KergsContactHistory), scount, sendbuf, NULL, &recvbuf, &nrecv));

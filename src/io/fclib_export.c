@@ -21,11 +21,11 @@
 #define KERGS_FCLIB_SPACEDIM 2 /* FCLib's 2D frictional contact: normal then tangential per contact */
 #define KERGS_FCLIB_PACK 5     /* per exported contact: q_n, q_t, mu, r_n, r_t */
 
-typedef int (*KergsFCLibWriteLocalFn)(struct fclib_local *, const char *);
-typedef int (*KergsFCLibWriteSolutionFn)(struct fclib_solution *, const char *);
+typedef int (*FCLibWriteLocalFn)(struct fclib_local *, const char *);
+typedef int (*FCLibWriteSolutionFn)(struct fclib_solution *, const char *);
 
 /* Load libfclib once (rank 0 only); msg is set when it or one of its functions is missing. */
-static void KergsFCLibLoad(KergsFCLibWriteLocalFn *write_local, KergsFCLibWriteSolutionFn *write_solution, char msg[], size_t len)
+static void FCLibLoad(FCLibWriteLocalFn *write_local, FCLibWriteSolutionFn *write_solution, char msg[], size_t len)
 {
   static void *handle  = NULL; /* never closed: unloading an HDF5 library at run time is not safe */
   const char  *names[] = {KERGS_FCLIB_LIBRARY, "libfclib.so.0"};
@@ -47,9 +47,9 @@ typedef struct {
   int      *colptr, *rowind;
   double   *val, *q, *mu, *r, *u;
   PetscBool padded; /* frictionless kergs problem: tangential components added */
-} KergsFCLibProblem;
+} FCLibProblem;
 
-static PetscErrorCode KergsFCLibProblemFree(KergsFCLibProblem *p)
+static PetscErrorCode FCLibProblemFree(FCLibProblem *p)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscFree3(p->colptr, p->rowind, p->val));
@@ -59,8 +59,8 @@ static PetscErrorCode KergsFCLibProblemFree(KergsFCLibProblem *p)
 
 /* Global row indices of W (contact components) of this rank's active contacts, gathered on rank 0 in
    order; also the per-contact pack (q_n, q_t, mu, r_n, r_t) of those contacts. */
-static PetscErrorCode FCLibGather(MPI_Comm comm, PetscInt n, const KergsContact *contacts, PetscInt nc, Vec vdv, const PetscBool *active, PetscInt rstart,
-                                  PetscInt *na, PetscInt **rows, PetscReal **pack)
+static PetscErrorCode FCLibGather(MPI_Comm comm, PetscInt n, const KergsContact *contacts, PetscInt nc, Vec vdv, const PetscBool *active,
+                                  PetscInt rstart, PetscInt *na, PetscInt **rows, PetscReal **pack)
 {
   PetscMPIInt        rank, size, nloc = 0, ntot = 0, *counts = NULL, *displs = NULL;
   PetscInt          *lrows;
@@ -115,13 +115,13 @@ static PetscErrorCode FCLibGather(MPI_Comm comm, PetscInt n, const KergsContact 
 
 /* Padded index of component j of the exported (active-only) kergs numbering: contact j / nc, normal or
    tangential j % nc; FCLib always has 2 components per contact. */
-static inline PetscInt KergsFCLibIndex(PetscInt j, PetscInt nc) { return (j / nc) * KERGS_FCLIB_SPACEDIM + j % nc; }
+static inline PetscInt FCLibIndex(PetscInt j, PetscInt nc) { return (j / nc) * KERGS_FCLIB_SPACEDIM + j % nc; }
 
 /* Compressed columns of the padded W from the sequential submatrix Wa (rows and columns of the active
    contacts). Frictionless: each contact gets a tangential unknown with W_tt = W_nn and no coupling, so the
    padded problem has the same normal solution and r_t = 0. Rows are visited in increasing padded order, so
    row indices come out sorted inside each column. */
-static PetscErrorCode KergsFCLibBuildCSC(Mat Wa, PetscInt nc, KergsFCLibProblem *p)
+static PetscErrorCode FCLibBuildCSC(Mat Wa, PetscInt nc, FCLibProblem *p)
 {
   const PetscInt     nrows = p->na * nc;
   PetscInt          *count, *next, ncols;
@@ -133,11 +133,11 @@ static PetscErrorCode KergsFCLibBuildCSC(Mat Wa, PetscInt nc, KergsFCLibProblem 
   p->nnz = 0;
   for (PetscInt i = 0; i < nrows; i++) {
     PetscCall(MatGetRow(Wa, i, &ncols, &cols, NULL));
-    for (PetscInt e = 0; e < ncols; e++) count[KergsFCLibIndex(cols[e], nc)]++;
+    for (PetscInt e = 0; e < ncols; e++) count[FCLibIndex(cols[e], nc)]++;
     p->nnz += ncols;
     PetscCall(MatRestoreRow(Wa, i, &ncols, &cols, NULL));
     if (p->padded) {
-      count[KergsFCLibIndex(i, nc) + 1]++;
+      count[FCLibIndex(i, nc) + 1]++;
       p->nnz++;
     }
   }
@@ -151,11 +151,11 @@ static PetscErrorCode KergsFCLibBuildCSC(Mat Wa, PetscInt nc, KergsFCLibProblem 
     next[j]          = p->colptr[j];
   }
   for (PetscInt i = 0; i < nrows; i++) {
-    const PetscInt pi   = KergsFCLibIndex(i, nc);
+    const PetscInt pi   = FCLibIndex(i, nc);
     PetscReal      diag = 0.0;
     PetscCall(MatGetRow(Wa, i, &ncols, &cols, &vals));
     for (PetscInt e = 0; e < ncols; e++) {
-      const PetscInt pj   = KergsFCLibIndex(cols[e], nc);
+      const PetscInt pj   = FCLibIndex(cols[e], nc);
       p->rowind[next[pj]] = (int)pi;
       p->val[next[pj]++]  = PetscRealPart(vals[e]);
       if (cols[e] == i) diag = PetscRealPart(vals[e]);
@@ -171,7 +171,7 @@ static PetscErrorCode KergsFCLibBuildCSC(Mat Wa, PetscInt nc, KergsFCLibProblem 
 }
 
 /* q, mu, r from the gathered packs; u = W r + q, the local velocity of the exported problem. */
-static PetscErrorCode KergsFCLibBuildVectors(const PetscReal *pack, KergsFCLibProblem *p)
+static PetscErrorCode FCLibBuildVectors(const PetscReal *pack, FCLibProblem *p)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscMalloc4(PetscMax(p->m, 1), &p->q, PetscMax(p->na, 1), &p->mu, PetscMax(p->m, 1), &p->r, PetscMax(p->m, 1), &p->u));
@@ -190,25 +190,25 @@ static PetscErrorCode KergsFCLibBuildVectors(const PetscReal *pack, KergsFCLibPr
 }
 
 /* Rank 0: write path.tmp with libfclib, then rename it to path; msg is set on failure. */
-static PetscErrorCode FCLibWrite(KergsScene scene, KergsFCLibProblem *p, const char path[], char msg[], size_t len)
+static PetscErrorCode FCLibWrite(KergsScene scene, FCLibProblem *p, const char path[], char msg[], size_t len)
 {
-  const char *name = "";
-  PetscInt    step = 0;
-  PetscReal   time = 0;
-  KergsFCLibWriteLocalFn    write_local    = NULL;
-  KergsFCLibWriteSolutionFn write_solution = NULL;
-  char                      tmp[PETSC_MAX_PATH_LEN], title[PETSC_MAX_PATH_LEN + 64], description[256], math[256];
-  struct fclib_matrix       W;
-  struct fclib_info         info;
-  struct fclib_local        problem;
-  struct fclib_solution     solution;
+  const char           *name           = "";
+  PetscInt              step           = 0;
+  PetscReal             time           = 0;
+  FCLibWriteLocalFn     write_local    = NULL;
+  FCLibWriteSolutionFn  write_solution = NULL;
+  char                  tmp[PETSC_MAX_PATH_LEN], title[PETSC_MAX_PATH_LEN + 64], description[256], math[256];
+  struct fclib_matrix   W;
+  struct fclib_info     info;
+  struct fclib_local    problem;
+  struct fclib_solution solution;
 
   PetscFunctionBeginUser;
   if (scene) {
     PetscCall(KergsSceneGetName(scene, &name));
     PetscCall(KergsSceneGetStep(scene, &step, &time, NULL));
   }
-  KergsFCLibLoad(&write_local, &write_solution, msg, len);
+  FCLibLoad(&write_local, &write_solution, msg, len);
   if (msg[0]) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
   PetscCall(PetscSNPrintf(title, sizeof(title), "kergs %s step %" PetscInt_FMT, name, step));
@@ -237,17 +237,17 @@ static PetscErrorCode FCLibWrite(KergsScene scene, KergsFCLibProblem *p, const c
 
 PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsOperators ops, const PetscBool *active, const char path[])
 {
-  MPI_Comm          comm;
-  PetscMPIInt       rank;
-  PetscInt          nc, rstart, rend, vlo, vhi, *rows = NULL, n;
-  PetscReal        *pack = NULL;
-  IS                is;
-  Mat              *sub, W;
-  Vec               vd;
-  KergsContact     *c;
-  KergsDofLayout    layout;
-  KergsFCLibProblem p                                 = {0};
-  char              msg[2 * PETSC_MAX_PATH_LEN + 128] = "";
+  MPI_Comm       comm;
+  PetscMPIInt    rank;
+  PetscInt       nc, rstart, rend, vlo, vhi, *rows = NULL, n;
+  PetscReal     *pack = NULL;
+  IS             is;
+  Mat           *sub, W;
+  Vec            vd;
+  KergsContact  *c;
+  KergsDofLayout layout;
+  FCLibProblem   p                                 = {0};
+  char           msg[2 * PETSC_MAX_PATH_LEN + 128] = "";
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
@@ -284,10 +284,10 @@ PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsO
   if (rank == 0) {
     p.m      = KERGS_FCLIB_SPACEDIM * p.na;
     p.padded = (PetscBool)(nc == 1);
-    PetscCall(KergsFCLibBuildCSC(sub[0], nc, &p));
-    PetscCall(KergsFCLibBuildVectors(pack, &p));
+    PetscCall(FCLibBuildCSC(sub[0], nc, &p));
+    PetscCall(FCLibBuildVectors(pack, &p));
     PetscCall(FCLibWrite(scene, &p, path, msg, sizeof(msg)));
-    PetscCall(KergsFCLibProblemFree(&p));
+    PetscCall(FCLibProblemFree(&p));
   }
   PetscCall(MatDestroySubMatrices(1, &sub));
   PetscCall(ISDestroy(&is));

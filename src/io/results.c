@@ -16,7 +16,7 @@
    Atomic files: rank 0 touches the file system, every rank learns the outcome. */
 
 /* Broadcast rank 0's message; a non-empty one becomes the same error on every rank. */
-static PetscErrorCode KergsRaiseFromRoot(MPI_Comm comm, PetscErrorCode code, char msg[], int len)
+static PetscErrorCode RaiseFromRoot(MPI_Comm comm, PetscErrorCode code, char msg[], int len)
 {
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Bcast(msg, len, MPI_CHAR, 0, comm));
@@ -25,7 +25,7 @@ static PetscErrorCode KergsRaiseFromRoot(MPI_Comm comm, PetscErrorCode code, cha
 }
 
 /* mkdir -p of the directory part of path (rank 0 only); the message is empty on success. */
-static void KergsMakeDirectories(const char path[], char msg[], size_t len)
+static void MakeDirectories(const char path[], char msg[], size_t len)
 {
   char dir[PETSC_MAX_PATH_LEN];
 
@@ -65,8 +65,8 @@ PetscErrorCode KergsFileMakeParentDir(MPI_Comm comm, const char path[])
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  if (rank == 0) KergsMakeDirectories(path, msg, sizeof(msg));
-  PetscCall(KergsRaiseFromRoot(comm, PETSC_ERR_FILE_OPEN, msg, (int)sizeof(msg)));
+  if (rank == 0) MakeDirectories(path, msg, sizeof(msg));
+  PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_OPEN, msg, (int)sizeof(msg)));
   PetscFunctionReturn(0);
 }
 
@@ -79,7 +79,7 @@ PetscErrorCode KergsFileCommit(MPI_Comm comm, const char tmp[], const char path[
   PetscCallMPI(MPI_Barrier(comm)); /* every rank has closed its handle on tmp */
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   if (rank == 0 && rename(tmp, path)) snprintf(msg, sizeof(msg), "Cannot rename %s to %s: %s", tmp, path, strerror(errno));
-  PetscCall(KergsRaiseFromRoot(comm, PETSC_ERR_FILE_WRITE, msg, (int)sizeof(msg)));
+  PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_WRITE, msg, (int)sizeof(msg)));
   PetscFunctionReturn(0);
 }
 
@@ -106,7 +106,7 @@ PetscErrorCode KergsResultsSetSceneName(KergsResults res, const char name[])
 }
 
 /* results/<scene name>.h5, with the scene name reduced to its last path component. */
-static PetscErrorCode KergsResultsDefaultPath(KergsResults res, char path[], size_t len)
+static PetscErrorCode ResultsDefaultPath(KergsResults res, char path[], size_t len)
 {
   const char *name = res->scenename, *slash = strrchr(res->scenename, '/');
 
@@ -123,7 +123,7 @@ PetscErrorCode KergsResultsSetFromOptions(KergsResults res)
   PetscBool set, none = (PetscBool)!res->enabled;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsResultsDefaultPath(res, defpath, sizeof(defpath)));
+  PetscCall(ResultsDefaultPath(res, defpath, sizeof(defpath)));
   PetscCall(PetscStrncpy(path, res->path[0] ? res->path : defpath, sizeof(path)));
   PetscOptionsBegin(res->comm, NULL, "Output options", "KergsResults");
   PetscCall(PetscOptionsString("-output", "Results file (HDF5: /stats per step, /snapshots); written to <path>.tmp, renamed when complete",
@@ -145,7 +145,7 @@ PetscErrorCode KergsResultsOpen(KergsResults res)
   PetscFunctionBeginUser;
   if (!res->enabled) PetscFunctionReturn(0);
   PetscCheck(!res->viewer, res->comm, PETSC_ERR_ORDER, "Results file %s is already open", res->tmppath);
-  if (!res->path[0]) PetscCall(KergsResultsDefaultPath(res, res->path, sizeof(res->path)));
+  if (!res->path[0]) PetscCall(ResultsDefaultPath(res, res->path, sizeof(res->path)));
   PetscCall(PetscSNPrintf(res->tmppath, sizeof(res->tmppath), "%s.tmp", res->path));
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
   PetscCall(KergsFileMakeParentDir(res->comm, res->path));
@@ -163,13 +163,13 @@ PetscErrorCode KergsResultsOpen(KergsResults res)
 /* ---------------------------------------------------------------------------------------------
    Statistics: a table kept on every rank, one column per name, one row per step. Unset cells are NaN. */
 
-static void KergsFillNaN(PetscReal *a, PetscInt from, PetscInt to)
+static void FillNaN(PetscReal *a, PetscInt from, PetscInt to)
 {
   for (PetscInt i = from; i < to; i++) a[i] = (PetscReal)NAN;
 }
 
 /* Make room for row index `row` in every column (capacity doubles). */
-static PetscErrorCode KergsResultsReserveRow(KergsResults res, PetscInt row)
+static PetscErrorCode ResultsReserveRow(KergsResults res, PetscInt row)
 {
   PetscInt nalloc = res->nalloc ? res->nalloc : KERGS_RESULTS_INITIAL_ROWS;
 
@@ -180,7 +180,7 @@ static PetscErrorCode KergsResultsReserveRow(KergsResults res, PetscInt row)
     PetscReal *grown;
     PetscCall(PetscMalloc1(nalloc, &grown));
     PetscCall(PetscArraycpy(grown, res->statvalues[j], res->nalloc));
-    KergsFillNaN(grown, res->nalloc, nalloc);
+    FillNaN(grown, res->nalloc, nalloc);
     PetscCall(PetscFree(res->statvalues[j]));
     res->statvalues[j] = grown;
   }
@@ -189,7 +189,7 @@ static PetscErrorCode KergsResultsReserveRow(KergsResults res, PetscInt row)
 }
 
 /* Column index of a statistic, created (NaN in every earlier row) on first use. */
-static PetscErrorCode KergsResultsColumn(KergsResults res, const char name[], PetscInt *col)
+static PetscErrorCode ResultsColumn(KergsResults res, const char name[], PetscInt *col)
 {
   PetscBool same;
 
@@ -205,11 +205,11 @@ static PetscErrorCode KergsResultsColumn(KergsResults res, const char name[], Pe
              "Too many statistics (at most %d) when adding \"%s\" to %s", KERGS_RESULTS_MAXSTATS, name, res->path);
   PetscCheck(name[0] && strlen(name) < sizeof(res->statname[0]) && !strchr(name, '/'), res->comm, PETSC_ERR_ARG_WRONG,
              "Statistic name \"%s\" must be non-empty, shorter than %d characters and without '/'", name, (int)sizeof(res->statname[0]));
-  PetscCall(KergsResultsReserveRow(res, res->nrows));
+  PetscCall(ResultsReserveRow(res, res->nrows));
   *col = res->nstats++;
   PetscCall(PetscStrncpy(res->statname[*col], name, sizeof(res->statname[0])));
   PetscCall(PetscMalloc1(res->nalloc, &res->statvalues[*col]));
-  KergsFillNaN(res->statvalues[*col], 0, res->nalloc);
+  FillNaN(res->statvalues[*col], 0, res->nalloc);
   PetscFunctionReturn(0);
 }
 
@@ -219,7 +219,7 @@ PetscErrorCode KergsResultsRecord(KergsResults res, const char name[], PetscReal
 
   PetscFunctionBeginUser;
   /* kept in memory even with -output_none: the run's callers read them */
-  PetscCall(KergsResultsColumn(res, name, &col));
+  PetscCall(ResultsColumn(res, name, &col));
   res->statvalues[col][res->nrows] = value; /* recording twice in a step keeps the last value */
   PetscFunctionReturn(0);
 }
@@ -231,10 +231,13 @@ PetscErrorCode KergsResultsRecordText(KergsResults res, const char name[], const
 
   PetscFunctionBeginUser;
   for (j = 0; j < res->ntexts && !same; j++) PetscCall(PetscStrcmp(res->textname[j], name, &same));
-  if (same) j--;
+  if (same)
+    j--;
   else {
-    PetscCheck(res->ntexts < KERGS_RESULTS_MAXTEXTS, res->comm, PETSC_ERR_ARG_OUTOFRANGE, "Too many texts (at most %d) when adding \"%s\" to %s", KERGS_RESULTS_MAXTEXTS, name, res->path);
-    PetscCheck(name[0] && strlen(name) < sizeof(res->textname[0]) && !strchr(name, '/'), res->comm, PETSC_ERR_ARG_WRONG, "Text name \"%s\" must be non-empty, shorter than %d characters and without '/'", name, (int)sizeof(res->textname[0]));
+    PetscCheck(res->ntexts < KERGS_RESULTS_MAXTEXTS, res->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Too many texts (at most %d) when adding \"%s\" to %s", KERGS_RESULTS_MAXTEXTS, name, res->path);
+    PetscCheck(name[0] && strlen(name) < sizeof(res->textname[0]) && !strchr(name, '/'), res->comm, PETSC_ERR_ARG_WRONG,
+               "Text name \"%s\" must be non-empty, shorter than %d characters and without '/'", name, (int)sizeof(res->textname[0]));
     j = res->ntexts++;
     PetscCall(PetscStrncpy(res->textname[j], name, sizeof(res->textname[0])));
   }
@@ -275,13 +278,13 @@ PetscErrorCode KergsResultsGetPath(KergsResults res, const char **path, PetscBoo
 PetscErrorCode KergsResultsEndStep(KergsResults res)
 {
   PetscFunctionBeginUser;
-  PetscCall(KergsResultsReserveRow(res, res->nrows + 1));
+  PetscCall(ResultsReserveRow(res, res->nrows + 1));
   res->nrows++;
   PetscFunctionReturn(0);
 }
 
 /* Whether the current (not yet ended) row holds any value. */
-static PetscBool KergsResultsPendingRow(KergsResults res)
+static PetscBool ResultsPendingRow(KergsResults res)
 {
   for (PetscInt j = 0; j < res->nstats; j++)
     if (!PetscIsNanReal(res->statvalues[j][res->nrows])) return PETSC_TRUE;
@@ -289,7 +292,7 @@ static PetscBool KergsResultsPendingRow(KergsResults res)
 }
 
 /* /stats/<name>: a Vec of global length nrows held entirely by rank 0, so the dataset is 1-D. */
-static PetscErrorCode KergsResultsWriteStats(KergsResults res)
+static PetscErrorCode ResultsWriteStats(KergsResults res)
 {
   PetscMPIInt rank;
   Vec         col;
@@ -299,7 +302,8 @@ static PetscErrorCode KergsResultsWriteStats(KergsResults res)
   PetscCall(VecCreateMPI(res->comm, rank == 0 ? res->nrows : 0, res->nrows, &col));
   PetscCall(PetscViewerHDF5PushGroup(res->viewer, "/stats"));
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "nrows", PETSC_INT, &res->nrows));
-  for (PetscInt j = 0; j < res->ntexts; j++) PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, res->textname[j], PETSC_STRING, res->textvalue[j]));
+  for (PetscInt j = 0; j < res->ntexts; j++)
+    PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, res->textname[j], PETSC_STRING, res->textvalue[j]));
   for (PetscInt j = 0; j < res->nstats; j++) {
     PetscScalar *a;
     PetscCall(VecGetArray(col, &a));
@@ -318,9 +322,9 @@ PetscErrorCode KergsResultsClose(KergsResults res)
 {
   PetscFunctionBeginUser;
   if (!res->enabled || !res->viewer) PetscFunctionReturn(0);
-  if (res->nalloc && KergsResultsPendingRow(res)) PetscCall(KergsResultsEndStep(res));
+  if (res->nalloc && ResultsPendingRow(res)) PetscCall(KergsResultsEndStep(res));
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
-  PetscCall(KergsResultsWriteStats(res));
+  PetscCall(ResultsWriteStats(res));
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, "/", "nsnapshots", PETSC_INT, &res->nsnapshots));
   PetscCall(PetscViewerDestroy(&res->viewer));
   PetscCall(KergsFileCommit(res->comm, res->tmppath, res->path));
@@ -389,7 +393,7 @@ PetscErrorCode KergsViewIntegers(PetscViewer viewer, MPI_Comm comm, const char n
 
 /* The owned disks of each rank (global indices [dstart, dend)), in rank order: the datasets are in global-index
    order. */
-static PetscErrorCode KergsSnapshotDisks(PetscViewer viewer, KergsScene scene)
+static PetscErrorCode SnapshotDisks(PetscViewer viewer, KergsScene scene)
 {
   KergsDisks D;
   MPI_Comm   sccomm;
@@ -401,8 +405,7 @@ static PetscErrorCode KergsSnapshotDisks(PetscViewer viewer, KergsScene scene)
   s = D.dstart;
   n = D.nowned;
   PetscCheck(0 <= s && s <= D.dend && D.dend <= D.ndisks && n == D.dend - s, sccomm, PETSC_ERR_ARG_OUTOFRANGE,
-             "Scene disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not within the %" PetscInt_FMT " disks", s, D.dend,
-             D.ndisks);
+             "Scene disk range [%" PetscInt_FMT ", %" PetscInt_FMT ") is not within the %" PetscInt_FMT " disks", s, D.dend, D.ndisks);
   PetscCall(MPIU_Allreduce(&n, &nsum, 1, MPIU_INT, MPI_SUM, sccomm));
   PetscCheck(nsum == D.ndisks, sccomm, PETSC_ERR_ARG_WRONG,
              "Scene disk ranges cover %" PetscInt_FMT " disks, not the %" PetscInt_FMT " of the scene", nsum, D.ndisks);
@@ -417,13 +420,14 @@ static PetscErrorCode KergsSnapshotDisks(PetscViewer viewer, KergsScene scene)
 }
 
 /* walls (nwalls x 2*KERGS_DIM: a then b) and wall_infinite (0 segment, 1 line), written by rank 0. */
-static PetscErrorCode KergsSnapshotWalls(PetscViewer viewer, KergsScene scene)
+static PetscErrorCode SnapshotWalls(PetscViewer viewer, KergsScene scene)
 {
-  MPI_Comm sccomm;
-  PetscInt scnwalls; const KergsWall *scwalls;
-  PetscMPIInt rank;
-  PetscInt    n;
-  PetscReal  *ab, *inf;
+  MPI_Comm         sccomm;
+  PetscInt         scnwalls;
+  const KergsWall *scwalls;
+  PetscMPIInt      rank;
+  PetscInt         n;
+  PetscReal       *ab, *inf;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetComm(scene, &sccomm));
@@ -446,9 +450,9 @@ static PetscErrorCode KergsSnapshotWalls(PetscViewer viewer, KergsScene scene)
 
 /* This rank's contacts: a, b (global disk indices, as in the snapshot's disk datasets; b a wall index when kind is
    1), kind, n, gap, r. The tangential impulse is 0 in frictionless scenes. */
-static PetscErrorCode KergsSnapshotContacts(PetscViewer viewer, KergsScene scene, KergsContacts contacts)
+static PetscErrorCode SnapshotContacts(PetscViewer viewer, KergsScene scene, KergsContacts contacts)
 {
-  PetscInt      m = 0;
+  PetscInt      m   = 0;
   KergsContact *cts = NULL;
   KergsDisks    D;
   MPI_Comm      comm;
@@ -507,9 +511,9 @@ PetscErrorCode KergsResultsSnapshot(KergsResults res, KergsScene scene, KergsCon
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "ndisks", PETSC_INT, &D.ndisks));
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "nwalls", PETSC_INT, &scnwalls));
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, NULL, "ncontacts", PETSC_INT, &ncontacts));
-  PetscCall(KergsSnapshotDisks(res->viewer, scene));
-  PetscCall(KergsSnapshotWalls(res->viewer, scene));
-  PetscCall(KergsSnapshotContacts(res->viewer, scene, contacts));
+  PetscCall(SnapshotDisks(res->viewer, scene));
+  PetscCall(SnapshotWalls(res->viewer, scene));
+  PetscCall(SnapshotContacts(res->viewer, scene, contacts));
   PetscCall(PetscViewerHDF5PopGroup(res->viewer));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   res->nsnapshots++;

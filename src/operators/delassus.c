@@ -82,11 +82,11 @@ static PetscInt DiskContacts(KergsOperators ops, const StepData *sd, const Petsc
 
   (void)MPI_Comm_rank(ops->comm, &rank);
   for (PetscInt j = start[q]; j < start[q + 1]; j++, m++) {
-    const PetscInt      e  = list[j];
-    const KergsContact *c  = e < sd->ncontacts ? &sd->c[e] : &sd->foreign[e - sd->ncontacts];
-    bc[m].index            = e < sd->ncontacts ? sd->start + e : sd->foreign_index[e - sd->ncontacts];
-    bc[m].owner            = e < sd->ncontacts ? rank : (PetscMPIInt)sd->D.ghost_owner[c->a - sd->D.nowned];
-    bc[m].coupled          = ops->W_active_only ? KergsContactIsActive(&sd->activity, c) : PETSC_TRUE;
+    const PetscInt      e = list[j];
+    const KergsContact *c = e < sd->ncontacts ? &sd->c[e] : &sd->foreign[e - sd->ncontacts];
+    bc[m].index           = e < sd->ncontacts ? sd->start + e : sd->foreign_index[e - sd->ncontacts];
+    bc[m].owner           = e < sd->ncontacts ? rank : (PetscMPIInt)sd->D.ghost_owner[c->a - sd->D.nowned];
+    bc[m].coupled         = ops->W_active_only ? KergsContactIsActive(&sd->activity, c) : PETSC_TRUE;
     if (rows) RestrictToBody(ops, sd, c, dof, nd, bc[m].h);
   }
   return m;
@@ -106,8 +106,8 @@ static PetscErrorCode WallContacts(KergsOperators ops, const StepData *sd, Petsc
   PetscCall(PetscMalloc1(nmine + 1, &mine));
   for (PetscInt k = 0, i = 0; k < sd->ncontacts; k++)
     if (sd->c[k].kind == KERGS_CONTACT_DISK_WALL && sd->c[k].b == w) {
-      mine[i].index = sd->start + k;
-      mine[i].owner = rank;
+      mine[i].index   = sd->start + k;
+      mine[i].owner   = rank;
       mine[i].coupled = ops->W_active_only ? KergsContactIsActive(&sd->activity, &sd->c[k]) : PETSC_TRUE;
       RestrictToBody(ops, sd, &sd->c[k], ops->wall_dof[w], KERGS_DIM, mine[i++].h);
     }
@@ -137,15 +137,17 @@ static void CountBlocks(const BodyContact *bc, PetscInt m, PetscInt row, PetscMP
     if (bc[j].index == row) alpha = &bc[j];
   for (PetscInt j = 0; j < m; j++) {
     if (bc[j].index < row || !StoredBlock(alpha, &bc[j])) continue;
-    if (bc[j].owner == owner) (*d)++;
-    else (*o)++;
+    if (bc[j].owner == owner)
+      (*d)++;
+    else
+      (*o)++;
   }
   if (dup) (*d)--;
 }
 
 /* The counts of the rows of foreign contacts at owned disks, sent to their owners, added to dnz/onz there. */
-static PetscErrorCode CountRemoteRows(KergsOperators ops, const StepData *sd, const PetscInt *start, const PetscInt *list,
-                                      BodyContact *bc, PetscInt *dnz, PetscInt *onz)
+static PetscErrorCode CountRemoteRows(KergsOperators ops, const StepData *sd, const PetscInt *start, const PetscInt *list, BodyContact *bc,
+                                      PetscInt *dnz, PetscInt *onz)
 {
   PetscMPIInt size, *scount, *fill;
   PetscInt   *send, *recv, nrecv;
@@ -176,7 +178,8 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, const StepData *sd, co
   nrecv *= 3;
   for (PetscInt i = 0; i < nrecv; i += 3) {
     const PetscInt k = recv[i] - sd->start;
-    PetscCheck(k >= 0 && k < sd->ncontacts, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W pattern: contact %" PetscInt_FMT " is not owned here", recv[i]);
+    PetscCheck(k >= 0 && k < sd->ncontacts, PETSC_COMM_SELF, PETSC_ERR_PLIB, "W pattern: contact %" PetscInt_FMT " is not owned here",
+               recv[i]);
     dnz[k] += recv[i + 1];
     onz[k] += recv[i + 2];
   }
@@ -189,8 +192,8 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, const StepData *sd, co
 /* Add the blocks H_alpha,q M_q^-1 H_beta,q^T of body q (contacts bc[0 .. m), inverse masses minv on its nd DOFs)
    to the block rows of the contacts bc[rows[i]] (all of them when rows is NULL); only the upper blocks, beta >= alpha
    (global contact indices), as W is stored by its upper block triangle (W_beta,alpha = W_alpha,beta^T). */
-static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const PetscReal *minv, const BodyContact *bc, PetscInt m, const PetscInt *rows,
-                                    PetscInt nrows, PetscInt *cols, PetscScalar *vals)
+static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const PetscReal *minv, const BodyContact *bc, PetscInt m,
+                                    const PetscInt *rows, PetscInt nrows, PetscInt *cols, PetscScalar *vals)
 {
   PetscFunctionBeginUser;
   for (PetscInt i = 0; i < (rows ? nrows : m); i++) {
@@ -233,8 +236,10 @@ static PetscErrorCode AddWallTerms(KergsOperators ops, const StepData *sd, Petsc
       if (bc[j].owner == rank) rows[nrows++] = j;
     for (PetscInt d = 0; d < KERGS_DIM; d++) minv[d] = 1.0 / sd->walls[w].mass;
     if (dnz)
-      for (PetscInt i = 0; i < nrows; i++) CountBlocks(bc, m, bc[rows[i]].index, rank, PETSC_TRUE, &dnz[bc[rows[i]].index - sd->start], &onz[bc[rows[i]].index - sd->start]);
-    else PetscCall(AddBodyBlocks(ops->W, ops->ncomp, KERGS_DIM, minv, bc, m, rows, nrows, cols, vals));
+      for (PetscInt i = 0; i < nrows; i++)
+        CountBlocks(bc, m, bc[rows[i]].index, rank, PETSC_TRUE, &dnz[bc[rows[i]].index - sd->start], &onz[bc[rows[i]].index - sd->start]);
+    else
+      PetscCall(AddBodyBlocks(ops->W, ops->ncomp, KERGS_DIM, minv, bc, m, rows, nrows, cols, vals));
     PetscCall(PetscFree3(rows, cols, vals));
     PetscCall(PetscFree(bc));
   }
@@ -243,8 +248,8 @@ static PetscErrorCode AddWallTerms(KergsOperators ops, const StepData *sd, Petsc
 
 /* Exact block counts of this rank's rows: the contacts at body a (owned here), plus those at body b (owned here,
    from b's owner for a ghost, or at a free wall), alpha itself once. */
-static PetscErrorCode CountPattern(KergsOperators ops, const StepData *sd, const PetscInt *start, const PetscInt *list,
-                                   BodyContact *bc, PetscInt *dnz, PetscInt *onz)
+static PetscErrorCode CountPattern(KergsOperators ops, const StepData *sd, const PetscInt *start, const PetscInt *list, BodyContact *bc,
+                                   PetscInt *dnz, PetscInt *onz)
 {
   PetscMPIInt rank;
 
@@ -337,4 +342,3 @@ PetscErrorCode KergsOperatorsReleaseW(KergsOperators ops)
   PetscCall(MatDestroy(&ops->W));
   PetscFunctionReturn(0);
 }
-

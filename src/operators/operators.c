@@ -1,5 +1,5 @@
 /* kergs operators: H_f^T, H_g^T, M^-1, W = H_f^T M^-1 H_f, V_f, V_g, R^d and v^d for one step
-   (DESIGN.md sections 2 and 6). Only what the scene needs is built: no rotations nor tangential
+   (docs/design.md: notation, parallel layout). Only what the scene needs is built: no rotations nor tangential
    components for a frictionless scene, no H_g without driven walls. */
 #include <kergs/private/operatorsimpl.h>
 #include <petscmat.h>
@@ -54,8 +54,10 @@ static PetscErrorCode SetUpDofLayout(KergsOperators ops, KergsScene scene, const
   PetscCall(PetscFree(ops->wall_dof));
   PetscCall(PetscMalloc1(sd->nwalls + 1, &ops->wall_dof));
   for (PetscInt w = 0; w < sd->nwalls; w++) {
-    if (sd->walls[w].kind == KERGS_WALL_FREE) ops->wall_dof[w] = sd->D.ndisks * ops->ndof_disk + KERGS_DIM * nf++;
-    else ops->wall_dof[w] = KERGS_DIM * ng++;
+    if (sd->walls[w].kind == KERGS_WALL_FREE)
+      ops->wall_dof[w] = sd->D.ndisks * ops->ndof_disk + KERGS_DIM * nf++;
+    else
+      ops->wall_dof[w] = KERGS_DIM * ng++;
   }
   ops->nfreewalls   = nf;
   ops->ndrivenwalls = ng;
@@ -169,18 +171,20 @@ void KergsOperatorsContactRows(KergsOperators ops, const StepData *sd, const Ker
 
   free->ncol = given->ncol = 0;
   AddBody(free, KergsOperatorsDiskDof(ops, sd->D.gidx[ct->a]), rotates, e, 1.0, ct->ra, tang);
-  if (ct->kind == KERGS_CONTACT_DISK_DISK) AddBody(free, KergsOperatorsDiskDof(ops, sd->D.gidx[ct->b]), rotates, e, -1.0, ct->rb, tang);
-  else if (sd->walls[ct->b].kind == KERGS_WALL_FREE) AddBody(free, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
-  else AddBody(given, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
+  if (ct->kind == KERGS_CONTACT_DISK_DISK)
+    AddBody(free, KergsOperatorsDiskDof(ops, sd->D.gidx[ct->b]), rotates, e, -1.0, ct->rb, tang);
+  else if (sd->walls[ct->b].kind == KERGS_WALL_FREE)
+    AddBody(free, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
+  else
+    AddBody(given, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
 }
 
 /* Create an AIJ Mat with exact preallocation: rows = local contact components, columns split at
    [clo, chi) into the diagonal and off-diagonal blocks. */
-static PetscErrorCode CreateHt(KergsOperators ops, const StepData *sd, PetscBool freepart, PetscInt ncols_local,
-                               PetscInt ncols, Mat *Ht)
+static PetscErrorCode CreateHt(KergsOperators ops, const StepData *sd, PetscBool freepart, PetscInt ncols_local, PetscInt ncols, Mat *Ht)
 {
-  PetscInt  nrows = sd->ncontacts * ops->ncomp, *dnz, *onz, clo = 0;
-  HtRow     fr, gr;
+  PetscInt nrows = sd->ncontacts * ops->ncomp, *dnz, *onz, clo = 0;
+  HtRow    fr, gr;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Exscan(&ncols_local, &clo, 1, MPIU_INT, MPI_SUM, ops->comm));
@@ -190,8 +194,10 @@ static PetscErrorCode CreateHt(KergsOperators ops, const StepData *sd, PetscBool
       HtRow *row = freepart ? &fr : &gr;
       KergsOperatorsContactRows(ops, sd, &sd->c[k], c, &fr, &gr);
       for (PetscInt j = 0; j < row->ncol; j++) {
-        if (row->col[j] >= clo && row->col[j] < clo + ncols_local) dnz[k * ops->ncomp + c]++;
-        else onz[k * ops->ncomp + c]++;
+        if (row->col[j] >= clo && row->col[j] < clo + ncols_local)
+          dnz[k * ops->ncomp + c]++;
+        else
+          onz[k * ops->ncomp + c]++;
       }
     }
   PetscCall(MatCreate(ops->comm, Ht));
@@ -274,8 +280,10 @@ PetscErrorCode KergsOperatorsAssembleH(KergsOperators ops, KergsScene scene, Ker
   PetscCall(VecDuplicate(ops->vd, &ops->r));
   PetscCall(VecDuplicate(ops->vd, &ops->v));
   PetscCall(BuildHg(ops, sd));
-  if (ops->HgT) PetscCall(MatMult(ops->HgT, ops->Vg, ops->vd));
-  else PetscCall(VecZeroEntries(ops->vd));
+  if (ops->HgT)
+    PetscCall(MatMult(ops->HgT, ops->Vg, ops->vd));
+  else
+    PetscCall(VecZeroEntries(ops->vd));
   if (!keep) PetscCall(MatDestroy(&ops->HgT));
   PetscCall(BuildHf(ops, sd));
   PetscCall(VecDuplicate(ops->Vf, &tmp));

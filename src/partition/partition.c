@@ -1,12 +1,12 @@
-/* kergs partition: ownership of the grains by the ranks (DESIGN.md section 6, issue 4).
+/* kergs partition: ownership of the grains by the ranks (docs/design.md: parallel layout).
 
    Rank p owns the disks of global indices [dstart, dend), so a partition is a new numbering of the disks, part
    after part. It is computed on rank 0 from the grain graph gathered there (vertices: grains with work
    1 + contacts and their centres and ids; edges: disk-disk contacts); each rank receives the new global index of
-   its own disks (MPI_Scatterv); the disks then migrate to their new owners with their whole state (KergsSceneMigrate), and the contacts follow
-   their disk a with their impulses, so that the next detection warm-starts them (Algorithm 1). METIS and the
-   Hilbert sort run serially on rank 0 (O(ndisks) memory there at each partition, the only such place); at
-   hundreds of ranks ParMETIS and a parallel sort would replace them. */
+   its own disks (MPI_Scatterv); the disks then migrate to their new owners with their whole state (KergsSceneMigrate), and the contacts
+   follow their disk a with their impulses, so that the next detection warm-starts them (Algorithm 1). METIS and the Hilbert sort run
+   serially on rank 0 (O(ndisks) memory there at each partition, the only such place); at hundreds of ranks ParMETIS and a parallel sort
+   would replace them. */
 #include <kergs/private/partitionimpl.h>
 #include <metis.h>
 #include <stdint.h>
@@ -53,9 +53,10 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
 {
   PetscFunctionBeginUser;
   PetscOptionsBegin(p->comm, NULL, "Partition options (ownership of the grains by the ranks)", NULL);
-  PetscCall(PetscOptionsEnum(
-      "-partition_type", "contiguous (even split by index, never changed), geometric (Hilbert curve), metis (k-way on the contact graph; the default on several ranks; one rank never partitions)",
-      "", KergsPartitionTypes, (PetscEnum)p->type, (PetscEnum *)&p->type, NULL));
+  PetscCall(PetscOptionsEnum("-partition_type",
+                             "contiguous (even split by index, never changed), geometric (Hilbert curve), metis (k-way on the contact "
+                             "graph; the default on several ranks; one rank never partitions)",
+                             "", KergsPartitionTypes, (PetscEnum)p->type, (PetscEnum *)&p->type, NULL));
   PetscCall(PetscOptionsReal(
       "-partition_imbalance_tol",
       "Repartition when the max rank work / mean work reaches this factor and grew since the last partition (1: at every check)", "",
@@ -71,9 +72,11 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
       "-partition_metis_curve",
       "Join consecutive grains along a Hilbert curve by light edges in METIS's graph (locality for grains without contacts)", "",
       p->metis_curve, &p->metis_curve, NULL));
-  PetscCall(PetscOptionsEnum("-partition_work",
-                             "Work of a rank: measured (its time in the sweeps' arithmetic at the last step, spread over its grains by the model; balances what the model misses, not reproducible to the bit across runs) or model (active contacts count 6, inactive 1; deterministic)",
-                             "", KergsPartitionWorks, (PetscEnum)p->work, (PetscEnum *)&p->work, NULL));
+  PetscCall(PetscOptionsEnum(
+      "-partition_work",
+      "Work of a rank: measured (its time in the sweeps' arithmetic at the last step, spread over its grains by the model; balances what "
+      "the model misses, not reproducible to the bit across runs) or model (active contacts count 6, inactive 1; deterministic)",
+      "", KergsPartitionWorks, (PetscEnum)p->work, (PetscEnum *)&p->work, NULL));
   PetscCall(PetscOptionsInt("-partition_metis_seed", "Seed of METIS's random choices (fixed: reproducible partitions)", "", p->metis_seed,
                             &p->metis_seed, NULL));
   PetscOptionsEnd();
@@ -117,9 +120,9 @@ PetscErrorCode KergsPartitionView(KergsPartition p, PetscViewer viewer)
 /* ranges[p] .. ranges[p+1]: the disks of rank p (size + 1 entries), checked to tile [0, ndisks) in rank order. */
 static PetscErrorCode GetRanges(KergsScene sc, PetscInt **ranges)
 {
-  KergsDisks D;
+  KergsDisks  D;
   const char *scname;
-  MPI_Comm sccomm;
+  MPI_Comm    sccomm;
   PetscMPIInt size;
   PetscInt    mine[2], *all;
 
@@ -150,10 +153,10 @@ static PetscErrorCode GetRanges(KergsScene sc, PetscInt **ranges)
 /* Measures                                                                                                   */
 
 /* Work of a contact in a step, for each of its disks: the sweeps dominate a step (thousands per step), and there an
-   active contact costs about 6 times an inactive one (biaxial 20k, one core: 40 against 6 ns per sweep; an inactive
-   contact with r = 0 is skipped). Each disk counts 1 more for its own work outside the sweeps. */
+   active contact costs about 6 times an inactive one, whose zero impulse is skipped (docs/scaling.md, "Partition
+   work"). Each disk counts 1 more for its own work outside the sweeps. */
 #define KERGS_WORK_INACTIVE 1
-#define KERGS_WORK_ACTIVE   6
+#define KERGS_WORK_ACTIVE 6
 static inline PetscInt ContactWork(const KergsActivity *act, const KergsContact *c)
 {
   return KergsContactIsActive(act, c) ? KERGS_WORK_ACTIVE : KERGS_WORK_INACTIVE;
@@ -165,11 +168,12 @@ static inline PetscInt ContactWork(const KergsActivity *act, const KergsContact 
    work_scale = (time / model) / (total time / total model) turns the model of its grains into time for METIS. */
 PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsContacts ct, KergsPartitionMeasures *m)
 {
-  PetscInt nct; KergsContact *cts;
-  KergsDisks D;
-  const char *scname;
-  PetscMPIInt rank, size;
-  PetscInt   *buf;
+  PetscInt      nct;
+  KergsContact *cts;
+  KergsDisks    D;
+  const char   *scname;
+  PetscMPIInt   rank, size;
+  PetscInt     *buf;
 
   KergsActivity act;
 
@@ -190,10 +194,12 @@ PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsConta
     buf[rank] += w;
     if (c->kind != KERGS_CONTACT_DISK_DISK) continue;
     PetscCheck(c->b >= 0 && c->b < D.nlocal, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONGSTATE,
-               "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT " (contacts older than the ghost layer)",
+               "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT
+               " (contacts older than the ghost layer)",
                scname, k, c->b, D.nlocal);
     buf[size]++;
-    if (c->b < D.nowned) buf[rank] += w;
+    if (c->b < D.nowned)
+      buf[rank] += w;
     else {
       buf[D.ghost_owner[c->b - D.nowned]] += w;
       buf[size + 1]++;
@@ -218,7 +224,7 @@ PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsConta
   m->my_seconds = p->compute_seconds;
   p->work_scale = 1.0;
   if (p->work == KERGS_PARTITION_WORK_MEASURED) {
-    const PetscReal model = m->work_mean * size; /* total modelled work */
+    const PetscReal model = m->work_mean * size;                                           /* total modelled work */
     PetscReal       t[3]  = {p->compute_seconds, p->compute_seconds, -p->compute_seconds}; /* sum; max, -min */
 
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &t[0], 1, MPIU_REAL, MPI_SUM, p->comm));
@@ -236,9 +242,10 @@ PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsConta
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsPartitionObserve(KergsPartition p, KergsScene sc, KergsContacts ct, PetscReal sweep_seconds, PetscReal compute_seconds, KergsPartitionMeasures *out)
+PetscErrorCode KergsPartitionObserve(KergsPartition p, KergsScene sc, KergsContacts ct, PetscReal sweep_seconds, PetscReal compute_seconds,
+                                     KergsPartitionMeasures *out)
 {
-  PetscInt scstep;
+  PetscInt                scstep;
   KergsPartitionMeasures *m = &p->last;
   PetscMPIInt             rank;
 
@@ -271,18 +278,18 @@ PetscErrorCode KergsPartitionObserve(KergsPartition p, KergsScene sc, KergsConta
    here on the local copy; the caller guarantees equality across ranks, e.g. by a broadcast). */
 static PetscErrorCode CheckRenumbering(KergsScene sc, const PetscInt order[], const PetscInt counts[], PetscMPIInt size, PetscInt *old2new)
 {
-  KergsDisks D;
+  KergsDisks  D;
   const char *scname;
-  MPI_Comm sccomm;
-  PetscInt total = 0;
+  MPI_Comm    sccomm;
+  PetscInt    total = 0;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetDisks(sc, &D));
   PetscCall(KergsSceneGetName(sc, &scname));
   PetscCall(KergsSceneGetComm(sc, &sccomm));
   for (PetscMPIInt q = 0; q < size; q++) {
-    PetscCheck(counts[q] >= 0, sccomm, PETSC_ERR_ARG_OUTOFRANGE, "Renumbering of scene %s: rank %d gets %" PetscInt_FMT " disks",
-               scname, q, counts[q]);
+    PetscCheck(counts[q] >= 0, sccomm, PETSC_ERR_ARG_OUTOFRANGE, "Renumbering of scene %s: rank %d gets %" PetscInt_FMT " disks", scname, q,
+               counts[q]);
     total += counts[q];
   }
   PetscCheck(total == D.ndisks, sccomm, PETSC_ERR_ARG_WRONG,
@@ -290,8 +297,8 @@ static PetscErrorCode CheckRenumbering(KergsScene sc, const PetscInt order[], co
   for (PetscInt i = 0; i < D.ndisks; i++) old2new[i] = -1;
   for (PetscInt k = 0; k < D.ndisks; k++) {
     PetscCheck(order[k] >= 0 && order[k] < D.ndisks && old2new[order[k]] < 0, sccomm, PETSC_ERR_ARG_WRONG,
-               "Renumbering of scene %s: new disk %" PetscInt_FMT " takes old disk %" PetscInt_FMT ", out of range or taken twice",
-               scname, k, order[k]);
+               "Renumbering of scene %s: new disk %" PetscInt_FMT " takes old disk %" PetscInt_FMT ", out of range or taken twice", scname,
+               k, order[k]);
     old2new[order[k]] = k;
   }
   PetscFunctionReturn(0);
@@ -301,8 +308,8 @@ static PetscErrorCode CheckRenumbering(KergsScene sc, const PetscInt order[], co
    contacts follow their disk a (keys and impulses), then the disks move. */
 static PetscErrorCode MigrateOwned(KergsScene sc, KergsContacts ct, const PetscInt newidx[], const PetscInt counts[], PetscInt *nmoved)
 {
-  KergsDisks D;
-  MPI_Comm sccomm;
+  KergsDisks  D;
+  MPI_Comm    sccomm;
   PetscMPIInt rank, size;
   PetscInt   *newranges, moved = 0;
 
@@ -325,8 +332,8 @@ static PetscErrorCode MigrateOwned(KergsScene sc, KergsContacts ct, const PetscI
 
 PetscErrorCode KergsPartitionRenumber(KergsScene sc, KergsContacts ct, const PetscInt order[], const PetscInt counts[], PetscInt *nmoved)
 {
-  KergsDisks D;
-  MPI_Comm sccomm;
+  KergsDisks  D;
+  MPI_Comm    sccomm;
   PetscMPIInt size;
   PetscInt   *old2new, *newidx;
 
@@ -398,12 +405,13 @@ static PetscErrorCode GatherGrains(KergsScene sc, GrainGraph *g)
    the ids to rank 0 and build the graph there. */
 static PetscErrorCode GatherGrainGraph(KergsPartition p, KergsScene sc, KergsContacts ct, GrainGraph *g)
 {
-  PetscInt nct; KergsContact *cts;
-  KergsDisks D;
-  const char *scname;
-  MPI_Comm sccomm;
-  PetscMPIInt rank, size, nmine, *counts = NULL, *displs = NULL;
-  PetscInt   *mine, *all = NULL, nall = 0, *fill;
+  PetscInt      nct;
+  KergsContact *cts;
+  KergsDisks    D;
+  const char   *scname;
+  MPI_Comm      sccomm;
+  PetscMPIInt   rank, size, nmine, *counts = NULL, *displs = NULL;
+  PetscInt     *mine, *all = NULL, nall = 0, *fill;
   KergsActivity act;
 
   PetscFunctionBeginUser;
@@ -418,14 +426,14 @@ static PetscErrorCode GatherGrainGraph(KergsPartition p, KergsScene sc, KergsCon
   PetscCall(PetscMemzero(g, sizeof(*g)));
   PetscCall(PetscMalloc1(nmine + 1, &mine));
   for (PetscInt k = 0; k < nct; k++) {
-    PetscCheck(cts[k].kind != KERGS_CONTACT_DISK_DISK || (cts[k].b >= 0 && cts[k].b < D.nlocal), PETSC_COMM_SELF,
-               PETSC_ERR_ARG_WRONGSTATE, "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT, scname, k,
-               cts[k].b, D.nlocal);
+    PetscCheck(cts[k].kind != KERGS_CONTACT_DISK_DISK || (cts[k].b >= 0 && cts[k].b < D.nlocal), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONGSTATE,
+               "Scene %s: contact %" PetscInt_FMT " names local disk %" PetscInt_FMT " of %" PetscInt_FMT, scname, k, cts[k].b, D.nlocal);
     mine[3 * k]     = D.gidx[cts[k].a];
     mine[3 * k + 1] = cts[k].kind == KERGS_CONTACT_DISK_DISK ? D.gidx[cts[k].b] : -1;
     /* measured work: the model in tenths, times this rank's factor (time per modelled unit, relative to the mean) */
-    mine[3 * k + 2] = p->work == KERGS_PARTITION_WORK_MEASURED ? PetscMax(1, (PetscInt)(10.0 * p->work_scale * ContactWork(&act, &cts[k]) + 0.5))
-                                                                : ContactWork(&act, &cts[k]);
+    mine[3 * k + 2] = p->work == KERGS_PARTITION_WORK_MEASURED
+                          ? PetscMax(1, (PetscInt)(10.0 * p->work_scale * ContactWork(&act, &cts[k]) + 0.5))
+                          : ContactWork(&act, &cts[k]);
   }
   PetscCall(GatherGrains(sc, g));
   if (rank == 0) PetscCall(PetscMalloc2(size, &counts, size, &displs));
@@ -520,8 +528,8 @@ static PetscErrorCode HilbertOrder(const GrainGraph *g, PetscInt seq[])
 {
   const PetscInt   n = g->n;
   const PetscReal *x = g->x;
-  PetscReal      lo[KERGS_DIM], hi[KERGS_DIM], extent = 0, scale;
-  CurveEntry    *e;
+  PetscReal        lo[KERGS_DIM], hi[KERGS_DIM], extent = 0, scale;
+  CurveEntry      *e;
 
   PetscFunctionBeginUser;
   for (PetscInt d = 0; d < KERGS_DIM; d++) {
@@ -751,8 +759,8 @@ typedef struct {
 #define KERGS_OUTCOME_LEN 4
 
 /* part (and seq, the order within the parts) by one method. */
-static PetscErrorCode ComputeParts(KergsPartition p, const GrainGraph *g, KergsPartitionType method, PetscMPIInt size,
-                                   PetscInt part[], PetscInt seq[], PetscInt *status)
+static PetscErrorCode ComputeParts(KergsPartition p, const GrainGraph *g, KergsPartitionType method, PetscMPIInt size, PetscInt part[],
+                                   PetscInt seq[], PetscInt *status)
 {
   const PetscInt n = g->n;
 
@@ -800,8 +808,8 @@ static PetscErrorCode FinishParts(const GrainGraph *g, KergsPartitionType method
    parts and the new order. METIS can miss the balance on tiny graphs (it may leave a part empty): when its
    imbalance exceeds the tolerance, the geometric partition is taken instead if it is within the tolerance, or if
    METIS left a part empty and the geometric partition does not. */
-static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, const GrainGraph *g, const PetscInt oldranges[],
-                                             PetscMPIInt size, PetscInt order[], PetscInt counts[], PartitionOutcome *out)
+static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, const GrainGraph *g, const PetscInt oldranges[], PetscMPIInt size,
+                                             PetscInt order[], PetscInt counts[], PartitionOutcome *out)
 {
   const PetscInt     n      = g->n;
   PetscBool          dense  = (PetscBool)(2.0 * g->nedges >= KERGS_PARTITION_MIN_DEGREE * n && g->nedges > 0);
@@ -847,8 +855,8 @@ static PetscErrorCode ComputePartitionOnRoot(KergsPartition p, const GrainGraph 
    index of each of its owned disks (*newidx, PetscFree): O(owned disks) per rank, not the whole order. */
 static PetscErrorCode ScatterNewIndices(KergsScene sc, const PetscInt oldranges[], const PetscInt order[], PetscInt **newidx)
 {
-  KergsDisks D;
-  MPI_Comm sccomm;
+  KergsDisks  D;
+  MPI_Comm    sccomm;
   PetscMPIInt rank, size, *counts = NULL, *displs = NULL;
   PetscInt   *old2new = NULL;
 
@@ -874,9 +882,9 @@ static PetscErrorCode ScatterNewIndices(KergsScene sc, const PetscInt oldranges[
 /* Compute a partition with the object's type from the current contacts and renumber (collective). */
 static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts ct)
 {
-  KergsDisks D;
-  const char *scname;
-  PetscInt scstep;
+  KergsDisks       D;
+  const char      *scname;
+  PetscInt         scstep;
   PetscMPIInt      rank, size;
   PetscInt        *order, *counts, *oldranges, *newidx, moved;
   GrainGraph       g;
@@ -942,9 +950,9 @@ PetscErrorCode KergsPartitionApply(KergsPartition p, KergsScene sc, KergsContact
 
 PetscErrorCode KergsPartitionUpdate(KergsPartition p, KergsScene sc, KergsContacts ct, PetscBool *repartitioned)
 {
-  KergsDisks D;
-  const char *scname;
-  PetscInt scstep;
+  KergsDisks             D;
+  const char            *scname;
+  PetscInt               scstep;
   KergsPartitionMeasures m;
   PetscMPIInt            size;
   PetscBool              dense, due, unbalanced;

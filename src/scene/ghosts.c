@@ -1,4 +1,4 @@
-/* kergs scene ghosts: the distributed disk state (DESIGN.md section 6, issue 4).
+/* kergs scene ghosts: the distributed disk state (docs/design.md: parallel layout).
 
    Rank p owns the disks of global indices [dstart, dend), stored first in its local arrays; ghosts follow them:
    copies of the disks of other ranks that may touch an owned disk before the next rebuild of the layer.
@@ -174,13 +174,14 @@ static PetscInt GridCoordinate(const OwnedGrid *g, PetscInt d, PetscReal x)
 
 static PetscErrorCode OwnedGridCreate(KergsScene sc, const PetscReal *box, PetscReal reach, OwnedGrid *g)
 {
-  PetscReal area = 1.0;
+  PetscReal area  = 1.0;
   PetscInt  ncell = 1;
 
   PetscFunctionBeginUser;
   g->side = reach;
   for (PetscInt d = 0; d < KERGS_DIM; d++) area *= PetscMax(box[KERGS_DIM + d] - box[d], reach);
-  if (area / PetscPowRealInt(g->side, KERGS_DIM) > 4.0 * sc->nowned + 16) g->side = PetscPowReal(area / (4.0 * sc->nowned + 16), 1.0 / KERGS_DIM);
+  if (area / PetscPowRealInt(g->side, KERGS_DIM) > 4.0 * sc->nowned + 16)
+    g->side = PetscPowReal(area / (4.0 * sc->nowned + 16), 1.0 / KERGS_DIM);
   for (PetscInt d = 0; d < KERGS_DIM; d++) {
     g->lo[d] = box[d];
     g->n[d]  = 1 + (PetscInt)((box[KERGS_DIM + d] - box[d]) / g->side);
@@ -213,7 +214,8 @@ static PetscBool NearOwned(KergsScene sc, const OwnedGrid *g, const PetscReal x[
 }
 
 /* Keep the received candidates within reach of an owned disk, in their order; recvcount[q] and *nrecv follow. */
-static PetscErrorCode KeepNearCandidates(KergsScene sc, const PetscReal *box, PetscReal reach, PetscMPIInt size, PetscMPIInt recvcount[], DiskRecord *recv, PetscInt *nrecv)
+static PetscErrorCode KeepNearCandidates(KergsScene sc, const PetscReal *box, PetscReal reach, PetscMPIInt size, PetscMPIInt recvcount[],
+                                         DiskRecord *recv, PetscInt *nrecv)
 {
   OwnedGrid g;
   PetscInt  k = 0, kept = 0;
@@ -276,8 +278,8 @@ static PetscErrorCode RebuildGhosts(KergsScene sc)
   PetscCall(PetscFree(send));
   PetscCall(PetscFree(recv));
   PetscCall(PetscFree(boxes));
-  PetscCall(PetscInfo(NULL, "Scene %s: ghost layer %" PetscInt_FMT " built: %" PetscInt_FMT " owned disks, %" PetscInt_FMT " ghosts\n", sc->name,
-                      sc->ghost_rebuilds, sc->nowned, sc->nlocal - sc->nowned));
+  PetscCall(PetscInfo(NULL, "Scene %s: ghost layer %" PetscInt_FMT " built: %" PetscInt_FMT " owned disks, %" PetscInt_FMT " ghosts\n",
+                      sc->name, sc->ghost_rebuilds, sc->nowned, sc->nlocal - sc->nowned));
   PetscFunctionReturn(0);
 }
 
@@ -293,11 +295,11 @@ static PetscErrorCode RefreshGhosts(KergsScene sc)
   for (PetscInt i = 0; i < sc->nowned; i++) {
     PetscReal *s = &root[KERGS_DISK_STATE * i];
     for (PetscInt d = 0; d < KERGS_DIM; d++) {
-      s[d]                         = sc->x[KERGS_DIM * i + d];
+      s[d]                          = sc->x[KERGS_DIM * i + d];
       s[KERGS_DIM + KERGS_NROT + d] = sc->v[KERGS_DIM * i + d];
     }
     for (PetscInt d = 0; d < KERGS_NROT; d++) {
-      s[KERGS_DIM + d]                 = sc->rot[KERGS_NROT * i + d];
+      s[KERGS_DIM + d]                  = sc->rot[KERGS_NROT * i + d];
       s[2 * KERGS_DIM + KERGS_NROT + d] = sc->omega[KERGS_NROT * i + d];
     }
   }
@@ -356,7 +358,8 @@ PetscErrorCode KergsSceneUpdateGhosts(KergsScene sc, PetscBool rebuild)
     PetscReal dmax = 0.0, rmax = 0.0;
     PetscCall(MaxDisplacement(sc, &dmax, &rmax));
     rebuild = (PetscBool)(2.0 * dmax > GhostSkin(sc, rmax));
-  } else rebuild = PETSC_TRUE;
+  } else
+    rebuild = PETSC_TRUE;
   if (rebuild) PetscCall(RebuildGhosts(sc));
   PetscCall(PetscLogEventEnd(KERGS_Exchange, 0, 0, 0, 0));
   PetscFunctionReturn(0);
@@ -388,13 +391,13 @@ PetscErrorCode KergsSceneMigrate(KergsScene sc, const PetscInt newidx[], const P
   PetscCall(PetscMalloc2(size, &sendcount, size, &recvcount));
   ranges[0] = 0;
   for (PetscMPIInt q = 0; q < size; q++) ranges[q + 1] = ranges[q] + counts[q];
-  PetscCheck(ranges[size] == sc->ndisks, sc->comm, PETSC_ERR_ARG_WRONG, "Migration of scene %s: the ranks get %" PetscInt_FMT " disks, not %" PetscInt_FMT,
-             sc->name, ranges[size], sc->ndisks);
+  PetscCheck(ranges[size] == sc->ndisks, sc->comm, PETSC_ERR_ARG_WRONG,
+             "Migration of scene %s: the ranks get %" PetscInt_FMT " disks, not %" PetscInt_FMT, sc->name, ranges[size], sc->ndisks);
   PetscCall(PetscArrayzero(sendcount, size));
   for (PetscInt i = 0; i < sc->nowned; i++) {
     PetscCheck(newidx[i] >= 0 && newidx[i] < sc->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-               "Migration of scene %s: disk %" PetscInt_FMT " gets global index %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")", sc->name,
-               sc->dstart + i, newidx[i], sc->ndisks);
+               "Migration of scene %s: disk %" PetscInt_FMT " gets global index %" PetscInt_FMT ", outside [0, %" PetscInt_FMT ")",
+               sc->name, sc->dstart + i, newidx[i], sc->ndisks);
     sendcount[KergsRangeOwner(ranges, size, newidx[i])]++;
   }
   offset[0] = 0;
@@ -407,8 +410,8 @@ PetscErrorCode KergsSceneMigrate(KergsScene sc, const PetscInt newidx[], const P
   }
   PetscCall(KergsExchangeRecords(sc->comm, sizeof(DiskRecord), sendcount, send, recvcount, &recv, &nrecv));
   PetscCheck(nrecv == counts[rank], PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
-             "Migration of scene %s: rank %d received %" PetscInt_FMT " disks, expected %" PetscInt_FMT " (newidx is not a permutation)", sc->name,
-             rank, nrecv, counts[rank]);
+             "Migration of scene %s: rank %d received %" PetscInt_FMT " disks, expected %" PetscInt_FMT " (newidx is not a permutation)",
+             sc->name, rank, nrecv, counts[rank]);
   /* drop the ghost layer: its disks and its SF describe the old ownership */
   PetscCall(PetscSFDestroy(&sc->ghost_sf));
   sc->dstart = ranges[rank];
@@ -419,7 +422,8 @@ PetscErrorCode KergsSceneMigrate(KergsScene sc, const PetscInt newidx[], const P
   for (PetscInt k = 0; k < nrecv; k++) {
     const PetscInt i = recv[k].gidx - sc->dstart;
     PetscCheck(i >= 0 && i < nrecv && sc->gidx[i] < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
-               "Migration of scene %s: global index %" PetscInt_FMT " received twice or outside rank %d's range (newidx is not a permutation)",
+               "Migration of scene %s: global index %" PetscInt_FMT
+               " received twice or outside rank %d's range (newidx is not a permutation)",
                sc->name, recv[k].gidx, rank);
     UnpackDisk(sc, i, &recv[k]);
   }
@@ -443,8 +447,8 @@ static PetscErrorCode AllGather(KergsScene sc, const void *owned, PetscInt bs, M
   PetscCallMPI(MPI_Allgather(&mine, 1, MPI_INT, counts, 1, MPI_INT, sc->comm));
   displs[0] = 0;
   for (PetscMPIInt q = 1; q < size; q++) displs[q] = displs[q - 1] + counts[q - 1];
-  PetscCheck(displs[size - 1] + counts[size - 1] == bs * sc->ndisks, sc->comm, PETSC_ERR_PLIB, "Scene %s: the ranks own %d values, not %" PetscInt_FMT,
-             sc->name, displs[size - 1] + counts[size - 1], bs * sc->ndisks);
+  PetscCheck(displs[size - 1] + counts[size - 1] == bs * sc->ndisks, sc->comm, PETSC_ERR_PLIB,
+             "Scene %s: the ranks own %d values, not %" PetscInt_FMT, sc->name, displs[size - 1] + counts[size - 1], bs * sc->ndisks);
   /* ranks own increasing ranges of global indices: rank order is global-index order */
   PetscCallMPI(MPI_Allgatherv((void *)owned, mine, type, all, counts, displs, type, sc->comm));
   PetscCall(PetscFree2(counts, displs));

@@ -13,9 +13,9 @@ typedef struct {
   PetscInt   n;
   PetscReal  time;
   PetscReal *x, *v, *rot, *omega, *radius, *material, *id;
-} KergsSampleData;
+} SampleData;
 
-static PetscErrorCode KergsSampleDataFree(KergsSampleData *s)
+static PetscErrorCode SampleDataFree(SampleData *s)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscFree(s->x));
@@ -30,7 +30,7 @@ static PetscErrorCode KergsSampleDataFree(KergsSampleData *s)
 
 /* Rank 0 checks that path is a readable file that HDF5 can open (a truncated or non-HDF5 file fails
    here, quietly), so that PETSc's viewer is only ever given a good file. */
-static PetscErrorCode KergsSampleCheckFile(MPI_Comm comm, const char path[])
+static PetscErrorCode SampleCheckFile(MPI_Comm comm, const char path[])
 {
   char        msg[PETSC_MAX_PATH_LEN + 128] = "";
   PetscMPIInt rank;
@@ -64,8 +64,8 @@ static PetscErrorCode KergsSampleCheckFile(MPI_Comm comm, const char path[])
 }
 
 /* Load /sample/<name> (n blocks of bs reals) into a newly allocated replicated array. */
-static PetscErrorCode KergsSampleLoadField(PetscViewer viewer, MPI_Comm comm, const char path[], const char name[], PetscInt n, PetscInt bs,
-                                           PetscReal **all)
+static PetscErrorCode SampleLoadField(PetscViewer viewer, MPI_Comm comm, const char path[], const char name[], PetscInt n, PetscInt bs,
+                                      PetscReal **all)
 {
   PetscBool          has;
   PetscInt           fbs, fN;
@@ -107,7 +107,7 @@ static PetscErrorCode KergsSampleLoadField(PetscViewer viewer, MPI_Comm comm, co
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSampleLoad(PetscViewer viewer, MPI_Comm comm, const char path[], KergsSampleData *s)
+static PetscErrorCode SampleLoad(PetscViewer viewer, MPI_Comm comm, const char path[], SampleData *s)
 {
   PetscBool has;
 
@@ -122,19 +122,19 @@ static PetscErrorCode KergsSampleLoad(PetscViewer viewer, MPI_Comm comm, const c
   PetscCall(PetscViewerHDF5HasAttribute(viewer, NULL, "time", &has));
   PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute time on %s", path, KERGS_SAMPLE_GROUP);
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "time", PETSC_REAL, NULL, &s->time));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "x", s->n, KERGS_DIM, &s->x));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "v", s->n, KERGS_DIM, &s->v));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "rot", s->n, KERGS_NROT, &s->rot));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "omega", s->n, KERGS_NROT, &s->omega));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "radius", s->n, 1, &s->radius));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "material", s->n, 1, &s->material));
-  PetscCall(KergsSampleLoadField(viewer, comm, path, "id", s->n, 1, &s->id));
+  PetscCall(SampleLoadField(viewer, comm, path, "x", s->n, KERGS_DIM, &s->x));
+  PetscCall(SampleLoadField(viewer, comm, path, "v", s->n, KERGS_DIM, &s->v));
+  PetscCall(SampleLoadField(viewer, comm, path, "rot", s->n, KERGS_NROT, &s->rot));
+  PetscCall(SampleLoadField(viewer, comm, path, "omega", s->n, KERGS_NROT, &s->omega));
+  PetscCall(SampleLoadField(viewer, comm, path, "radius", s->n, 1, &s->radius));
+  PetscCall(SampleLoadField(viewer, comm, path, "material", s->n, 1, &s->material));
+  PetscCall(SampleLoadField(viewer, comm, path, "id", s->n, 1, &s->id));
   PetscCall(PetscViewerHDF5PopGroup(viewer));
   PetscFunctionReturn(0);
 }
 
 /* First non-finite entry of a (n blocks of bs), as a disk index, or -1. */
-static PetscInt KergsFirstNonFinite(const PetscReal *a, PetscInt n, PetscInt bs)
+static PetscInt FirstNonFinite(const PetscReal *a, PetscInt n, PetscInt bs)
 {
   for (PetscInt i = 0; i < n * bs; i++)
     if (PetscIsInfOrNanReal(a[i])) return i / bs;
@@ -143,7 +143,7 @@ static PetscInt KergsFirstNonFinite(const PetscReal *a, PetscInt n, PetscInt bs)
 
 /* Grain ids identify grains (contact persistence, ownership, outputs): two disks with one id would silently lose
    contacts. Names the first repeated id and the two disks that carry it. */
-static PetscErrorCode SampleCheckDistinctIds(MPI_Comm comm, const char path[], const KergsSampleData *s)
+static PetscErrorCode SampleCheckDistinctIds(MPI_Comm comm, const char path[], const SampleData *s)
 {
   PetscInt *ids, *order;
 
@@ -158,14 +158,16 @@ static PetscErrorCode SampleCheckDistinctIds(MPI_Comm comm, const char path[], c
     const PetscInt id = ids[k], first = PetscMin(order[k - 1], order[k]), second = PetscMax(order[k - 1], order[k]);
     if (ids[k - 1] != id) continue;
     PetscCall(PetscFree2(ids, order));
-    SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: disks %" PetscInt_FMT " and %" PetscInt_FMT " have the same grain id %" PetscInt_FMT "; ids must be distinct", path, first, second, id);
+    SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED,
+            "Sample file %s: disks %" PetscInt_FMT " and %" PetscInt_FMT " have the same grain id %" PetscInt_FMT "; ids must be distinct",
+            path, first, second, id);
   }
   PetscCall(PetscFree2(ids, order));
   PetscFunctionReturn(0);
 }
 
 /* Every value finite, radii positive, materials existing in the scene, ids non-negative integers. */
-static PetscErrorCode KergsSampleValidate(KergsScene scene, const char path[], const KergsSampleData *s)
+static PetscErrorCode SampleValidate(KergsScene scene, const char path[], const SampleData *s)
 {
   const struct {
     const char      *name;
@@ -182,7 +184,7 @@ static PetscErrorCode KergsSampleValidate(KergsScene scene, const char path[], c
   PetscFunctionBeginUser;
   PetscCheck(!PetscIsInfOrNanReal(s->time), scene->comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: time is not finite", path);
   for (size_t f = 0; f < sizeof(fields) / sizeof(fields[0]); f++) {
-    PetscInt bad = KergsFirstNonFinite(fields[f].a, s->n, fields[f].bs);
+    PetscInt bad = FirstNonFinite(fields[f].a, s->n, fields[f].bs);
     PetscCheck(bad < 0, scene->comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: %s of disk %" PetscInt_FMT " is not finite", path,
                fields[f].name, bad);
   }
@@ -202,7 +204,7 @@ static PetscErrorCode KergsSampleValidate(KergsScene scene, const char path[], c
 
 /* Hand the disks to the scene (KergsSceneSetDisks allocates and computes masses), then the state it
    does not take: orientations, angular velocities, ids and the clock. */
-static PetscErrorCode KergsSampleApply(KergsScene scene, const KergsSampleData *s)
+static PetscErrorCode SampleApply(KergsScene scene, const SampleData *s)
 {
   PetscInt *material;
 
@@ -228,22 +230,22 @@ static PetscErrorCode KergsSampleApply(KergsScene scene, const KergsSampleData *
 
 PetscErrorCode KergsSampleRead(KergsScene scene, const char path[])
 {
-  MPI_Comm        comm = scene->comm;
-  PetscViewer     viewer;
-  KergsSampleData s = {0};
-  PetscErrorCode  ierr;
+  MPI_Comm       comm = scene->comm;
+  PetscViewer    viewer;
+  SampleData     s = {0};
+  PetscErrorCode ierr;
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
   PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
-  PetscCall(KergsSampleCheckFile(comm, path));
+  PetscCall(SampleCheckFile(comm, path));
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
-  ierr = KergsSampleLoad(viewer, comm, path, &s);
+  ierr = SampleLoad(viewer, comm, path, &s);
   PetscCall(PetscViewerDestroy(&viewer));
-  if (!ierr) ierr = KergsSampleValidate(scene, path, &s);
-  if (!ierr) ierr = KergsSampleApply(scene, &s);
-  PetscCall(KergsSampleDataFree(&s));
+  if (!ierr) ierr = SampleValidate(scene, path, &s);
+  if (!ierr) ierr = SampleApply(scene, &s);
+  PetscCall(SampleDataFree(&s));
   PetscCall(ierr);
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   PetscFunctionReturn(0);

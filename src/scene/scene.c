@@ -437,7 +437,8 @@ PetscErrorCode KergsSceneGetModel(KergsScene scene, PetscBool *frictional, Petsc
 PetscErrorCode KergsSceneSetWallVelocity(KergsScene scene, PetscInt w, const PetscReal v[])
 {
   PetscFunctionBeginUser;
-  PetscCheck(w >= 0 && w < scene->nwalls, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
+  PetscCheck(w >= 0 && w < scene->nwalls, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
   for (PetscInt d = 0; d < KERGS_DIM; d++) scene->walls[w].v[d] = v[d];
   PetscFunctionReturn(0);
 }
@@ -804,8 +805,8 @@ static void GetDiskCheckRecord(KergsScene scene, PetscInt i, DiskCheckRecord *d)
 static PetscErrorCode CheckDisk(MPI_Comm comm, PetscInt nmaterials, const DiskCheckRecord *d)
 {
   PetscFunctionBeginUser;
-  PetscCheck(Finite(d->radius) && d->radius > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Grain %" PetscInt_FMT ": radius %g must be positive and finite",
-             d->id, (double)d->radius);
+  PetscCheck(Finite(d->radius) && d->radius > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Grain %" PetscInt_FMT ": radius %g must be positive and finite", d->id, (double)d->radius);
   for (PetscInt k = 0; k < KERGS_DIM; k++) {
     PetscCheck(Finite(d->x[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": position component %" PetscInt_FMT " is %g", d->id, k,
                (double)d->x[k]);
@@ -959,8 +960,10 @@ PetscErrorCode KergsSceneView(KergsScene scene, PetscViewer viewer)
   PetscCall(PetscViewerASCIIPrintf(viewer, "dt %g, steps %" PetscInt_FMT ", theta %g, gap rule %s, alert distance %g, gravity (%g, %g)\n",
                                    (double)scene->dt, scene->nsteps, (double)scene->theta, KergsGapRules[scene->gaprule],
                                    (double)scene->alert, (double)scene->gravity[0], (double)scene->gravity[1]));
-  PetscCall(PetscViewerASCIIPrintf(
-      viewer, "%s\n", scene->frictional ? (scene->lock_rotation ? "frictional (tangential impulses), rotations locked" : "frictional (tangential impulses, rotations)") : "frictionless (normal impulses only)"));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "%s\n",
+                                   scene->frictional ? (scene->lock_rotation ? "frictional (tangential impulses), rotations locked"
+                                                                             : "frictional (tangential impulses, rotations)")
+                                                     : "frictionless (normal impulses only)"));
   PetscCall(SceneViewMaterials(scene, viewer));
   for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(SceneViewWall(viewer, &scene->walls[w]));
   PetscCall(PetscViewerASCIIPopTab(viewer));

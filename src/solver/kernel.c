@@ -1,5 +1,5 @@
 /* kergs kernel: the orthogonal projector onto ker H_f, P = I - H_f^T (H_f H_f^T)^+ H_f, and Z = omega P
-   (DESIGN.md section 5; the paper's Algorithm 6 needs Z's products and diagonal blocks, never Z itself).
+   (docs/design.md: the kernel projector; the paper's Algorithm 6 needs Z's products and diagonal blocks, never Z itself).
 
    Per step (KergsKernelSetUp):
    1. Elimination (the paper's section on the 500-disk sample). Bodies are the disks and the free walls
@@ -70,7 +70,9 @@ PetscErrorCode KergsKernelSetFromOptions(KergsKernel k)
                              "entry, off-diagonal entries 0)",
                              "KergsKernelComputeDiagonalBlocks", KergsKernelDiags, (PetscEnum)k->diagtype, (PetscEnum *)&k->diagtype,
                              NULL));
-  PetscCall(PetscOptionsBool("-kernel_active_only", "Kernel of H_f over the active contacts only (default: every potential contact, as in Algorithm 1)", "KergsKernelSetActive", k->active_only, &k->active_only, NULL));
+  PetscCall(PetscOptionsBool("-kernel_active_only",
+                             "Kernel of H_f over the active contacts only (default: every potential contact, as in Algorithm 1)",
+                             "KergsKernelSetActive", k->active_only, &k->active_only, NULL));
   PetscCall(PetscOptionsInt("-kernel_diag_batch", "Exact diagonal: contacts per rank in one block of right-hand sides",
                             "KergsKernelComputeDiagonalBlocks", k->diag_batch, &k->diag_batch, NULL));
   PetscCall(PetscOptionsReal("-kernel_null_pivot_tol",
@@ -215,8 +217,8 @@ static PetscErrorCode GatherContactBodies(KergsKernel k, const KernelInput *in, 
   PetscCallMPI(MPI_Allgather(&nmine, 1, MPI_INT, counts, 1, MPI_INT, k->comm));
   displs[0] = 0;
   for (PetscMPIInt p = 0; p < size; p++) displs[p + 1] = displs[p] + counts[p];
-  PetscCheck(displs[size] == 2 * in->nglobal, k->comm, PETSC_ERR_PLIB,
-             "Kernel: %d contact ends gathered for %" PetscInt_FMT " contacts", displs[size], in->nglobal);
+  PetscCheck(displs[size] == 2 * in->nglobal, k->comm, PETSC_ERR_PLIB, "Kernel: %d contact ends gathered for %" PetscInt_FMT " contacts",
+             displs[size], in->nglobal);
   PetscCallMPI(MPI_Allgatherv(mine, nmine, MPIU_INT, *ends, counts, displs, MPIU_INT, k->comm));
   PetscCall(PetscFree2(counts, displs));
   PetscCall(PetscFree(mine));
@@ -288,8 +290,10 @@ static PetscErrorCode Eliminate(KergsKernel k, const KernelInput *in)
   }
   k->inactive_contacts = 0;
   for (PetscInt c = 0; c < in->nglobal; c++) {
-    if (ends[2 * c] < 0) k->inactive_contacts++;
-    else if (!alive[c]) k->peeled_contacts++;
+    if (ends[2 * c] < 0)
+      k->inactive_contacts++;
+    else if (!alive[c])
+      k->peeled_contacts++;
   }
   /* rows of the peeled bodies minus the rank their contacts carry (ncomp each) */
   k->deficiency_peeled = peeled_dofs - nc * k->peeled_contacts;
@@ -586,11 +590,9 @@ static PetscErrorCode ChooseSolver(KergsKernel k, const char **solver)
   *solver = MATSOLVERMUMPS;
   if (isauto || ischolmod) {
     if (size == 1) PetscCall(MatGetFactorAvailable(k->A, MATSOLVERCHOLMOD, MAT_FACTOR_CHOLESKY, &avail));
-    if (avail)
-      *solver = MATSOLVERCHOLMOD;
-    else if (ischolmod)
-      SETERRQ(k->comm, PETSC_ERR_SUP,
-              "-kernel_solver cholmod: this PETSc has no CHOLMOD Cholesky for AIJ matrices; use -kernel_solver mumps");
+    PetscCheck(avail || !ischolmod, k->comm, PETSC_ERR_SUP,
+               "-kernel_solver cholmod: this PETSc has no CHOLMOD Cholesky for AIJ matrices; use -kernel_solver mumps");
+    if (avail) *solver = MATSOLVERCHOLMOD;
   }
   PetscFunctionReturn(0);
 }

@@ -1,4 +1,4 @@
-/* kergs law: the exact one-contact solve of the 2D Signorini-Coulomb law (DESIGN.md section 3).
+/* kergs law: the exact one-contact solve of the 2D Signorini-Coulomb law (docs/design.md: the per-step problem).
    v = Waa r + b. The solution is found by cases (open, stick, slip with v_t > 0, slip with v_t < 0):
    each case fixes which relations are equalities, which gives a closed-form candidate, accepted when
    it satisfies the remaining inequalities. No iteration, no PETSc calls: this runs in the sweep's
@@ -53,8 +53,8 @@ PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const Pe
 /* Fallback when rounding rejects every case (the exact solution lies on a case boundary) or the block is
    degenerate: among the computed candidates, projected on the cone, keep the smallest natural residual.
    Any rho > 0 has the same zeros; 1 / max |W_ij| keeps rho v of the order of r even when W_nn is tiny. */
-static KergsLawStatus SolveCoulomb2Fallback(const PetscReal W[], const PetscReal b[], PetscReal mu, PetscInt ncand, PetscReal cand[][KERGS_MAXCOMP],
-                                            const KergsLawStatus status[], PetscReal r[])
+static KergsLawStatus SolveCoulomb2Fallback(const PetscReal W[], const PetscReal b[], PetscReal mu, PetscInt ncand,
+                                            PetscReal cand[][KERGS_MAXCOMP], const KergsLawStatus status[], PetscReal r[])
 {
   const PetscReal wmax = PetscMax(PetscMax(PetscAbsReal(W[0]), PetscAbsReal(W[1])), PetscMax(PetscAbsReal(W[2]), PetscAbsReal(W[3])));
   const PetscReal rho  = wmax > 0 ? 1.0 / wmax : 1.0;

@@ -3,28 +3,28 @@
    set, the scaling of eta and epsilon, and the DOF-space solve of Algorithms 4 and 5. */
 #include <kergs/private/predictorimpl.h>
 
-static PetscFunctionList KergsPredictorList = NULL;
+static PetscFunctionList PredictorList = NULL;
 
 PetscErrorCode KergsPredictorRegister(const char name[], PetscErrorCode (*create)(KergsPredictor))
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscFunctionListAdd(&KergsPredictorList, name, create));
+  PetscCall(PetscFunctionListAdd(&PredictorList, name, create));
   PetscFunctionReturn(0);
 }
 
 /* Forget the registry at PetscFinalize (PETSc may be initialized again). */
-static PetscErrorCode KergsPredictorFinalizePackage(void)
+static PetscErrorCode PredictorFinalizePackage(void)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscFunctionListDestroy(&KergsPredictorList));
+  PetscCall(PetscFunctionListDestroy(&PredictorList));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsPredictorRegisterAll(void)
+static PetscErrorCode PredictorRegisterAll(void)
 {
   PetscFunctionBeginUser;
-  if (KergsPredictorList) PetscFunctionReturn(0);
-  PetscCall(PetscRegisterFinalize(KergsPredictorFinalizePackage));
+  if (PredictorList) PetscFunctionReturn(0);
+  PetscCall(PetscRegisterFinalize(PredictorFinalizePackage));
   PetscCall(KergsPredictorRegister(KERGS_PREDICTOR_NONE, KergsPredictorCreate_None));
   PetscCall(KergsPredictorRegister(KERGS_PREDICTOR_LINEAR, KergsPredictorCreate_Linear));
   PetscCall(KergsPredictorRegister(KERGS_PREDICTOR_UNILATERAL, KergsPredictorCreate_Unilateral));
@@ -37,7 +37,7 @@ PetscErrorCode KergsPredictorCreate(MPI_Comm comm, KergsPredictor *predictor)
   KergsPredictor p;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsPredictorRegisterAll());
+  PetscCall(PredictorRegisterAll());
   PetscCall(KergsInitializePackage());
   PetscCall(PetscNew(&p));
   p->comm      = comm;
@@ -55,7 +55,7 @@ PetscErrorCode KergsPredictorSetType(KergsPredictor p, KergsPredictorType type)
   PetscErrorCode (*create)(KergsPredictor);
 
   PetscFunctionBeginUser;
-  PetscCall(PetscFunctionListFind(KergsPredictorList, type, &create));
+  PetscCall(PetscFunctionListFind(PredictorList, type, &create));
   PetscCheck(create, p->comm, PETSC_ERR_ARG_UNKNOWN_TYPE,
              "Unknown -predictor_type %s (registered: none, linear, unilateral, elastic; see -help)", type);
   if (p->ops.destroy) PetscCall((*p->ops.destroy)(p));
@@ -79,7 +79,7 @@ PetscErrorCode KergsPredictorSetFromOptions(KergsPredictor p)
   PetscCall(
       PetscOptionsFList("-predictor_type",
                         "Prediction r~ of the impulses: none, linear (Algorithm 4), unilateral (exact frictionless), elastic (Algorithm 5)",
-                        "KergsPredictorSetType", KergsPredictorList, type, type, sizeof(type), &set));
+                        "KergsPredictorSetType", PredictorList, type, type, sizeof(type), &set));
   if (!p->ops.predict || set) PetscCall(KergsPredictorSetType(p, type));
   /* the parameters of linear and elastic are fields of every predictor, so that -help always lists them */
   PetscCall(PetscOptionsReal(
@@ -130,8 +130,7 @@ PetscErrorCode KergsPredictorCreateKSP(KergsPredictor p)
 }
 
 /* Local offsets (into the layout of in->r) of the normal components of the active local contacts. */
-static PetscErrorCode ActiveNormalOffsets(const KergsPredictorInput *in, const PetscBool *active, PetscInt *nact,
-                                          PetscInt **offsets)
+static PetscErrorCode ActiveNormalOffsets(const KergsPredictorInput *in, const PetscBool *active, PetscInt *nact, PetscInt **offsets)
 {
   PetscFunctionBeginUser;
   *nact = 0;
@@ -155,7 +154,8 @@ static PetscErrorCode AssembleK(const KergsPredictorInput *in, Mat A, PetscReal 
   PetscFunctionBeginUser;
   PetscCall(MatTransposeMatMult(A, A, MAT_INITIAL_MATRIX, PETSC_DEFAULT, K));
   PetscCall(MatScale(*K, c));
-  PetscCall(MatCreateAIJ(PetscObjectComm((PetscObject)A), in->L.nfree_local, in->L.nfree_local, in->L.nfree, in->L.nfree, 1, NULL, 0, NULL, &Mmat));
+  PetscCall(MatCreateAIJ(PetscObjectComm((PetscObject)A), in->L.nfree_local, in->L.nfree_local, in->L.nfree, in->L.nfree, 1, NULL, 0, NULL,
+                         &Mmat));
   PetscCall(VecGetOwnershipRange(Mdiag, &lo, &hi));
   {
     const PetscScalar *m;
@@ -173,7 +173,7 @@ static PetscErrorCode AssembleK(const KergsPredictorInput *in, Mat A, PetscReal 
 }
 
 /* Solve K V~ = b with p->ksp; the reason is reduced over ranks (a failed factorization may be flagged on one
-   rank only) and the solution must be finite: MUMPS failures are otherwise silent (TOOLCHAIN.md). */
+   rank only) and the solution must be finite: MUMPS failures are otherwise silent (docs/design.md: toolchain notes). */
 static PetscErrorCode SolveK(KergsPredictor p, Mat K, Vec b, Vec x)
 {
   KSPConvergedReason reason;
@@ -226,8 +226,8 @@ static PetscErrorCode SolveK(KergsPredictor p, Mat K, Vec b, Vec x)
 /* Algorithms 4 and 5 in one form (predictor.h): with A = D H_f^T restricted to the active normal rows,
      (M + c A^T A) V~ = R^d + M V_f^- - A^T q,   r~_n = -(q + c A V~).
    Linear: c = dt/eta, q = c H_g^T V_g^+; elastic: c = theta dt^2/eps, q = (dt/eps)(g^- + ...) (elastic.c). */
-PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor p, const KergsPredictorInput *in, const PetscBool *active,
-                                              PetscReal c, Vec q, Vec rtilde)
+PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor p, const KergsPredictorInput *in, const PetscBool *active, PetscReal c, Vec q,
+                                              Vec rtilde)
 {
   PetscInt           nact, *off, cstart, cend, *rows;
   IS                 isrow, iscol;
@@ -292,8 +292,7 @@ PetscErrorCode KergsPredictorSolveRegularised(KergsPredictor p, const KergsPredi
 
 /* Active set (the caller's, or g^- <= 0), its global count, and the mean W_nn over it, which scales
    relative eta and epsilon (predictor.h). */
-static PetscErrorCode ActiveAndScale(KergsPredictor p, const KergsPredictorInput *in,
-                                     const PetscBool *active, PetscBool *act)
+static PetscErrorCode ActiveAndScale(KergsPredictor p, const KergsPredictorInput *in, const PetscBool *active, PetscBool *act)
 {
   Vec                diag;
   const PetscScalar *d;
@@ -333,7 +332,8 @@ static PetscErrorCode GetPredictorInput(KergsScene scene, KergsContacts contacts
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsPredictorPredict(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops, const PetscBool *active, Vec rtilde)
+PetscErrorCode KergsPredictorPredict(KergsPredictor p, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+                                     const PetscBool *active, Vec rtilde)
 {
   PetscLogDouble      t0, t1;
   PetscInt            m;

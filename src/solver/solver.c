@@ -5,16 +5,17 @@
 
 const char *const KergsCriteria[] = {"quad", "maxm", "natural", "KergsCriterion", "KERGS_CRITERION_", NULL};
 
-static PetscFunctionList KergsSolverList = NULL;
+static PetscFunctionList SolverList = NULL;
 #define KERGS_SOLVER_MAXTYPES 16
-static char     KergsSolverNames[KERGS_SOLVER_MAXTYPES][64]; /* the registered names, in order, for -help */
-static PetscInt KergsSolverNumTypes = 0;
+static char     SolverNames[KERGS_SOLVER_MAXTYPES][64]; /* the registered names, in order, for -help */
+static PetscInt SolverNumTypes = 0;
 
 PetscErrorCode KergsSolverRegister(const char name[], PetscErrorCode (*create)(KergsSolver))
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscFunctionListAdd(&KergsSolverList, name, create));
-  if (KergsSolverNumTypes < KERGS_SOLVER_MAXTYPES) PetscCall(PetscStrncpy(KergsSolverNames[KergsSolverNumTypes++], name, sizeof(KergsSolverNames[0])));
+  PetscCall(PetscFunctionListAdd(&SolverList, name, create));
+  if (SolverNumTypes < KERGS_SOLVER_MAXTYPES)
+    PetscCall(PetscStrncpy(SolverNames[SolverNumTypes++], name, sizeof(SolverNames[0])));
   PetscFunctionReturn(0);
 }
 
@@ -22,15 +23,15 @@ PetscErrorCode KergsSolverRegister(const char name[], PetscErrorCode (*create)(K
 static PetscErrorCode SolverFinalizePackage(void)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscFunctionListDestroy(&KergsSolverList));
-  KergsSolverNumTypes = 0;
+  PetscCall(PetscFunctionListDestroy(&SolverList));
+  SolverNumTypes = 0;
   PetscFunctionReturn(0);
 }
 
 static PetscErrorCode SolverRegisterAll(void)
 {
   PetscFunctionBeginUser;
-  if (KergsSolverList) PetscFunctionReturn(0);
+  if (SolverList) PetscFunctionReturn(0);
   PetscCall(PetscRegisterFinalize(SolverFinalizePackage));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGS, KergsSolverCreate_NLGS));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLKERGS, KergsSolverCreate_NLKerGS));
@@ -59,7 +60,7 @@ PetscErrorCode KergsSolverSetType(KergsSolver s, KergsSolverType type)
   PetscErrorCode (*create)(KergsSolver);
 
   PetscFunctionBeginUser;
-  PetscCall(PetscFunctionListFind(KergsSolverList, type, &create));
+  PetscCall(PetscFunctionListFind(SolverList, type, &create));
   PetscCheck(create, s->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "Unknown -solver_type %s (see -help for the registered types)", type);
   if (s->ops.destroy) PetscCall((*s->ops.destroy)(s));
   PetscCall(PetscMemzero(&s->ops, sizeof(s->ops)));
@@ -78,15 +79,21 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
   PetscFunctionBeginUser;
   if (s->type[0]) PetscCall(PetscStrncpy(type, s->type, sizeof(type)));
   PetscOptionsBegin(s->comm, NULL, "Contact solver options", NULL);
-  PetscCall(PetscOptionsFList("-solver_type", "Solver of the per-step contact problem", "KergsSolverSetType", KergsSolverList, type, type, sizeof(type), &set));
-  PetscCall(PetscOptionsInt("-solver_max_it", "Maximum number of sweeps per step (the paper caps at 150)", "", s->max_it, &s->max_it, NULL));
+  PetscCall(PetscOptionsFList("-solver_type", "Solver of the per-step contact problem", "KergsSolverSetType", SolverList, type, type,
+                              sizeof(type), &set));
+  PetscCall(
+      PetscOptionsInt("-solver_max_it", "Maximum number of sweeps per step (the paper caps at 150)", "", s->max_it, &s->max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_tol", "Tolerance of the convergence criterion", "", s->tol, &s->tol, NULL));
-  PetscCall(PetscOptionsEnum("-solver_criterion", "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, LMGC90 Maxm), natural (natural-map residual, Siconos)", "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
+  PetscCall(PetscOptionsEnum("-solver_criterion",
+                             "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, "
+                             "LMGC90 Maxm), natural (natural-map residual, Siconos)",
+                             "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
   if (!s->ops.solve || set) PetscCall(KergsSolverSetType(s, type));
   if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
   PetscOptionsEnd();
   PetscCheck(s->max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_max_it %" PetscInt_FMT " must be at least 1", s->max_it);
-  PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number", (double)s->tol);
+  PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number",
+             (double)s->tol);
   PetscFunctionReturn(0);
 }
 
@@ -167,16 +174,18 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
     }
   }
   PetscCall(PetscTime(&t1));
-  stats->sweep_seconds   = t1 - t0;
+  stats->sweep_seconds = t1 - t0;
   {
     PetscLogDouble compute;
     PetscCall(KergsSweepGetComputeSeconds(s->iterate_sweep ? s->iterate_sweep : s->sweep, &compute));
     stats->compute_seconds = compute;
   }
-  stats->criterion     = value;
+  stats->criterion = value;
   /* the natural criterion has just computed the residual (and v) of the final r */
-  if (s->criterion == KERGS_CRITERION_NATURAL && stats->iterations > 0) stats->residual = value;
-  else PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &stats->residual));
+  if (s->criterion == KERGS_CRITERION_NATURAL && stats->iterations > 0)
+    stats->residual = value;
+  else
+    PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &stats->residual));
   PetscFunctionReturn(0);
 }
 
@@ -204,7 +213,8 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
 PetscErrorCode KergsSolverView(KergsSolver s, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact solver: %s, at most %" PetscInt_FMT " sweeps, criterion %s < %g\n", s->type, s->max_it, KergsCriteria[s->criterion], (double)s->tol));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact solver: %s, at most %" PetscInt_FMT " sweeps, criterion %s < %g\n", s->type, s->max_it,
+                                   KergsCriteria[s->criterion], (double)s->tol));
   if (s->ops.view) {
     PetscCall(PetscViewerASCIIPushTab(viewer));
     PetscCall((*s->ops.view)(s, viewer));
@@ -228,13 +238,13 @@ PetscErrorCode KergsSolverPrintHelpAllTypes(MPI_Comm comm)
 {
   PetscFunctionBeginUser;
   PetscCall(SolverRegisterAll());
-  for (PetscInt t = 0; t < KergsSolverNumTypes; t++) {
+  for (PetscInt t = 0; t < SolverNumTypes; t++) {
     KergsSolver s;
     PetscCall(KergsSolverCreate(comm, &s));
-    PetscCall(KergsSolverSetType(s, KergsSolverNames[t]));
+    PetscCall(KergsSolverSetType(s, SolverNames[t]));
     if (s->ops.setfromoptions) {
       PetscOptionsBegin(comm, NULL, "Contact solver type options", NULL);
-      PetscOptionsHeadBegin(PetscOptionsObject, KergsSolverNames[t]);
+      PetscOptionsHeadBegin(PetscOptionsObject, SolverNames[t]);
       PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
       PetscOptionsEnd();
     }
@@ -246,7 +256,8 @@ PetscErrorCode KergsSolverPrintHelpAllTypes(MPI_Comm comm)
 PetscErrorCode KergsSolveStatsAdd(KergsSolveStats *st, const char name[], PetscReal value)
 {
   PetscFunctionBeginUser;
-  PetscCheck(st->nextra < KERGS_SOLVE_MAXEXTRA, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KergsSolveStatsAdd: more than %d figures (%s)", KERGS_SOLVE_MAXEXTRA, name);
+  PetscCheck(st->nextra < KERGS_SOLVE_MAXEXTRA, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KergsSolveStatsAdd: more than %d figures (%s)",
+             KERGS_SOLVE_MAXEXTRA, name);
   PetscCall(PetscStrncpy(st->extra[st->nextra].name, name, sizeof(st->extra[0].name)));
   st->extra[st->nextra++].value = value;
   PetscFunctionReturn(0);
@@ -255,7 +266,8 @@ PetscErrorCode KergsSolveStatsAdd(KergsSolveStats *st, const char name[], PetscR
 PetscErrorCode KergsSolveStatsAddText(KergsSolveStats *st, const char name[], const char value[])
 {
   PetscFunctionBeginUser;
-  PetscCheck(st->ntext < KERGS_SOLVE_MAXTEXT, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KergsSolveStatsAddText: more than %d texts (%s)", KERGS_SOLVE_MAXTEXT, name);
+  PetscCheck(st->ntext < KERGS_SOLVE_MAXTEXT, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KergsSolveStatsAddText: more than %d texts (%s)",
+             KERGS_SOLVE_MAXTEXT, name);
   PetscCall(PetscStrncpy(st->text[st->ntext].name, name, sizeof(st->text[0].name)));
   PetscCall(PetscStrncpy(st->text[st->ntext++].value, value, sizeof(st->text[0].value)));
   PetscFunctionReturn(0);

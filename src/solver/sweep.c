@@ -1,5 +1,5 @@
-/* kergs sweep: one non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2, DESIGN.md sections 4
-   and 6). The sweep reads W's block CSR arrays directly: one block row per contact, blocks W_alpha,beta of
+/* kergs sweep: one non-linear Gauss-Seidel sweep over a rank's contacts (Algorithm 2; docs/design.md: algorithms,
+   parallel layout). The sweep reads W's block CSR arrays directly: one block row per contact, blocks W_alpha,beta of
    ncomp x ncomp (BAIJ, each block stored column by column; AIJ is the case ncomp = 1). Inside a rank it is Gauss-Seidel (contact alpha sees
    the impulses already updated in this sweep); across ranks it is Jacobi: the impulses of other ranks'
    contacts are scattered once per sweep into rghost and enter through Ao rghost, a correction kept for the few rows
@@ -17,9 +17,9 @@
 /* The block kernels are specialised by inlining with a constant number of components (1 or 2); the compiler's
    heuristics alone do not inline the sweep loop into its two call sites. */
 #if PetscHasAttribute(always_inline)
-  #define KERGS_ALWAYS_INLINE __attribute__((always_inline))
+#define KERGS_ALWAYS_INLINE __attribute__((always_inline))
 #else
-  #define KERGS_ALWAYS_INLINE
+#define KERGS_ALWAYS_INLINE
 #endif
 
 PetscErrorCode KergsSweepCreate(MPI_Comm comm, KergsSweep *sweep)
@@ -35,7 +35,8 @@ PetscErrorCode KergsSweepCreate(MPI_Comm comm, KergsSweep *sweep)
    [ia[a], ia[a+1]), block j has block column ja[j] and its bs*bs values at a + j*bs*bs. For BAIJ (blocked)
    the block-compressed row structure and the value array (column-major blocks); for AIJ the plain CSR,
    not inode-compressed. */
-static PetscErrorCode GetBlockCSR(Mat A, PetscBool blocked, PetscBool upper, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
+static PetscErrorCode GetBlockCSR(Mat A, PetscBool blocked, PetscBool upper, const PetscInt **ia, const PetscInt **ja,
+                                  const PetscScalar **a)
 {
   PetscInt     nrow;
   PetscBool    done;
@@ -43,18 +44,20 @@ static PetscErrorCode GetBlockCSR(Mat A, PetscBool blocked, PetscBool upper, con
 
   PetscFunctionBeginUser;
   PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, blocked, &nrow, ia, ja, &done));
-  PetscCheck(done, PetscObjectComm((PetscObject)A), PETSC_ERR_SUP, "nlgs.c: MatGetRowIJ cannot give the CSR arrays of W's local block");
+  PetscCheck(done, PetscObjectComm((PetscObject)A), PETSC_ERR_SUP, "sweep.c: MatGetRowIJ cannot give the CSR arrays of W's local block");
   if (upper) {
     PetscCall(MatSeqSBAIJGetArray(A, &v));
     *a = v;
   } else if (blocked) {
     PetscCall(MatSeqBAIJGetArray(A, &v));
     *a = v;
-  } else PetscCall(MatSeqAIJGetArrayRead(A, a));
+  } else
+    PetscCall(MatSeqAIJGetArrayRead(A, a));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode RestoreBlockCSR(Mat A, PetscBool blocked, PetscBool upper, const PetscInt **ia, const PetscInt **ja, const PetscScalar **a)
+static PetscErrorCode RestoreBlockCSR(Mat A, PetscBool blocked, PetscBool upper, const PetscInt **ia, const PetscInt **ja,
+                                      const PetscScalar **a)
 {
   PetscInt     nrow;
   PetscBool    done;
@@ -62,9 +65,12 @@ static PetscErrorCode RestoreBlockCSR(Mat A, PetscBool blocked, PetscBool upper,
 
   PetscFunctionBeginUser;
   if (*a) {
-    if (upper) PetscCall(MatSeqSBAIJRestoreArray(A, &v));
-    else if (blocked) PetscCall(MatSeqBAIJRestoreArray(A, &v));
-    else PetscCall(MatSeqAIJRestoreArrayRead(A, a));
+    if (upper)
+      PetscCall(MatSeqSBAIJRestoreArray(A, &v));
+    else if (blocked)
+      PetscCall(MatSeqBAIJRestoreArray(A, &v));
+    else
+      PetscCall(MatSeqAIJRestoreArrayRead(A, a));
   }
   PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, blocked, &nrow, ia, ja, &done));
   *a = NULL;
@@ -94,8 +100,8 @@ PetscErrorCode KergsSweepReset(KergsSweep s)
   s->norows = 0;
   PetscCall(PetscFree(s->dsplit));
   PetscCall(MatDestroy(&s->W));
-  s->mu     = NULL;
-  s->active = NULL;
+  s->mu      = NULL;
+  s->active  = NULL;
   s->n       = 0;
   s->ncomp   = 0;
   s->blocked = PETSC_FALSE;
@@ -115,7 +121,8 @@ PetscErrorCode KergsSweepDestroy(KergsSweep *sweep)
 /* W_aa of local contact a, row-major as the law takes it, into w (ncomp*ncomp). With upper storage W_aa is the first
    block of row a (checked at set-up) and is read there, stored column by column (entry (c, e) at c + e*nc); with whole
    storage from the copy Wdiag made at set-up. Inlined with a constant nc. */
-static inline KERGS_ALWAYS_INLINE void DiagonalBlock(const PetscInt nc, PetscInt a, const PetscInt *ai, const PetscScalar *aa, const PetscReal *Wdiag, PetscReal *w)
+static inline KERGS_ALWAYS_INLINE void DiagonalBlock(const PetscInt nc, PetscInt a, const PetscInt *ai, const PetscScalar *aa,
+                                                     const PetscReal *Wdiag, PetscReal *w)
 {
   PetscInt c, e;
 
@@ -147,14 +154,16 @@ static PetscErrorCode LocateDiagonalBlocks(KergsSweep s)
   if (s->upper) {
     for (a = 0; a < s->n; a++) {
       j = s->ai[a];
-      PetscCheck(j < s->ai[a + 1] && s->aj[j] == a, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "KergsSweepSetUp: W's diagonal block of local contact %" PetscInt_FMT " is not stored", a);
+      PetscCheck(j < s->ai[a + 1] && s->aj[j] == a, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+                 "KergsSweepSetUp: W's diagonal block of local contact %" PetscInt_FMT " is not stored", a);
     }
     PetscFunctionReturn(0);
   }
   PetscCall(PetscCalloc1(s->n * bs2, &s->Wdiag));
   PetscCall(PetscMalloc1(2 * s->n, &s->dsplit));
   for (a = 0; a < s->n; a++) {
-    for (j = s->ai[a]; j < s->ai[a + 1] && s->aj[j] < a; j++) { }
+    for (j = s->ai[a]; j < s->ai[a + 1] && s->aj[j] < a; j++) {
+    }
     s->dsplit[2 * a] = j;
     if (j < s->ai[a + 1] && s->aj[j] == a) {
       for (c = 0; c < nc; c++)
@@ -209,9 +218,11 @@ static PetscErrorCode CheckStorage(KergsSweep s, Mat W, PetscInt ncomp, PetscBoo
   *ismpi   = (PetscBool)(mpiaij || mpibaij || mpisbaij);
   *upper   = (PetscBool)(seqsbaij || mpisbaij);
   *blocked = (PetscBool)(seqbaij || mpibaij || *upper);
-  PetscCheck(*blocked || seqaij || mpiaij, s->comm, PETSC_ERR_SUP, "KergsSweepSetUp: W has type %s; the sweep needs an assembled (seq|mpi)(s)baij or (seq|mpi)aij matrix", type);
+  PetscCheck(*blocked || seqaij || mpiaij, s->comm, PETSC_ERR_SUP,
+             "KergsSweepSetUp: W has type %s; the sweep needs an assembled (seq|mpi)(s)baij or (seq|mpi)aij matrix", type);
   PetscCheck(*blocked ? bs == ncomp : ncomp == 1, s->comm, PETSC_ERR_SUP,
-             "KergsSweepSetUp: W of type %s, block size %" PetscInt_FMT ", for %" PetscInt_FMT " components per contact: the sweep needs (s)baij with block size ncomp (aij for one component)",
+             "KergsSweepSetUp: W of type %s, block size %" PetscInt_FMT ", for %" PetscInt_FMT
+             " components per contact: the sweep needs (s)baij with block size ncomp (aij for one component)",
              type, bs, ncomp);
   PetscFunctionReturn(0);
 }
@@ -229,11 +240,13 @@ static PetscErrorCode CopyOffProcessRow(KergsSweep s, PetscInt row, PetscInt a, 
 
   PetscFunctionBeginUser;
   PetscCall(MatGetRow(s->W, row, &ncols, &cols, &vals));
-  for (k = 0; k < ncols && cols[k] < cend; k++) { }
-  PetscCheck((ncols - k) == nc * (s->ubi[a + 1] - s->ubi[a]), PETSC_COMM_SELF, PETSC_ERR_PLIB, "KergsSweepSetUp: W's row %" PetscInt_FMT " is not made of whole blocks", row);
+  for (k = 0; k < ncols && cols[k] < cend; k++) {
+  }
+  PetscCheck((ncols - k) == nc * (s->ubi[a + 1] - s->ubi[a]), PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "KergsSweepSetUp: W's row %" PetscInt_FMT " is not made of whole blocks", row);
   for (j = 0; k < ncols; k++, j++) {
-    pos         = s->ubi[a] + j / nc;
-    s->ubj[pos] = cols[k] / nc;
+    pos                                             = s->ubi[a] + j / nc;
+    s->ubj[pos]                                     = cols[k] / nc;
     s->uba[pos * nc * nc + (cols[k] % nc) * nc + c] = vals[k];
   }
   PetscCall(MatRestoreRow(s->W, row, &ncols, &cols, &vals));
@@ -291,8 +304,10 @@ static PetscErrorCode SetUpParts(KergsSweep s)
     PetscCall(PetscFree(ucolmap));
     PetscFunctionReturn(0);
   }
-  if (s->blocked) PetscCall(MatMPIBAIJGetSeqBAIJ(s->W, &s->Ad, &s->Ao, &colmap));
-  else PetscCall(MatMPIAIJGetSeqAIJ(s->W, &s->Ad, &s->Ao, &colmap));
+  if (s->blocked)
+    PetscCall(MatMPIBAIJGetSeqBAIJ(s->W, &s->Ad, &s->Ao, &colmap));
+  else
+    PetscCall(MatMPIAIJGetSeqAIJ(s->W, &s->Ad, &s->Ao, &colmap));
   PetscCall(GetBlockCSR(s->Ao, s->blocked, PETSC_FALSE, &s->bi, &s->bj, &s->ba));
   PetscCall(MatGetSize(s->Ao, NULL, &ncol));
   PetscCall(CreateGhostScatter(s, ncol / s->ncomp, colmap));
@@ -339,14 +354,16 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
 
   PetscFunctionBeginUser;
   PetscCall(KergsSweepReset(s));
-  if (ncomp < 1 || ncomp > KERGS_MAXCOMP)
-    SETERRQ(s->comm, PETSC_ERR_ARG_OUTOFRANGE, "KergsSweepSetUp: %" PetscInt_FMT " components per contact, expected 1 to %d", ncomp, KERGS_MAXCOMP);
+  PetscCheck(ncomp >= 1 && ncomp <= KERGS_MAXCOMP, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "KergsSweepSetUp: %" PetscInt_FMT " components per contact, expected 1 to %d", ncomp, KERGS_MAXCOMP);
   PetscCall(CheckStorage(s, W, ncomp, &ismpi, &blocked, &upper));
   PetscCall(MatGetLocalSize(W, &m, &mcol));
   PetscCall(MatGetOwnershipRange(W, &rstart, NULL));
   PetscCall(MatGetOwnershipRangeColumn(W, &cstart, NULL));
-  if (m != mcol || rstart != cstart) SETERRQ(s->comm, PETSC_ERR_ARG_SIZ, "KergsSweepSetUp: W's local rows and columns must be the same contact components");
-  if (m % ncomp) SETERRQ(s->comm, PETSC_ERR_ARG_SIZ, "KergsSweepSetUp: %" PetscInt_FMT " local rows of W is not a multiple of %" PetscInt_FMT " components", m, ncomp);
+  PetscCheck(m == mcol && rstart == cstart, s->comm, PETSC_ERR_ARG_SIZ,
+             "KergsSweepSetUp: W's local rows and columns must be the same contact components");
+  PetscCheck(m % ncomp == 0, s->comm, PETSC_ERR_ARG_SIZ,
+             "KergsSweepSetUp: %" PetscInt_FMT " local rows of W is not a multiple of %" PetscInt_FMT " components", m, ncomp);
 
   PetscCall(PetscObjectReference((PetscObject)W));
   s->W       = W;
@@ -356,8 +373,10 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
   s->upper   = upper;
   s->mu      = (PetscReal *)mu;
   s->active  = (PetscBool *)active;
-  if (ismpi) PetscCall(SetUpParts(s));
-  else s->Ad = W;
+  if (ismpi)
+    PetscCall(SetUpParts(s));
+  else
+    s->Ad = W;
   PetscCall(GetBlockCSR(s->Ad, blocked, upper, &s->ai, &s->aj, &s->aa));
   if (s->ghost_scatter) PetscCall(FindCoupledRows(s)); /* none on one rank: no off-process part */
   if (upper) PetscCall(PetscMalloc1(m + 1, &s->acc));
@@ -368,7 +387,8 @@ PetscErrorCode KergsSweepSetUp(KergsSweep s, Mat W, PetscInt ncomp, const PetscR
 
 /* b[c] += sum over the blocks [j0, j1) of a block row of W_block(c, e) x[ja[j]*nc + e], each block stored
    column by column (entry (c, e) at c + e*nc). Inlined with a constant nc. */
-static inline KERGS_ALWAYS_INLINE void BlocksTimesX(const PetscInt nc, const PetscInt *ja, const PetscScalar *va, PetscInt j0, PetscInt j1, const PetscScalar *x, PetscReal *b)
+static inline KERGS_ALWAYS_INLINE void BlocksTimesX(const PetscInt nc, const PetscInt *ja, const PetscScalar *va, PetscInt j0, PetscInt j1,
+                                                    const PetscScalar *x, PetscReal *b)
 {
   PetscInt c, e, j;
 
@@ -382,14 +402,15 @@ static inline KERGS_ALWAYS_INLINE void BlocksTimesX(const PetscInt nc, const Pet
 
 /* corr_k = (Ao rghost)_a + lower_a at the k-th coupled row a: the contributions of other ranks' contacts, frozen
    for the sweep (Jacobi across ranks); lower (NULL without upper storage) is the lower ranks' share. */
-static inline KERGS_ALWAYS_INLINE void OffProcessProduct(const PetscInt nc, PetscInt nrows, const PetscInt *rows, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *rg,
+static inline KERGS_ALWAYS_INLINE void OffProcessProduct(const PetscInt nc, PetscInt nrows, const PetscInt *rows, const PetscInt *bi,
+                                                         const PetscInt *bj, const PetscScalar *ba, const PetscScalar *rg,
                                                          const PetscScalar *lower, PetscReal *corr)
 {
   PetscInt k, a, c;
 
   for (k = 0; k < nrows; k++) {
     PetscReal t[KERGS_MAXCOMP] = {0.0};
-    a = rows[k];
+    a                          = rows[k];
     BlocksTimesX(nc, bj, ba, bi[a], bi[a + 1], rg, t);
     for (c = 0; c < nc; c++) corr[k * nc + c] = t[c] + (lower ? PetscRealPart(lower[a * nc + c]) : 0.0);
   }
@@ -397,7 +418,8 @@ static inline KERGS_ALWAYS_INLINE void OffProcessProduct(const PetscInt nc, Pets
 
 /* y[ja[j]*nc + e] += sum_c W_block(c, e) x[c] over the blocks [j0, j1) of a block row: the transposed blocks
    W_block^T applied to x, the ncomp values of the row's contact. Inlined with a constant nc. */
-static inline KERGS_ALWAYS_INLINE void BlocksTransposeTimesX(const PetscInt nc, const PetscInt *ja, const PetscScalar *va, PetscInt j0, PetscInt j1, const PetscReal *x, PetscReal *y)
+static inline KERGS_ALWAYS_INLINE void BlocksTransposeTimesX(const PetscInt nc, const PetscInt *ja, const PetscScalar *va, PetscInt j0,
+                                                             PetscInt j1, const PetscReal *x, PetscReal *y)
 {
   PetscInt c, e, j;
 
@@ -411,7 +433,9 @@ static inline KERGS_ALWAYS_INLINE void BlocksTransposeTimesX(const PetscInt nc, 
 
 /* y = B^T r over the coupled rows (upper storage): the coupling of this rank's contacts with the higher ranks'
    ones seen from those ranks, y ordered as B's block columns (rghost). */
-static inline KERGS_ALWAYS_INLINE void OffProcessTransposeProduct(const PetscInt nc, PetscInt nrows, const PetscInt *rows, const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba, const PetscScalar *r, PetscReal *y)
+static inline KERGS_ALWAYS_INLINE void OffProcessTransposeProduct(const PetscInt nc, PetscInt nrows, const PetscInt *rows,
+                                                                  const PetscInt *bi, const PetscInt *bj, const PetscScalar *ba,
+                                                                  const PetscScalar *r, PetscReal *y)
 {
   PetscInt k, a, c;
 
@@ -442,15 +466,17 @@ typedef struct {
    Gauss-Seidel wants), and acc_a = sum_{beta < a} W_beta,a^T r_beta(new) = sum_{beta < a} W_a,beta r_beta(new)
    completes the sum; once r_a(new) is known the same row adds W_a,beta^T r_a(new) to acc_beta. nc is 1 or 2; the
    function is inlined with a constant nc so that the small loops over components unroll. */
-static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *ai, const PetscInt *aj, const PetscScalar *aa, const PetscInt *ds,
-                                 const PetscScalar *vd, PetscInt norows, const PetscInt *orows, const PetscReal *corr, const PetscReal *extra, const PetscReal *Wlaw, const PetscReal *Wdiag,
-                                 const PetscReal *mu, const PetscBool *active, PetscScalar *r, PetscReal *acc, SweepSums *sums)
+static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt n, const PetscInt *ai, const PetscInt *aj,
+                                                     const PetscScalar *aa, const PetscInt *ds, const PetscScalar *vd, PetscInt norows,
+                                                     const PetscInt *orows, const PetscReal *corr, const PetscReal *extra,
+                                                     const PetscReal *Wlaw, const PetscReal *Wdiag, const PetscReal *mu,
+                                                     const PetscBool *active, PetscScalar *r, PetscReal *acc, SweepSums *sums)
 {
   PetscReal b[KERGS_MAXCOMP], rnew[KERGS_MAXCOMP], dr[KERGS_MAXCOMP], w[KERGS_MAXCOMP * KERGS_MAXCOMP], dWd, rWr;
   PetscInt  a, c, e, i, k = 0;
 
   for (a = 0; a < n; a++) {
-    const PetscBool act = active ? active[a] : PETSC_TRUE;
+    const PetscBool  act  = active ? active[a] : PETSC_TRUE;
     const PetscInt   jlow = acc ? ai[a] : ds[2 * a], jup = acc ? ai[a] + 1 : ds[2 * a + 1]; /* upper: W_aa first */
     const PetscReal *co = NULL;
 
@@ -476,7 +502,7 @@ static inline KERGS_ALWAYS_INLINE void SweepContacts(const PetscInt nc, PetscInt
     /* W_aa-weighted measures of the change (nlgs.h) */
     dWd = rWr = 0.0;
     for (c = 0; c < nc; c++) {
-      dr[c] = rnew[c] - r[a * nc + c];
+      dr[c]         = rnew[c] - r[a * nc + c];
       r[a * nc + c] = rnew[c];
     }
     for (c = 0; c < nc; c++)
@@ -523,8 +549,10 @@ static PetscErrorCode BeginLowerRanksCoupling(KergsSweep s, Vec r)
   PetscCall(VecGetArrayRead(r, &rl));
   PetscCall(VecGetArray(s->ylower, &y));
   PetscCall(PetscTime(&t0));
-  if (s->ncomp == 2) OffProcessTransposeProduct(2, s->norows, s->orows, s->bi, s->bj, s->ba, rl, y);
-  else OffProcessTransposeProduct(1, s->norows, s->orows, s->bi, s->bj, s->ba, rl, y);
+  if (s->ncomp == 2)
+    OffProcessTransposeProduct(2, s->norows, s->orows, s->bi, s->bj, s->ba, rl, y);
+  else
+    OffProcessTransposeProduct(1, s->norows, s->orows, s->bi, s->bj, s->ba, rl, y);
   PetscCall(PetscTime(&t1));
   s->compute_seconds += t1 - t0;
   PetscCall(VecRestoreArray(s->ylower, &y));
@@ -554,8 +582,10 @@ static PetscErrorCode OffProcessCorrection(KergsSweep s, Vec r)
   PetscCall(VecGetArrayRead(s->rghost, &rg));
   if (s->upper) PetscCall(VecGetArrayRead(s->blower, &bl));
   PetscCall(PetscTime(&t0));
-  if (nc == 2) OffProcessProduct(2, s->norows, s->orows, s->bi, s->bj, s->ba, rg, bl, s->corr);
-  else OffProcessProduct(1, s->norows, s->orows, s->bi, s->bj, s->ba, rg, bl, s->corr);
+  if (nc == 2)
+    OffProcessProduct(2, s->norows, s->orows, s->bi, s->bj, s->ba, rg, bl, s->corr);
+  else
+    OffProcessProduct(1, s->norows, s->orows, s->bi, s->bj, s->ba, rg, bl, s->corr);
   PetscCall(PetscTime(&t1));
   s->compute_seconds += t1 - t0;
   if (s->upper) PetscCall(VecRestoreArrayRead(s->blower, &bl));
@@ -563,7 +593,8 @@ static PetscErrorCode OffProcessCorrection(KergsSweep s, Vec r)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wdiag_override, KergsSweepMeasures *measures)
+PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wdiag_override,
+                             KergsSweepMeasures *measures)
 {
   const PetscInt     nc = s->ncomp, m = s->n * s->ncomp;
   PetscInt           mr, mv;
@@ -574,18 +605,23 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   PetscLogDouble     t0, t1;
 
   PetscFunctionBeginUser;
-  if (!s->W) SETERRQ(s->comm, PETSC_ERR_ORDER, "KergsSweepRun: call KergsSweepSetUp first");
+  PetscCheck(s->W, s->comm, PETSC_ERR_ORDER, "KergsSweepRun: call KergsSweepSetUp first");
   PetscCall(VecGetLocalSize(r, &mr));
   PetscCall(VecGetLocalSize(vd, &mv));
-  if (mr != m || mv != m) SETERRQ(s->comm, PETSC_ERR_ARG_SIZ, "KergsSweepRun: r and vd need %" PetscInt_FMT " local entries (have %" PetscInt_FMT ", %" PetscInt_FMT ")", m, mr, mv);
+  PetscCheck(mr == m && mv == m, s->comm, PETSC_ERR_ARG_SIZ,
+             "KergsSweepRun: r and vd need %" PetscInt_FMT " local entries (have %" PetscInt_FMT ", %" PetscInt_FMT ")", m, mr, mv);
   PetscCall(PetscLogEventBegin(KERGS_Sweep, 0, 0, 0, 0));
   if (s->ghost_scatter) PetscCall(OffProcessCorrection(s, r));
   if (s->acc) PetscCall(PetscArrayzero(s->acc, m));
   PetscCall(VecGetArray(r, &rl));
   PetscCall(VecGetArrayRead(vd, &vdl));
   PetscCall(PetscTime(&t0));
-  if (nc == 2) SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->norows, s->orows, s->corr, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
-  else SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->norows, s->orows, s->corr, extra, Wdiag_override, s->Wdiag, s->mu, s->active, rl, s->acc, &loc);
+  if (nc == 2)
+    SweepContacts(2, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->norows, s->orows, s->corr, extra, Wdiag_override, s->Wdiag, s->mu,
+                  s->active, rl, s->acc, &loc);
+  else
+    SweepContacts(1, s->n, s->ai, s->aj, s->aa, s->dsplit, vdl, s->norows, s->orows, s->corr, extra, Wdiag_override, s->Wdiag, s->mu,
+                  s->active, rl, s->acc, &loc);
   PetscCall(PetscTime(&t1));
   s->compute_seconds += t1 - t0;
   PetscCall(VecRestoreArrayRead(vd, &vdl));
@@ -617,7 +653,7 @@ PetscErrorCode KergsSweepNaturalResidual(KergsSweep s, Vec r, Vec vd, Vec v, Pet
   PetscInt           a, c;
 
   PetscFunctionBeginUser;
-  if (!s->W) SETERRQ(s->comm, PETSC_ERR_ORDER, "KergsSweepNaturalResidual: call KergsSweepSetUp first");
+  PetscCheck(s->W, s->comm, PETSC_ERR_ORDER, "KergsSweepNaturalResidual: call KergsSweepSetUp first");
   PetscCall(MatMultAdd(s->W, r, vd, v));
   PetscCall(VecGetArrayRead(r, &rl));
   PetscCall(VecGetArrayRead(v, &vl));

@@ -129,7 +129,10 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   PetscCall(RecordPartition(res, &pm));
   PetscCall(KergsResultsEndStep(res));
   if (!st->quiet)
-    PetscCall(PetscPrintf(st->comm, "step %5" PetscInt_FMT " t %-10.5g contacts %6" PetscInt_FMT " active %6" PetscInt_FMT " sweeps %4" PetscInt_FMT "%s residual %8.2e violation mean %8.2e max %8.2e solve %.3g s\n", step, (double)time, ncontacts,
-                          nactive, ss->iterations, ss->converged ? "  " : " !", (double)ss->residual, (double)mean, (double)max, (double)ss->seconds));
+    PetscCall(PetscPrintf(st->comm,
+                          "step %5" PetscInt_FMT " t %-10.5g contacts %6" PetscInt_FMT " active %6" PetscInt_FMT " sweeps %4" PetscInt_FMT
+                          "%s residual %8.2e violation mean %8.2e max %8.2e solve %.3g s\n",
+                          step, (double)time, ncontacts, nactive, ss->iterations, ss->converged ? "  " : " !", (double)ss->residual,
+                          (double)mean, (double)max, (double)ss->seconds));
   PetscFunctionReturn(0);
 }

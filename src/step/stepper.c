@@ -37,17 +37,31 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(KergsResultsSetFromOptions(st->results));
   PetscCall(KergsPartitionSetFromOptions(st->partition));
   PetscOptionsBegin(st->comm, NULL, "Time stepping options", NULL);
-  PetscCall(PetscOptionsReal("-stop_at_rest", "Stop once every disk is slower than this speed, after the packing has moved faster (0: run all -steps)", "", st->rest_speed, &st->rest_speed, NULL));
-  PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "", st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
-  PetscCall(PetscOptionsInt("-fclib_step", "Export the local problem of this step in FCLib format (-1: none)", "", st->fclib_step, &st->fclib_step, NULL));
-  PetscCall(PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path), NULL));
-  PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair", "", st->overlap_tol, &st->overlap_tol, NULL));
+  PetscCall(PetscOptionsReal("-stop_at_rest",
+                             "Stop once every disk is slower than this speed, after the packing has moved faster (0: run all -steps)", "",
+                             st->rest_speed, &st->rest_speed, NULL));
+  PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
+                               st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
+  PetscCall(PetscOptionsInt("-fclib_step", "Export the local problem of this step in FCLib format (-1: none)", "", st->fclib_step,
+                            &st->fclib_step, NULL));
+  PetscCall(
+      PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path), NULL));
+  PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair",
+                             "", st->overlap_tol, &st->overlap_tol, NULL));
   PetscCall(PetscOptionsBool("-quiet", "Do not print a summary line per step", "", st->quiet, &st->quiet, NULL));
-  PetscCall(PetscOptionsBool("-keep_H", "Keep H_f and H_g through the solve, next to W (default: freed before W is assembled and H_f assembled again for the velocity update, so that the peak memory is the larger of H and W, not their sum; solvers that use H keep it anyway)", "", st->keep_H, &st->keep_H, NULL));
+  PetscCall(PetscOptionsBool(
+      "-keep_H",
+      "Keep H_f and H_g through the solve, next to W (default: freed before W is assembled and H_f assembled again for the velocity "
+      "update, so that the peak memory is the larger of H and W, not their sum; solvers that use H keep it anyway)",
+      "", st->keep_H, &st->keep_H, NULL));
   PetscOptionsEnd();
-  PetscCheck(st->rest_speed >= 0 && !PetscIsInfOrNanReal(st->rest_speed), st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-stop_at_rest %g must be a non-negative speed", (double)st->rest_speed);
-  PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative", (double)st->overlap_tol);
-  if (st->fclib_step >= 0 && !st->fclib_path[0]) PetscCall(PetscSNPrintf(st->fclib_path, sizeof(st->fclib_path), "results/%s-step%" PetscInt_FMT ".fclib.h5", name[0] ? name : "kergs", st->fclib_step));
+  PetscCheck(st->rest_speed >= 0 && !PetscIsInfOrNanReal(st->rest_speed), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-stop_at_rest %g must be a non-negative speed", (double)st->rest_speed);
+  PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative",
+             (double)st->overlap_tol);
+  if (st->fclib_step >= 0 && !st->fclib_path[0])
+    PetscCall(PetscSNPrintf(st->fclib_path, sizeof(st->fclib_path), "results/%s-step%" PetscInt_FMT ".fclib.h5", name[0] ? name : "kergs",
+                            st->fclib_step));
   PetscFunctionReturn(0);
 }
 
@@ -71,10 +85,15 @@ static PetscErrorCode CheckInitialOverlaps(KergsStepper st)
   if (bad >= 0) {
     const KergsContact *b = &c[bad];
     if (b->kind == KERGS_CONTACT_DISK_DISK)
-      PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grains %" PetscInt_FMT " and %" PetscInt_FMT " overlap by %g (radii %g, %g)\n", D.id[b->a], D.id[b->b], (double)-b->gap, (double)b->ra, (double)b->rb));
-    else PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grain %" PetscInt_FMT " crosses wall %s by %g (radius %g)\n", D.id[b->a], walls[b->b].name, (double)-b->gap, (double)b->ra));
+      PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grains %" PetscInt_FMT " and %" PetscInt_FMT " overlap by %g (radii %g, %g)\n",
+                            D.id[b->a], D.id[b->b], (double)-b->gap, (double)b->ra, (double)b->rb));
+    else
+      PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grain %" PetscInt_FMT " crosses wall %s by %g (radius %g)\n", D.id[b->a],
+                            walls[b->b].name, (double)-b->gap, (double)b->ra));
   }
-  PetscCheck(nbad == 0, st->comm, PETSC_ERR_USER_INPUT, "The initial packing has overlapping grains (see the pairs printed above); raise -initial_overlap_tol to accept interpenetrations up to that fraction of the smaller radius");
+  PetscCheck(nbad == 0, st->comm, PETSC_ERR_USER_INPUT,
+             "The initial packing has overlapping grains (see the pairs printed above); raise -initial_overlap_tol to accept "
+             "interpenetrations up to that fraction of the smaller radius");
   PetscFunctionReturn(0);
 }
 
@@ -185,14 +204,17 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   if (st->sample_out[0]) PetscCall(KergsSampleWrite(sc, st->sample_out));
   PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
   PetscCall(KergsSolverGetTolerances(st->solver, NULL, &max_it));
-  PetscCall(PetscPrintf(st->comm, "kergs: %" PetscInt_FMT " steps%s, %" PetscInt_FMT " not converged (cap %" PetscInt_FMT " sweeps), largest interpenetration %.3g, kinetic energy %.3g, fastest grain %.3g\n", step, rest ? " (at rest)" : "", st->nonconverged, max_it,
-                        (double)st->max_violation, (double)ek, (double)vmax));
+  PetscCall(PetscPrintf(st->comm,
+                        "kergs: %" PetscInt_FMT " steps%s, %" PetscInt_FMT " not converged (cap %" PetscInt_FMT
+                        " sweeps), largest interpenetration %.3g, kinetic energy %.3g, fastest grain %.3g\n",
+                        step, rest ? " (at rest)" : "", st->nonconverged, max_it, (double)st->max_violation, (double)ek, (double)vmax));
   PetscCall(KergsPartitionGetView(st->partition, &view));
   if (view) PetscCall(KergsPartitionView(st->partition, PETSC_VIEWER_STDOUT_(st->comm)));
   PetscCall(KergsResultsGetPath(st->results, &path, &enabled));
   if (enabled) PetscCall(PetscPrintf(st->comm, "kergs: results in %s\n", path));
   if (st->sample_out[0]) PetscCall(PetscPrintf(st->comm, "kergs: sample in %s\n", st->sample_out));
-  if (st->fclib_step >= 0 && st->fclib_step < step) PetscCall(PetscPrintf(st->comm, "kergs: FCLib problem of step %" PetscInt_FMT " in %s\n", st->fclib_step, st->fclib_path));
+  if (st->fclib_step >= 0 && st->fclib_step < step)
+    PetscCall(PetscPrintf(st->comm, "kergs: FCLib problem of step %" PetscInt_FMT " in %s\n", st->fclib_step, st->fclib_path));
   PetscFunctionReturn(0);
 }
 

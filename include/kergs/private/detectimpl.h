@@ -7,8 +7,8 @@
 
 struct _p_KergsContacts {
   MPI_Comm      comm;
-  PetscInt      n, nalloc; /* contacts owned by this rank */
-  KergsContact *c;         /* sorted by (a, kind, idb) */
+  PetscInt      n, nalloc;      /* contacts owned by this rank */
+  KergsContact *c;              /* sorted by (a, kind, idb) */
   PetscInt      nglobal, start; /* global count and global index of c[0] */
   /* foreign contacts: disk-disk contacts of another rank (their body a is a ghost here, of smaller id) whose body b
      is a disk owned here, with their global index. Together with the owned contacts they are every contact at an

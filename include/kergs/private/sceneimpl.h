@@ -9,15 +9,15 @@ struct _p_KergsScene {
   MPI_Comm comm;
   char     name[PETSC_MAX_PATH_LEN];
   /* disks: local structure of arrays, owned disks [0, nowned) then ghosts [nowned, nlocal) */
-  PetscInt   ndisks;           /* global number of disks */
-  PetscInt   nowned, nlocal;   /* disks owned here; owned + ghosts */
-  PetscInt   nalloc;           /* capacity of the local arrays */
-  PetscInt  *gidx;     /* global index (owned disk i: dstart + i) */
-  PetscInt  *id;       /* persistent grain id */
-  PetscReal *x;        /* KERGS_DIM * ndisks positions */
-  PetscReal *rot;      /* KERGS_NROT * ndisks orientations */
-  PetscReal *v;        /* KERGS_DIM * ndisks velocities */
-  PetscReal *omega;    /* KERGS_NROT * ndisks angular velocities */
+  PetscInt   ndisks;         /* global number of disks */
+  PetscInt   nowned, nlocal; /* disks owned here; owned + ghosts */
+  PetscInt   nalloc;         /* capacity of the local arrays */
+  PetscInt  *gidx;           /* global index (owned disk i: dstart + i) */
+  PetscInt  *id;             /* persistent grain id */
+  PetscReal *x;              /* KERGS_DIM * ndisks positions */
+  PetscReal *rot;            /* KERGS_NROT * ndisks orientations */
+  PetscReal *v;              /* KERGS_DIM * ndisks velocities */
+  PetscReal *omega;          /* KERGS_NROT * ndisks angular velocities */
   PetscReal *radius, *mass, *inertia;
   PetscInt  *material;
   PetscInt   dstart, dend; /* global indices of the disks owned by this rank */
@@ -32,9 +32,9 @@ struct _p_KergsScene {
   KergsWall *walls;
   /* materials */
   PetscInt   nmaterials;
-  PetscReal *density; /* per material (mass per unit area in 2D) */
-  PetscReal *mu;      /* friction coefficient, nmaterials x nmaterials, symmetric */
-  PetscBool  frictional; /* some pair has mu > 0: contacts carry tangential components, disks rotate */
+  PetscReal *density;       /* per material (mass per unit area in 2D) */
+  PetscReal *mu;            /* friction coefficient, nmaterials x nmaterials, symmetric */
+  PetscBool  frictional;    /* some pair has mu > 0: contacts carry tangential components, disks rotate */
   PetscBool  lock_rotation; /* -disks_lock_rotation: disks translate only (sliding blocks), no rotation DOFs */
   /* loading and numerics */
   PetscReal    gravity[KERGS_DIM];
@@ -51,7 +51,6 @@ struct _p_KergsScene {
 /* Reads the disk source options (-disks_source list|lattice|random|file and theirs) and sets the disks
    (src/scene/disks.c). */
 PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene);
-
 
 /* Options holding lists of numbers, with the number of values checked (src/scene/scene.c). */
 PETSC_INTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscReal **, PetscBool *);

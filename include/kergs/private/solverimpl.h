@@ -31,9 +31,9 @@ struct _p_KergsSolver {
   PetscBool      needs_H;       /* the type reads H_f, H_g during its solve (kernel projector, predictors), and W over all
                                    pairs of contacts: the time step keeps H alive from assembly to the velocity update and
                                    assembles the whole W (otherwise W couples the active contacts only) */
-  PetscReal     *mu;     /* per local contact */
-  PetscBool     *active; /* per local contact */
-  PetscInt       nalloc;
+  PetscReal *mu;                /* per local contact */
+  PetscBool *active;            /* per local contact */
+  PetscInt   nalloc;
 };
 
 /* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */

@@ -13,8 +13,7 @@
      (M + theta (dt^2/eps) H_f D H_f^T) V~ = R^d + M V^- - (dt/eps) H_f D (g^- + (1 - theta) dt v^- + theta dt H_g^T V_g^+). */
 #include <kergs/private/predictorimpl.h>
 
-static PetscErrorCode KergsPredictorPredict_Elastic(KergsPredictor p, const KergsPredictorInput *in,
-                                                    const PetscBool *active, Vec rtilde)
+static PetscErrorCode PredictorPredict_Elastic(KergsPredictor p, const KergsPredictorInput *in, const PetscBool *active, Vec rtilde)
 {
   const PetscReal    dt = in->dt, th = in->theta, k = dt / p->epsilon_abs;
   Vec                q, vminus;
@@ -44,7 +43,7 @@ static PetscErrorCode KergsPredictorPredict_Elastic(KergsPredictor p, const Kerg
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsPredictorView_Elastic(KergsPredictor p, PetscViewer viewer)
+static PetscErrorCode PredictorView_Elastic(KergsPredictor p, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
   if (p->relative)
@@ -58,8 +57,8 @@ static PetscErrorCode KergsPredictorView_Elastic(KergsPredictor p, PetscViewer v
 PetscErrorCode KergsPredictorCreate_Elastic(KergsPredictor p)
 {
   PetscFunctionBeginUser;
-  p->ops.predict = KergsPredictorPredict_Elastic;
-  p->ops.view    = KergsPredictorView_Elastic;
+  p->ops.predict = PredictorPredict_Elastic;
+  p->ops.view    = PredictorView_Elastic;
   PetscCall(KergsPredictorCreateKSP(p));
   PetscFunctionReturn(0);
 }

@@ -5,8 +5,7 @@
    Units: eta in s/kg, so that dt/eta is a mass (predictor.h); by default -predictor_eta is relative. */
 #include <kergs/private/predictorimpl.h>
 
-static PetscErrorCode KergsPredictorPredict_Linear(KergsPredictor p, const KergsPredictorInput *in,
-                                                   const PetscBool *active, Vec rtilde)
+static PetscErrorCode PredictorPredict_Linear(KergsPredictor p, const KergsPredictorInput *in, const PetscBool *active, Vec rtilde)
 {
   const PetscReal c = in->dt / p->eta_abs;
   Vec             q;
@@ -24,7 +23,7 @@ static PetscErrorCode KergsPredictorPredict_Linear(KergsPredictor p, const Kergs
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsPredictorView_Linear(KergsPredictor p, PetscViewer viewer)
+static PetscErrorCode PredictorView_Linear(KergsPredictor p, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
   if (p->relative)
@@ -37,8 +36,8 @@ static PetscErrorCode KergsPredictorView_Linear(KergsPredictor p, PetscViewer vi
 PetscErrorCode KergsPredictorCreate_Linear(KergsPredictor p)
 {
   PetscFunctionBeginUser;
-  p->ops.predict = KergsPredictorPredict_Linear;
-  p->ops.view    = KergsPredictorView_Linear;
+  p->ops.predict = PredictorPredict_Linear;
+  p->ops.view    = PredictorView_Linear;
   PetscCall(KergsPredictorCreateKSP(p));
   PetscFunctionReturn(0);
 }

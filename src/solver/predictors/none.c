@@ -2,8 +2,7 @@
    part of r to zero). */
 #include <kergs/private/predictorimpl.h>
 
-static PetscErrorCode KergsPredictorPredict_None(KergsPredictor p, const KergsPredictorInput *in,
-                                                 const PetscBool *active, Vec rtilde)
+static PetscErrorCode PredictorPredict_None(KergsPredictor p, const KergsPredictorInput *in, const PetscBool *active, Vec rtilde)
 {
   PetscFunctionBeginUser;
   (void)p;
@@ -13,7 +12,7 @@ static PetscErrorCode KergsPredictorPredict_None(KergsPredictor p, const KergsPr
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsPredictorView_None(KergsPredictor p, PetscViewer viewer)
+static PetscErrorCode PredictorView_None(KergsPredictor p, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
   (void)p;
@@ -24,7 +23,7 @@ static PetscErrorCode KergsPredictorView_None(KergsPredictor p, PetscViewer view
 PetscErrorCode KergsPredictorCreate_None(KergsPredictor p)
 {
   PetscFunctionBeginUser;
-  p->ops.predict = KergsPredictorPredict_None;
-  p->ops.view    = KergsPredictorView_None;
+  p->ops.predict = PredictorPredict_None;
+  p->ops.view    = PredictorView_None;
   PetscFunctionReturn(0);
 }

@@ -14,7 +14,7 @@ typedef struct {
   PetscReal  quad; /* last sweep's quad */
 } Predictor_Unilateral;
 
-static PetscErrorCode KergsPredictorSetFromOptions_Unilateral(PetscOptionItems *PetscOptionsObject, KergsPredictor p)
+static PetscErrorCode PredictorSetFromOptions_Unilateral(PetscOptionItems *PetscOptionsObject, KergsPredictor p)
 {
   Predictor_Unilateral *u = (Predictor_Unilateral *)p->data;
 
@@ -50,9 +50,12 @@ static PetscErrorCode NormalEntries(Mat W, PetscInt nc, Mat Wnn, PetscInt *dnz, 
     for (PetscInt k = 0; k < ncols; k++) {
       if (cols[k] % nc) continue;
       col = cols[k] / nc;
-      if (!dnz) PetscCall(MatSetValues(Wnn, 1, &row, 1, &col, &vals[k], INSERT_VALUES));
-      else if (cols[k] >= rstart && cols[k] < rend) dnz[row - rstart / nc]++;
-      else onz[row - rstart / nc]++;
+      if (!dnz)
+        PetscCall(MatSetValues(Wnn, 1, &row, 1, &col, &vals[k], INSERT_VALUES));
+      else if (cols[k] >= rstart && cols[k] < rend)
+        dnz[row - rstart / nc]++;
+      else
+        onz[row - rstart / nc]++;
     }
     PetscCall(MatRestoreRow(W, i, &ncols, &cols, &vals));
   }
@@ -89,8 +92,7 @@ static PetscErrorCode NormalSubmatrix(const KergsPredictorInput *in, Mat *Wnn)
 
 /* W_nn, v^d_n and a warm start r_n (the contacts' normal impulses, >= 0, zero when inactive). With one
    component per contact they are W, v^d and rtilde themselves; otherwise the normal sub-block is extracted. */
-static PetscErrorCode NormalProblem(const KergsPredictorInput *in, const PetscBool *active, Vec rtilde,
-                                    Mat *Wnn, Vec *vdn, Vec *rn)
+static PetscErrorCode NormalProblem(const KergsPredictorInput *in, const PetscBool *active, Vec rtilde, Mat *Wnn, Vec *vdn, Vec *rn)
 {
   PetscScalar       *r;
   const PetscScalar *vd;
@@ -118,8 +120,7 @@ static PetscErrorCode NormalProblem(const KergsPredictorInput *in, const PetscBo
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsPredictorPredict_Unilateral(KergsPredictor p, const KergsPredictorInput *in,
-                                                       const PetscBool *active, Vec rtilde)
+static PetscErrorCode PredictorPredict_Unilateral(KergsPredictor p, const KergsPredictorInput *in, const PetscBool *active, Vec rtilde)
 {
   Predictor_Unilateral *u = (Predictor_Unilateral *)p->data;
   KergsSweepMeasures    m = {0, 0};
@@ -158,7 +159,7 @@ static PetscErrorCode KergsPredictorPredict_Unilateral(KergsPredictor p, const K
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsPredictorView_Unilateral(KergsPredictor p, PetscViewer viewer)
+static PetscErrorCode PredictorView_Unilateral(KergsPredictor p, PetscViewer viewer)
 {
   Predictor_Unilateral *u = (Predictor_Unilateral *)p->data;
 
@@ -169,7 +170,7 @@ static PetscErrorCode KergsPredictorView_Unilateral(KergsPredictor p, PetscViewe
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsPredictorDestroy_Unilateral(KergsPredictor p)
+static PetscErrorCode PredictorDestroy_Unilateral(KergsPredictor p)
 {
   Predictor_Unilateral *u = (Predictor_Unilateral *)p->data;
 
@@ -189,9 +190,9 @@ PetscErrorCode KergsPredictorCreate_Unilateral(KergsPredictor p)
   u->max_it = 1000;
   PetscCall(KergsSweepCreate(p->comm, &u->sweep));
   p->data               = u;
-  p->ops.setfromoptions = KergsPredictorSetFromOptions_Unilateral;
-  p->ops.predict        = KergsPredictorPredict_Unilateral;
-  p->ops.view           = KergsPredictorView_Unilateral;
-  p->ops.destroy        = KergsPredictorDestroy_Unilateral;
+  p->ops.setfromoptions = PredictorSetFromOptions_Unilateral;
+  p->ops.predict        = PredictorPredict_Unilateral;
+  p->ops.view           = PredictorView_Unilateral;
+  p->ops.destroy        = PredictorDestroy_Unilateral;
   PetscFunctionReturn(0);
 }

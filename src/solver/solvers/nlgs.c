@@ -2,14 +2,14 @@
    warm-started from the previous step's impulses. */
 #include <kergs/private/solverimpl.h>
 
-static PetscErrorCode KergsSolverSetUp_NLGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
+static PetscErrorCode SolverSetUp_NLGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
   PetscFunctionBeginUser;
   PetscCall(KergsSolverSetUpSweep(s, scene, contacts, ops));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverSolve_NLGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops, KergsSolveStats *stats)
+static PetscErrorCode SolverSolve_NLGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops, KergsSolveStats *stats)
 {
   PetscFunctionBeginUser;
   (void)scene;
@@ -21,7 +21,7 @@ static PetscErrorCode KergsSolverSolve_NLGS(KergsSolver s, KergsScene scene, Ker
 PetscErrorCode KergsSolverCreate_NLGS(KergsSolver s)
 {
   PetscFunctionBeginUser;
-  s->ops.setup = KergsSolverSetUp_NLGS;
-  s->ops.solve = KergsSolverSolve_NLGS;
+  s->ops.setup = SolverSetUp_NLGS;
+  s->ops.solve = SolverSolve_NLGS;
   PetscFunctionReturn(0);
 }

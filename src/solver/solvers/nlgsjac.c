@@ -13,7 +13,7 @@ static PetscErrorCode SolverSetFromOptions_NLGSJac(PetscOptionItems *PetscOption
 }
 
 /* W~_aa = W_aa + Z_aa for every local contact. */
-static PetscErrorCode KergsSolverSetUp_NLGSJac(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
+static PetscErrorCode SolverSetUp_NLGSJac(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
   KergsRegularised *reg = (KergsRegularised *)s->data;
   KergsDofLayout    layout;
@@ -32,7 +32,7 @@ static PetscErrorCode KergsSolverSetUp_NLGSJac(KergsSolver s, KergsScene scene, 
 }
 
 /* extra = Z r^(k-1) - Z_aa r_a^(k-1) - z~, before each sweep. */
-static PetscErrorCode KergsSolverPreSweep_NLGSJac(KergsSolver s, KergsOperators ops, PetscReal *extra)
+static PetscErrorCode SolverPreSweep_NLGSJac(KergsSolver s, KergsOperators ops, PetscReal *extra)
 {
   KergsRegularised  *reg = (KergsRegularised *)s->data;
   KergsDofLayout     layout;
@@ -65,7 +65,8 @@ static PetscErrorCode KergsSolverPreSweep_NLGSJac(KergsSolver s, KergsOperators 
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverSolve_NLGSJac(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops, KergsSolveStats *stats)
+static PetscErrorCode SolverSolve_NLGSJac(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+                                          KergsSolveStats *stats)
 {
   KergsRegularised *reg = (KergsRegularised *)s->data;
 
@@ -83,15 +84,16 @@ static PetscErrorCode SolverStats_NLGSJac(KergsSolver s, KergsSolveStats *st)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverView_NLGSJac(KergsSolver s, PetscViewer viewer)
+static PetscErrorCode SolverView_NLGSJac(KergsSolver s, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "NLGS-Jac (Algorithm 6): Gauss-Seidel on W, Jacobi on omega N N^T applied through the kernel projector\n"));
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer, "NLGS-Jac (Algorithm 6): Gauss-Seidel on W, Jacobi on omega N N^T applied through the kernel projector\n"));
   PetscCall(KergsRegularisedView((KergsRegularised *)s->data, viewer));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverDestroy_NLGSJac(KergsSolver s)
+static PetscErrorCode SolverDestroy_NLGSJac(KergsSolver s)
 {
   KergsRegularised *reg = (KergsRegularised *)s->data;
 
@@ -110,11 +112,11 @@ PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver s)
   s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */
   s->data               = reg;
   s->ops.setfromoptions = SolverSetFromOptions_NLGSJac;
-  s->ops.setup          = KergsSolverSetUp_NLGSJac;
-  s->ops.solve          = KergsSolverSolve_NLGSJac;
-  s->ops.presweep       = KergsSolverPreSweep_NLGSJac;
+  s->ops.setup          = SolverSetUp_NLGSJac;
+  s->ops.solve          = SolverSolve_NLGSJac;
+  s->ops.presweep       = SolverPreSweep_NLGSJac;
   s->ops.stats          = SolverStats_NLGSJac;
-  s->ops.view           = KergsSolverView_NLGSJac;
-  s->ops.destroy        = KergsSolverDestroy_NLGSJac;
+  s->ops.view           = SolverView_NLGSJac;
+  s->ops.destroy        = SolverDestroy_NLGSJac;
   PetscFunctionReturn(0);
 }

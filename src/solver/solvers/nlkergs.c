@@ -19,27 +19,31 @@ static PetscErrorCode SolverSetFromOptions_NLKerGS(PetscOptionItems *PetscOption
 
   PetscFunctionBeginUser;
   PetscOptionsHeadBegin(PetscOptionsObject, "NLKerGS-P on a stored W~ (verification)");
-  PetscCall(PetscOptionsInt("-solver_nlkergs_max_size", "Largest number of contact components for which W~ is stored densely", "", nk->max_size, &nk->max_size, NULL));
+  PetscCall(PetscOptionsInt("-solver_nlkergs_max_size", "Largest number of contact components for which W~ is stored densely", "",
+                            nk->max_size, &nk->max_size, NULL));
   PetscCall(KergsRegularisedSetFromOptions(PetscOptionsObject, s, nk->reg));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverSetUp_NLKerGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
+static PetscErrorCode SolverSetUp_NLKerGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
-  NLKerGS          *nk = (NLKerGS *)s->data;
-  KergsRegularised *reg = nk->reg;
-  Mat               Z;
-  PetscInt          N, n;
-  MatInfo           info;
+  NLKerGS           *nk  = (NLKerGS *)s->data;
+  KergsRegularised  *reg = nk->reg;
+  Mat                Z;
+  PetscInt           N, n;
+  MatInfo            info;
   const PetscScalar *zt;
-  KergsDofLayout    layout;
-  Vec               r;
+  KergsDofLayout     layout;
+  Vec                r;
 
   PetscFunctionBeginUser;
   PetscCall(KergsOperatorsGetLayout(ops, &layout));
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
   PetscCall(VecGetSize(r, &N));
-  PetscCheck(N <= nk->max_size, s->comm, PETSC_ERR_SUP, "-solver_type nlkergs stores W + omega N N^T densely (%" PetscInt_FMT " x %" PetscInt_FMT "): above -solver_nlkergs_max_size %" PetscInt_FMT "; use -solver_type nlgsjac", N, N, nk->max_size);
+  PetscCheck(N <= nk->max_size, s->comm, PETSC_ERR_SUP,
+             "-solver_type nlkergs stores W + omega N N^T densely (%" PetscInt_FMT " x %" PetscInt_FMT
+             "): above -solver_nlkergs_max_size %" PetscInt_FMT "; use -solver_type nlgsjac",
+             N, N, nk->max_size);
   PetscCall(KergsRegularisedSetUp(s, reg, scene, contacts, ops));
   PetscCall(MatDestroy(&nk->Wt));
   PetscCall(KergsKernelGetZ(reg->kernel, &Z));
@@ -63,7 +67,8 @@ static PetscErrorCode KergsSolverSetUp_NLKerGS(KergsSolver s, KergsScene scene, 
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverSolve_NLKerGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops, KergsSolveStats *stats)
+static PetscErrorCode SolverSolve_NLKerGS(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+                                          KergsSolveStats *stats)
 {
   NLKerGS *nk = (NLKerGS *)s->data;
 
@@ -86,17 +91,18 @@ static PetscErrorCode SolverStats_NLKerGS(KergsSolver s, KergsSolveStats *st)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverView_NLKerGS(KergsSolver s, PetscViewer viewer)
+static PetscErrorCode SolverView_NLKerGS(KergsSolver s, PetscViewer viewer)
 {
   NLKerGS *nk = (NLKerGS *)s->data;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "NLKerGS-P (Algorithm 3) on a stored W + omega N N^T (verification; at most %" PetscInt_FMT " components)\n", nk->max_size));
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer, "NLKerGS-P (Algorithm 3) on a stored W + omega N N^T (verification; at most %" PetscInt_FMT " components)\n", nk->max_size));
   PetscCall(KergsRegularisedView(nk->reg, viewer));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KergsSolverDestroy_NLKerGS(KergsSolver s)
+static PetscErrorCode SolverDestroy_NLKerGS(KergsSolver s)
 {
   NLKerGS *nk = (NLKerGS *)s->data;
 
@@ -121,10 +127,10 @@ PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver s)
   s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */
   s->data               = nk;
   s->ops.setfromoptions = SolverSetFromOptions_NLKerGS;
-  s->ops.setup          = KergsSolverSetUp_NLKerGS;
-  s->ops.solve          = KergsSolverSolve_NLKerGS;
+  s->ops.setup          = SolverSetUp_NLKerGS;
+  s->ops.solve          = SolverSolve_NLKerGS;
   s->ops.stats          = SolverStats_NLKerGS;
-  s->ops.view           = KergsSolverView_NLKerGS;
-  s->ops.destroy        = KergsSolverDestroy_NLKerGS;
+  s->ops.view           = SolverView_NLKerGS;
+  s->ops.destroy        = SolverDestroy_NLKerGS;
   PetscFunctionReturn(0);
 }

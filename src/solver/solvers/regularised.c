@@ -16,12 +16,17 @@ PetscErrorCode KergsRegularisedSetFromOptions(PetscOptionItems *PetscOptionsObje
 {
   PetscFunctionBeginUser;
   PetscOptionsHeadBegin(PetscOptionsObject, "Kernel-regularised solver options (nlkergs, nlgsjac)");
-  PetscCall(PetscOptionsReal("-solver_omega", "omega of W + omega N N^T (0: automatic, -solver_omega_factor * ||W||_2)", "", reg->omega_fixed, &reg->omega_fixed, NULL));
-  PetscCall(PetscOptionsReal("-solver_omega_factor", "Automatic omega as this fraction of ||W||_2 (the paper: 1/20)", "", reg->omega_factor, &reg->omega_factor, NULL));
+  PetscCall(PetscOptionsReal("-solver_omega", "omega of W + omega N N^T (0: automatic, -solver_omega_factor * ||W||_2)", "",
+                             reg->omega_fixed, &reg->omega_fixed, NULL));
+  PetscCall(PetscOptionsReal("-solver_omega_factor", "Automatic omega as this fraction of ||W||_2 (the paper: 1/20)", "", reg->omega_factor,
+                             &reg->omega_factor, NULL));
   PetscCall(PetscOptionsInt("-solver_omega_power_its", "Power iterations estimating ||W||_2", "", reg->power_its, &reg->power_its, NULL));
-  PetscCheck(reg->omega_fixed >= 0 && PetscIsNormalReal(reg->omega_fixed + 1), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_omega %g must be a finite number >= 0", (double)reg->omega_fixed);
-  PetscCheck(reg->omega_factor > 0 && PetscIsNormalReal(reg->omega_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_omega_factor %g must be positive", (double)reg->omega_factor);
-  PetscCheck(reg->power_its >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_omega_power_its %" PetscInt_FMT " must be at least 1", reg->power_its);
+  PetscCheck(reg->omega_fixed >= 0 && PetscIsNormalReal(reg->omega_fixed + 1), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_omega %g must be a finite number >= 0", (double)reg->omega_fixed);
+  PetscCheck(reg->omega_factor > 0 && PetscIsNormalReal(reg->omega_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_omega_factor %g must be positive", (double)reg->omega_factor);
+  PetscCheck(reg->power_its >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_omega_power_its %" PetscInt_FMT " must be at least 1",
+             reg->power_its);
   PetscCall(KergsKernelSetFromOptions(reg->kernel));
   PetscCall(KergsPredictorSetFromOptions(reg->predictor));
   PetscFunctionReturn(0);
@@ -94,7 +99,7 @@ PetscErrorCode KergsRegularisedSetUp(KergsSolver s, KergsRegularised *reg, Kergs
   PetscCall(EnsureWork(reg, ops, n));
   PetscCall(EstimateNormW(W, reg->power_its, &reg->normW));
   reg->omega = reg->omega_fixed > 0 ? reg->omega_fixed : reg->omega_factor * reg->normW;
-  if (reg->omega <= 0) reg->omega = 1.0; /* no contact carries anything: any omega will do */
+  if (reg->omega <= 0) reg->omega = 1.0;                   /* no contact carries anything: any omega will do */
   PetscCall(KergsKernelSetActive(reg->kernel, s->active)); /* the unknowns: active contacts only */
   PetscCall(KergsKernelSetUp(reg->kernel, scene, contacts, ops));
   PetscCall(KergsKernelSetOmega(reg->kernel, reg->omega));
@@ -134,8 +139,11 @@ PetscErrorCode KergsRegularisedStats(KergsRegularised *reg, KergsSolveStats *st)
 PetscErrorCode KergsRegularisedView(KergsRegularised *reg, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
-  if (reg->omega_fixed > 0) PetscCall(PetscViewerASCIIPrintf(viewer, "omega %g (fixed)\n", (double)reg->omega_fixed));
-  else PetscCall(PetscViewerASCIIPrintf(viewer, "omega %g * ||W||_2 (estimated by %" PetscInt_FMT " power iterations each step)\n", (double)reg->omega_factor, reg->power_its));
+  if (reg->omega_fixed > 0)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "omega %g (fixed)\n", (double)reg->omega_fixed));
+  else
+    PetscCall(PetscViewerASCIIPrintf(viewer, "omega %g * ||W||_2 (estimated by %" PetscInt_FMT " power iterations each step)\n",
+                                     (double)reg->omega_factor, reg->power_its));
   PetscCall(KergsPredictorView(reg->predictor, viewer));
   PetscCall(KergsKernelView(reg->kernel, viewer));
   PetscFunctionReturn(0);
