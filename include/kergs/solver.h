@@ -34,9 +34,12 @@ typedef struct {
 /* What a solve found and cost (KergsSolverSolve). */
 typedef struct {
   PetscInt        iterations;
-  PetscBool       converged;       /* the chosen criterion fell below -solver_tol before -solver_max_it */
+  PetscBool       criterion_met;   /* the type's own criterion fell below -solver_tol before -solver_max_it */
+  PetscBool       converged;       /* criterion met, and r solves the original problem: residual <= -solver_residual_tol and
+                                      velocity_error <= -solver_velocity_tol (docs/solver.md) */
   PetscReal       criterion;       /* value of the chosen criterion at exit */
   PetscReal       residual;        /* natural-map residual of the original problem, recomputed from r at exit */
+  PetscReal       velocity_error;  /* the law's worst violation in velocity, relative to the problem's (kergs/sweep.h) */
   PetscReal       seconds;         /* whole solve: set-up, sweeps, final residual */
   PetscReal       sweep_seconds;   /* the sweeps alone */
   PetscReal       compute_seconds; /* this rank's arithmetic in the sweeps (no waiting for messages or reductions) */

@@ -33,20 +33,28 @@ static inline void ProjectCoulombCone(PetscInt ncomp, const PetscReal z[], Petsc
   }
 }
 
-PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active)
+void KergsLawNaturalMap(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active, PetscReal e[])
 {
-  PetscReal z[KERGS_MAXCOMP] = {0.0}, p[KERGS_MAXCOMP], s = 0.0;
+  PetscReal z[KERGS_MAXCOMP] = {0.0}, p[KERGS_MAXCOMP];
   PetscInt  c;
 
   if (!active) {
-    for (c = 0; c < ncomp; c++) s += r[c] * r[c];
-    return s;
+    for (c = 0; c < ncomp; c++) e[c] = r[c];
+    return;
   }
   /* De Saxce's modified velocity: v + mu |v_t| e_n makes the law a projection on the cone K. */
   z[0] = r[0] - rho * (v[0] + (ncomp > 1 ? mu * PetscAbsReal(v[1]) : 0.0));
   if (ncomp > 1) z[1] = r[1] - rho * v[1];
   ProjectCoulombCone(ncomp, z, mu, p);
-  for (c = 0; c < ncomp; c++) s += (r[c] - p[c]) * (r[c] - p[c]);
+  for (c = 0; c < ncomp; c++) e[c] = r[c] - p[c];
+}
+
+PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active)
+{
+  PetscReal e[KERGS_MAXCOMP], s = 0.0;
+
+  KergsLawNaturalMap(ncomp, r, v, mu, rho, active, e);
+  for (PetscInt c = 0; c < ncomp; c++) s += e[c] * e[c];
   return s;
 }
 

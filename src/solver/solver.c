@@ -48,7 +48,9 @@ PetscErrorCode KergsSolverCreate(MPI_Comm comm, KergsSolver *solver)
   PetscCall(PetscNew(&s));
   s->comm      = comm;
   s->max_it    = 150; /* the paper's cap */
-  s->tol       = 1e-4;
+  s->tol          = 1e-4;
+  s->residual_tol = 5e-2;
+  s->velocity_tol = 1e-2;
   s->criterion = KERGS_CRITERION_QUAD;
   PetscCall(KergsSweepCreate(comm, &s->sweep));
   *solver = s;
@@ -84,6 +86,8 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
   PetscCall(
       PetscOptionsInt("-solver_max_it", "Maximum number of sweeps per step (the paper caps at 150)", "", s->max_it, &s->max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_tol", "Tolerance of the convergence criterion", "", s->tol, &s->tol, NULL));
+  PetscCall(PetscOptionsReal("-solver_residual_tol", "A step converges only if the natural residual of the original problem is at most this (whatever the type's own criterion)", "", s->residual_tol, &s->residual_tol, NULL));
+  PetscCall(PetscOptionsReal("-solver_velocity_tol", "... and the law's worst violation in velocity, relative to the problem's largest velocity, at most this", "", s->velocity_tol, &s->velocity_tol, NULL));
   PetscCall(PetscOptionsEnum("-solver_criterion",
                              "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, "
                              "LMGC90 Maxm), natural (natural-map residual, Siconos)",
@@ -92,8 +96,9 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
   if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
   PetscOptionsEnd();
   PetscCheck(s->max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_max_it %" PetscInt_FMT " must be at least 1", s->max_it);
-  PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number",
-             (double)s->tol);
+  PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number", (double)s->tol);
+  PetscCheck(s->residual_tol > 0 && PetscIsNormalReal(s->residual_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_residual_tol %g must be a positive number", (double)s->residual_tol);
+  PetscCheck(s->velocity_tol > 0 && PetscIsNormalReal(s->velocity_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_velocity_tol %g must be a positive number", (double)s->velocity_tol);
   PetscFunctionReturn(0);
 }
 
@@ -148,10 +153,10 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
   PetscCall(PetscTime(&t0));
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, &v, &vd));
   PetscCall(VecGetSize(r, &nglobal));
-  stats->iterations = 0;
-  stats->converged  = PETSC_TRUE;
+  stats->iterations    = 0;
+  stats->criterion_met = PETSC_TRUE;
   if (nglobal > 0) {
-    stats->converged = PETSC_FALSE;
+    stats->criterion_met = PETSC_FALSE;
     for (PetscInt k = 1; k <= s->max_it; k++) {
       if (s->ops.presweep) PetscCall((*s->ops.presweep)(s, ops, extra));
       PetscCall(KergsSweepRun(s->iterate_sweep ? s->iterate_sweep : s->sweep, r, vd, extra, Wdiag, &m));
@@ -168,7 +173,7 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
         break;
       }
       if (value < s->tol) {
-        stats->converged = PETSC_TRUE;
+        stats->criterion_met = PETSC_TRUE;
         break;
       }
     }
@@ -181,11 +186,22 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
     stats->compute_seconds = compute;
   }
   stats->criterion = value;
-  /* the natural criterion has just computed the residual (and v) of the final r */
-  if (s->criterion == KERGS_CRITERION_NATURAL && stats->iterations > 0)
-    stats->residual = value;
-  else
-    PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &stats->residual));
+  PetscFunctionReturn(0);
+}
+
+/* Whatever the type and its own criterion, a step converges only if r solves the original problem (W, not a
+   regularised one): natural residual and velocity error recomputed from r (the sweep on W holds the active set). */
+static PetscErrorCode DecideConvergence(KergsSolver s, KergsOperators ops, KergsSolveStats *stats)
+{
+  KergsResiduals res;
+  Vec            r, v, vd;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsOperatorsGetContactVectors(ops, &r, &v, &vd));
+  PetscCall(KergsSweepResiduals(s->sweep, r, vd, v, &res));
+  stats->residual       = res.natural;
+  stats->velocity_error = res.velocity;
+  stats->converged      = (PetscBool)(stats->criterion_met && res.natural <= s->residual_tol && res.velocity <= s->velocity_tol);
   PetscFunctionReturn(0);
 }
 
@@ -200,6 +216,7 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscCall(PetscTime(&t0));
   if (s->ops.setup) PetscCall((*s->ops.setup)(s, scene, contacts, ops));
   PetscCall((*s->ops.solve)(s, scene, contacts, ops, stats));
+  PetscCall(DecideConvergence(s, ops, stats));
   if (s->ops.stats) PetscCall((*s->ops.stats)(s, stats));
   /* the sweep lives for one solve: drop its reference to this step's W, so that W is freed at the start of the
      next assembly instead of coexisting with the next step's W (the peak memory) */

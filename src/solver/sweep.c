@@ -645,31 +645,55 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsSweepNaturalResidual(KergsSweep s, Vec r, Vec vd, Vec v, PetscReal *res)
+PetscErrorCode KergsSweepResiduals(KergsSweep s, Vec r, Vec vd, Vec v, KergsResiduals *res)
 {
   const PetscInt     nc = s->ncomp;
-  const PetscScalar *rl, *vl;
-  PetscReal          sums[2] = {0.0, 0.0}, rho;
+  const PetscScalar *rl, *vl, *vdl;
+  PetscReal          sums[2] = {0.0, 0.0}, maxes[2] = {0.0, 0.0};
   PetscInt           a, c;
 
   PetscFunctionBeginUser;
-  PetscCheck(s->W, s->comm, PETSC_ERR_ORDER, "KergsSweepNaturalResidual: call KergsSweepSetUp first");
+  PetscCheck(s->W, s->comm, PETSC_ERR_ORDER, "KergsSweepResiduals: call KergsSweepSetUp first");
   PetscCall(MatMultAdd(s->W, r, vd, v));
   PetscCall(VecGetArrayRead(r, &rl));
   PetscCall(VecGetArrayRead(v, &vl));
+  PetscCall(VecGetArrayRead(vd, &vdl));
   for (a = 0; a < s->n; a++) {
-    PetscReal w[KERGS_MAXCOMP * KERGS_MAXCOMP];
+    const PetscBool active = s->active ? s->active[a] : PETSC_TRUE;
+    PetscReal       w[KERGS_MAXCOMP * KERGS_MAXCOMP], e[KERGS_MAXCOMP], rho, e2 = 0.0, q2 = 0.0, wr2 = 0.0;
     /* rho = 1 / W_aa,nn turns the velocity into an impulse (law.h) */
     DiagonalBlock(nc, a, s->ai, s->aa, s->Wdiag, w);
     rho = w[0] > 0 ? 1.0 / w[0] : 1.0;
-    sums[0] += KergsLawNaturalResidual2(nc, rl + a * nc, vl + a * nc, s->mu ? s->mu[a] : 0.0, rho, s->active ? s->active[a] : PETSC_TRUE);
-    for (c = 0; c < nc; c++) sums[1] += rl[a * nc + c] * rl[a * nc + c];
+    KergsLawNaturalMap(nc, rl + a * nc, vl + a * nc, s->mu ? s->mu[a] : 0.0, rho, active, e);
+    for (c = 0; c < nc; c++) {
+      e2 += e[c] * e[c];
+      sums[1] += rl[a * nc + c] * rl[a * nc + c];
+      q2 += PetscSqr(PetscRealPart(vdl[a * nc + c]));
+      wr2 += PetscSqr(PetscRealPart(vl[a * nc + c] - vdl[a * nc + c]));
+    }
+    sums[0] += e2;
+    /* the velocity scale: the largest free velocity, or velocity change, of an active contact */
+    if (active) maxes[1] = PetscMax(maxes[1], PetscSqrtReal(PetscMax(q2, wr2)));
+    maxes[0] = PetscMax(maxes[0], PetscSqrtReal(e2) / rho);
   }
+  PetscCall(VecRestoreArrayRead(vd, &vdl));
   PetscCall(VecRestoreArrayRead(v, &vl));
   PetscCall(VecRestoreArrayRead(r, &rl));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, s->comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, maxes, 2, MPIU_REAL, MPIU_MAX, s->comm));
   /* relative to |r|; absolute when r = 0, so that the zero solution of an all-open problem gives 0 */
-  *res = sums[1] > 0 ? PetscSqrtReal(sums[0]) / PetscMax(PetscSqrtReal(sums[1]), 1e-300) : PetscSqrtReal(sums[0]);
+  res->natural  = sums[1] > 0 ? PetscSqrtReal(sums[0]) / PetscMax(PetscSqrtReal(sums[1]), 1e-300) : PetscSqrtReal(sums[0]);
+  res->velocity = maxes[1] > 0 ? maxes[0] / maxes[1] : maxes[0];
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSweepNaturalResidual(KergsSweep s, Vec r, Vec vd, Vec v, PetscReal *res)
+{
+  KergsResiduals all;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSweepResiduals(s, r, vd, v, &all));
+  *res = all.natural;
   PetscFunctionReturn(0);
 }
 

@@ -65,7 +65,9 @@ static PetscErrorCode RecordSolve(KergsResults res, const KergsSolveStats *ss)
   PetscFunctionBeginUser;
   PetscCall(KergsResultsRecord(res, "iterations", (PetscReal)ss->iterations));
   PetscCall(KergsResultsRecord(res, "converged", ss->converged ? 1.0 : 0.0));
+  PetscCall(KergsResultsRecord(res, "criterion_met", ss->criterion_met ? 1.0 : 0.0));
   PetscCall(KergsResultsRecord(res, "residual", ss->residual));
+  PetscCall(KergsResultsRecord(res, "velocity_error", ss->velocity_error));
   PetscCall(KergsResultsRecord(res, "criterion", ss->criterion));
   PetscCall(KergsResultsRecord(res, "solve_seconds", ss->seconds));
   PetscCall(KergsResultsRecord(res, "sweep_seconds", ss->sweep_seconds));

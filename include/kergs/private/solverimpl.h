@@ -25,6 +25,8 @@ struct _p_KergsSolver {
   void          *data;
   PetscInt       max_it;
   PetscReal      tol;
+  PetscReal      residual_tol; /* -solver_residual_tol: largest natural residual of the original problem of a converged step */
+  PetscReal      velocity_tol; /* -solver_velocity_tol: largest relative velocity error of a converged step */
   KergsCriterion criterion;
   KergsSweep     sweep;         /* Gauss-Seidel on W; also computes the physical residual */
   KergsSweep     iterate_sweep; /* when set, the sweeps run on this one instead (nlkergs: on W~) */
