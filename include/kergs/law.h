@@ -25,7 +25,8 @@ PETSC_EXTERN KergsLawStatus KergsLawSolve(PetscInt ncomp, const PetscReal Waa[],
      r - proj_K(r - rho (v + mu |v_t| e_n))    (De Saxce's modified velocity; K: Coulomb cone),
    or r itself when inactive. rho > 0 converts velocities to impulses (kergs uses rho = 1 / Waa_nn). */
 /* The natural map itself, e = r - proj_K(r - rho (v + mu |v_t| e_n)) (e = r when inactive), into e[ncomp]. */
-PETSC_EXTERN void KergsLawNaturalMap(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active, PetscReal e[]);
+PETSC_EXTERN void      KergsLawNaturalMap(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho,
+                                          PetscBool active, PetscReal e[]);
 PETSC_EXTERN PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho,
                                                 PetscBool active);
 

@@ -14,6 +14,7 @@ typedef const char *KergsSolverType;
 #define KERGS_SOLVER_NLGS "nlgs"
 #define KERGS_SOLVER_NLKERGS "nlkergs"
 #define KERGS_SOLVER_NLGSJAC "nlgsjac"
+#define KERGS_SOLVER_NEWTON "newton"
 
 typedef enum { KERGS_CRITERION_QUAD, KERGS_CRITERION_MAXM, KERGS_CRITERION_NATURAL } KergsCriterion;
 PETSC_EXTERN const char *const KergsCriteria[];
@@ -33,9 +34,9 @@ typedef struct {
 
 /* What a solve found and cost (KergsSolverSolve). */
 typedef struct {
-  PetscInt        iterations;
-  PetscBool       criterion_met;   /* the type's own criterion fell below -solver_tol before -solver_max_it */
-  PetscBool       converged;       /* criterion met, and r solves the original problem: residual <= -solver_residual_tol and
+  PetscInt  iterations;
+  PetscBool criterion_met;         /* the type's own criterion fell below -solver_tol before -solver_max_it */
+  PetscBool converged;             /* criterion met, and r solves the original problem: residual <= -solver_residual_tol and
                                       velocity_error <= -solver_velocity_tol (docs/solver.md) */
   PetscReal       criterion;       /* value of the chosen criterion at exit */
   PetscReal       residual;        /* natural-map residual of the original problem, recomputed from r at exit */

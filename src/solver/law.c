@@ -33,7 +33,8 @@ static inline void ProjectCoulombCone(PetscInt ncomp, const PetscReal z[], Petsc
   }
 }
 
-void KergsLawNaturalMap(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active, PetscReal e[])
+void KergsLawNaturalMap(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho, PetscBool active,
+                        PetscReal e[])
 {
   PetscReal z[KERGS_MAXCOMP] = {0.0}, p[KERGS_MAXCOMP];
   PetscInt  c;

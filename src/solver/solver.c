@@ -14,8 +14,7 @@ PetscErrorCode KergsSolverRegister(const char name[], PetscErrorCode (*create)(K
 {
   PetscFunctionBeginUser;
   PetscCall(PetscFunctionListAdd(&SolverList, name, create));
-  if (SolverNumTypes < KERGS_SOLVER_MAXTYPES)
-    PetscCall(PetscStrncpy(SolverNames[SolverNumTypes++], name, sizeof(SolverNames[0])));
+  if (SolverNumTypes < KERGS_SOLVER_MAXTYPES) PetscCall(PetscStrncpy(SolverNames[SolverNumTypes++], name, sizeof(SolverNames[0])));
   PetscFunctionReturn(0);
 }
 
@@ -36,6 +35,7 @@ static PetscErrorCode SolverRegisterAll(void)
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGS, KergsSolverCreate_NLGS));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLKERGS, KergsSolverCreate_NLKerGS));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGSJAC, KergsSolverCreate_NLGSJac));
+  PetscCall(KergsSolverRegister(KERGS_SOLVER_NEWTON, KergsSolverCreate_Newton));
   PetscFunctionReturn(0);
 }
 
@@ -46,12 +46,12 @@ PetscErrorCode KergsSolverCreate(MPI_Comm comm, KergsSolver *solver)
   PetscFunctionBeginUser;
   PetscCall(SolverRegisterAll());
   PetscCall(PetscNew(&s));
-  s->comm      = comm;
-  s->max_it    = 150; /* the paper's cap */
+  s->comm         = comm;
+  s->max_it       = 150; /* the paper's cap */
   s->tol          = 1e-4;
   s->residual_tol = 5e-2;
   s->velocity_tol = 1e-2;
-  s->criterion = KERGS_CRITERION_QUAD;
+  s->criterion    = KERGS_CRITERION_QUAD;
   PetscCall(KergsSweepCreate(comm, &s->sweep));
   *solver = s;
   PetscFunctionReturn(0);
@@ -83,22 +83,32 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
   PetscOptionsBegin(s->comm, NULL, "Contact solver options", NULL);
   PetscCall(PetscOptionsFList("-solver_type", "Solver of the per-step contact problem", "KergsSolverSetType", SolverList, type, type,
                               sizeof(type), &set));
-  PetscCall(
-      PetscOptionsInt("-solver_max_it", "Maximum number of sweeps per step (the paper caps at 150)", "", s->max_it, &s->max_it, NULL));
+  /* the type first: it may set its own defaults of the common options, which the options then override */
+  if (!s->ops.solve || set) PetscCall(KergsSolverSetType(s, type));
+  PetscCall(PetscOptionsInt("-solver_max_it",
+                            "Maximum number of iterations per step: sweeps (NLGS, NLGS-Jac; the paper caps at 150), Newton steps", "",
+                            s->max_it, &s->max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_tol", "Tolerance of the convergence criterion", "", s->tol, &s->tol, NULL));
-  PetscCall(PetscOptionsReal("-solver_residual_tol", "A step converges only if the natural residual of the original problem is at most this (whatever the type's own criterion)", "", s->residual_tol, &s->residual_tol, NULL));
-  PetscCall(PetscOptionsReal("-solver_velocity_tol", "... and the law's worst violation in velocity, relative to the problem's largest velocity, at most this", "", s->velocity_tol, &s->velocity_tol, NULL));
+  PetscCall(PetscOptionsReal(
+      "-solver_residual_tol",
+      "A step converges only if the natural residual of the original problem is at most this (whatever the type's own criterion)", "",
+      s->residual_tol, &s->residual_tol, NULL));
+  PetscCall(PetscOptionsReal("-solver_velocity_tol",
+                             "... and the law's worst violation in velocity, relative to the problem's largest velocity, at most this", "",
+                             s->velocity_tol, &s->velocity_tol, NULL));
   PetscCall(PetscOptionsEnum("-solver_criterion",
                              "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, "
                              "LMGC90 Maxm), natural (natural-map residual, Siconos)",
                              "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
-  if (!s->ops.solve || set) PetscCall(KergsSolverSetType(s, type));
   if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
   PetscOptionsEnd();
   PetscCheck(s->max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_max_it %" PetscInt_FMT " must be at least 1", s->max_it);
-  PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number", (double)s->tol);
-  PetscCheck(s->residual_tol > 0 && PetscIsNormalReal(s->residual_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_residual_tol %g must be a positive number", (double)s->residual_tol);
-  PetscCheck(s->velocity_tol > 0 && PetscIsNormalReal(s->velocity_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_velocity_tol %g must be a positive number", (double)s->velocity_tol);
+  PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number",
+             (double)s->tol);
+  PetscCheck(s->residual_tol > 0 && PetscIsNormalReal(s->residual_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_residual_tol %g must be a positive number", (double)s->residual_tol);
+  PetscCheck(s->velocity_tol > 0 && PetscIsNormalReal(s->velocity_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_velocity_tol %g must be a positive number", (double)s->velocity_tol);
   PetscFunctionReturn(0);
 }
 

@@ -46,5 +46,6 @@ PETSC_INTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, Pets
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver);
+PETSC_INTERN PetscErrorCode KergsSolverCreate_Newton(KergsSolver);
 
 #endif

@@ -1,0 +1,668 @@
+/* kergs solver type "newton": a semismooth Newton method on the Alart-Curnier form of the exact 2D law, globalised
+   by a line search, solving the original per-step problem (not a regularised one) to tight tolerances.
+
+   Alart-Curnier function (docs/solver.md, "Newton"): per active contact, with u = W r + v^d, rho_n, rho_t > 0,
+     xi  = r_n - rho_n u_n,          F_n = r_n - max(0, xi)
+     tau = mu max(0, xi), z = r_t - rho_t u_t,   F_t = r_t - proj_[-tau, tau](z)
+   F(r) = 0 exactly when r and u satisfy Signorini-Coulomb; an inactive contact has F = r. F is piecewise linear in
+   (r, u), so an element of its generalized Jacobian is J = A + B W with A, B block diagonal (ncomp x ncomp per
+   contact), constant on each piece (open, stick, slip+, slip-). Newton solves J d = -F, with W over the active
+   contacts stored whole (both triangles) and J on its pattern, by a sparse direct LU (MUMPS by default) or any KSP
+   (-solver_ksp_type, -solver_pc_type). The step is damped by backtracking until the merit 1/2 |F|^2 decreases enough
+   (Armijo); warm-started from the previous step's impulses like every type.
+
+   W is singular in a confined packing (its kernel: self-equilibrated force networks), and so is J where the stick
+   contacts carry a hyperstatic network. -solver_newton_shift eps replaces W by W + eps_k I in J only (never in F):
+   eps_k = eps |F| / |r| times the mean W_nn, a Levenberg-Marquardt regularisation that vanishes at the solution, so
+   the fixed point and the fast local convergence stay those of the original problem. MUMPS's null-pivot detection
+   (ICNTL(24)) handles what is left. Convergence is the natural residual of the original problem (-solver_tol). */
+#include <kergs/private/solverimpl.h>
+#include <petscksp.h>
+
+typedef enum { NEWTON_PROX_NONE, NEWTON_PROX_IDENTITY } NewtonProx;
+static const char *const NewtonProxes[] = {"none", "identity", "NewtonProx", "NEWTON_PROX_", NULL};
+
+typedef struct {
+  KSP        ksp;      /* J d = -F; prefix solver_ */
+  Mat        Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
+  Vec        F, d, Wd, rtry, utry, Ftry;
+  Vec        rc, ueff;  /* the proximal centre, and the proximal problem's velocity */
+  PetscReal *A, *B;     /* per local contact, ncomp x ncomp row-major: J = A + B W */
+  PetscReal *rho;       /* per local contact: rho_n = rho_t = rho_factor / W_aa,nn */
+  PetscReal *rho_nat;   /* per local contact: 1 / W_aa,nn, the natural residual's */
+  PetscInt  *diagblock; /* per local block row: position of its own block in J's diagonal part */
+  PetscInt   nalloc;
+  /* options */
+  PetscReal  rho_factor;     /* -solver_newton_rho */
+  PetscReal  shift;          /* -solver_newton_shift */
+  PetscReal  armijo;         /* -solver_newton_armijo: sufficient decrease of the merit */
+  PetscInt   max_backtracks; /* -solver_newton_max_backtracks */
+  PetscReal  switch_tol;     /* -solver_newton_switch_tol: natural residual at which sweeps hand over to Newton */
+  PetscInt   sweep_batch;    /* -solver_newton_sweeps: sweeps of the first batch */
+  PetscInt   max_sweeps;     /* -solver_newton_max_sweeps: sweeps over the whole solve */
+  PetscInt   sweep_check;    /* residual checked every this many sweeps */
+  NewtonProx prox;           /* -solver_prox */
+  PetscReal  sigma_fixed;    /* -solver_prox_sigma: sigma / mean W_nn */
+  PetscInt   inner_max;      /* -solver_prox_inner_max: Newton steps per outer iteration */
+  PetscReal  inner_rtol;     /* inner tolerance on |F|, relative to the natural residual times |r| */
+  PetscReal  sigma;          /* this outer iteration's sigma (0 without the proximal term) */
+  /* figures of the last solve */
+  PetscInt  linear_its, backtracks, failed_searches, sweeps, outer;
+  PetscReal linear_seconds, last_shift, merit;
+} Newton;
+
+/* ------------------------------------------------------------------------------------------------ */
+/* The Alart-Curnier function and its generalized Jacobian, contact by contact                      */
+
+/* F of one contact (nc components) from r, u; with A and B (row-major nc x nc) when they are not NULL. */
+static inline void ContactFunction(PetscInt nc, const PetscScalar r[], const PetscScalar u[], PetscReal mu, PetscReal rho, PetscBool active,
+                                   PetscReal F[], PetscReal A[], PetscReal B[])
+{
+  PetscReal xi, tau, z;
+
+  if (A)
+    for (PetscInt i = 0; i < nc * nc; i++) A[i] = B[i] = 0.0;
+  if (!active) { /* r = 0 */
+    for (PetscInt c = 0; c < nc; c++) {
+      F[c] = PetscRealPart(r[c]);
+      if (A) A[c * nc + c] = 1.0;
+    }
+    return;
+  }
+  xi = PetscRealPart(r[0]) - rho * PetscRealPart(u[0]);
+  if (xi > 0) { /* closed: F_n = rho u_n */
+    F[0] = rho * PetscRealPart(u[0]);
+    if (A) B[0] = rho;
+  } else { /* open: F_n = r_n */
+    F[0] = PetscRealPart(r[0]);
+    if (A) A[0] = 1.0;
+  }
+  if (nc == 1) return;
+  tau = mu * PetscMax(xi, 0.0);
+  z   = PetscRealPart(r[1]) - rho * PetscRealPart(u[1]);
+  if (PetscAbsReal(z) < tau) { /* stick: F_t = rho u_t (ties go to slip, whose row stays nonsingular) */
+    F[1] = rho * PetscRealPart(u[1]);
+    if (A) B[3] = rho;
+  } else { /* slip, or open: F_t = r_t - sign(z) tau, tau depending on r_n - rho u_n while closed */
+    const PetscReal s = z >= 0 ? 1.0 : -1.0;
+    F[1]              = PetscRealPart(r[1]) - s * tau;
+    if (A) {
+      A[3] = 1.0;
+      if (xi > 0) {
+        A[2] = -s * mu;
+        B[2] = s * mu * rho;
+      }
+    }
+  }
+}
+
+/* F over the local contacts, from r and u; with the Jacobian blocks when jac. Returns 1/2 |F|^2 (global). */
+static PetscErrorCode EvaluateFunction(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec F, PetscBool jac,
+                                       PetscReal *merit)
+{
+  const PetscScalar *rl, *ul;
+  PetscScalar       *Fl;
+  PetscReal          sum = 0.0;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArrayRead(r, &rl));
+  PetscCall(VecGetArrayRead(u, &ul));
+  PetscCall(VecGetArray(F, &Fl));
+  for (PetscInt a = 0; a < n; a++) {
+    PetscReal f[KERGS_MAXCOMP];
+    ContactFunction(nc, rl + a * nc, ul + a * nc, s->mu[a], nt->rho[a], s->active[a], f, jac ? nt->A + a * nc * nc : NULL,
+                    jac ? nt->B + a * nc * nc : NULL);
+    for (PetscInt c = 0; c < nc; c++) {
+      Fl[a * nc + c] = f[c];
+      sum += f[c] * f[c];
+    }
+  }
+  PetscCall(VecRestoreArray(F, &Fl));
+  PetscCall(VecRestoreArrayRead(u, &ul));
+  PetscCall(VecRestoreArrayRead(r, &rl));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sum, 1, MPIU_REAL, MPIU_SUM, s->comm));
+  *merit = 0.5 * sum;
+  PetscFunctionReturn(0);
+}
+
+/* The natural residual of the original problem (|e| / |r|, docs/solver.md) from r and u = W r + v^d. */
+static PetscErrorCode NaturalResidual(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res)
+{
+  const PetscScalar *rl, *ul;
+  PetscReal          sums[2] = {0.0, 0.0};
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArrayRead(r, &rl));
+  PetscCall(VecGetArrayRead(u, &ul));
+  for (PetscInt a = 0; a < n; a++) {
+    PetscReal ra[KERGS_MAXCOMP], ua[KERGS_MAXCOMP];
+    for (PetscInt c = 0; c < nc; c++) {
+      ra[c] = PetscRealPart(rl[a * nc + c]);
+      ua[c] = PetscRealPart(ul[a * nc + c]);
+      sums[1] += ra[c] * ra[c];
+    }
+    sums[0] += KergsLawNaturalResidual2(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a]);
+  }
+  PetscCall(VecRestoreArrayRead(u, &ul));
+  PetscCall(VecRestoreArrayRead(r, &rl));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, s->comm));
+  *res = sums[1] > 0 ? PetscSqrtReal(sums[0]) / PetscSqrtReal(sums[1]) : PetscSqrtReal(sums[0]);
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* The Jacobian J = A + B (W + sigma I) + eps I on W's pattern                                        */
+
+/* The local (diagonal) part of a parallel matrix, or the matrix itself, and the off-process part (NULL on one rank). */
+static PetscErrorCode GetParts(Mat M, PetscInt nc, Mat *Ad, Mat *Ao)
+{
+  PetscBool mpi;
+
+  PetscFunctionBeginUser;
+  *Ao = NULL;
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)M, &mpi, MATMPIAIJ, MATMPIBAIJ, ""));
+  if (!mpi)
+    *Ad = M;
+  else if (nc > 1)
+    PetscCall(MatMPIBAIJGetSeqBAIJ(M, Ad, Ao, NULL));
+  else
+    PetscCall(MatMPIAIJGetSeqAIJ(M, Ad, Ao, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* Left-multiply every block of block row a of a sequential (B)AIJ part by B_a (nc x nc; BAIJ stores each block
+   column by column: entry (c, e) at c + e nc); in the diagonal part, also add A_a + sigma B_a + eps I to the own block,
+   found at diagblock[a]. */
+static PetscErrorCode ScaleBlockRows(Newton *nt, Mat P, PetscInt n, PetscInt nc, PetscBool diagonal, PetscReal eps, PetscReal sigma)
+{
+  const PetscInt *ia, *ja;
+  PetscInt        nrow;
+  PetscBool       done;
+  PetscScalar    *v;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetRowIJ(P, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscCheck(done && nrow == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the Jacobian's rows");
+  if (nc > 1)
+    PetscCall(MatSeqBAIJGetArray(P, &v));
+  else
+    PetscCall(MatSeqAIJGetArray(P, &v));
+  for (PetscInt a = 0; a < n; a++) {
+    const PetscReal *Ba = nt->B + a * nc * nc, *Aa = nt->A + a * nc * nc;
+    for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
+      PetscScalar *blk = v + j * nc * nc, out[KERGS_MAXCOMP * KERGS_MAXCOMP];
+      for (PetscInt c = 0; c < nc; c++)
+        for (PetscInt e = 0; e < nc; e++) {
+          PetscScalar sum = 0.0;
+          for (PetscInt k = 0; k < nc; k++) sum += Ba[c * nc + k] * blk[k + e * nc];
+          out[c + e * nc] = sum;
+        }
+      if (diagonal && j == nt->diagblock[a])
+        for (PetscInt c = 0; c < nc; c++) {
+          for (PetscInt e = 0; e < nc; e++) out[c + e * nc] += Aa[c * nc + e] + sigma * Ba[c * nc + e];
+          out[c + c * nc] += eps;
+        }
+      for (PetscInt i = 0; i < nc * nc; i++) blk[i] = out[i];
+    }
+  }
+  if (nc > 1)
+    PetscCall(MatSeqBAIJRestoreArray(P, &v));
+  else
+    PetscCall(MatSeqAIJRestoreArray(P, &v));
+  PetscCall(MatRestoreRowIJ(P, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscFunctionReturn(0);
+}
+
+/* Position of each block row's own block in the diagonal part (its local block column is the row). */
+static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt n, PetscInt nc)
+{
+  const PetscInt *ia, *ja;
+  PetscInt        nrow;
+  PetscBool       done;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetRowIJ(Ad, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  for (PetscInt a = 0; a < n; a++) {
+    nt->diagblock[a] = -1;
+    for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
+      if (ja[j] == a) nt->diagblock[a] = j;
+    PetscCheck(nt->diagblock[a] >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "newton: W's diagonal block of local contact %" PetscInt_FMT " is not stored", a);
+  }
+  PetscCall(MatRestoreRowIJ(Ad, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode AssembleJacobian(Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
+{
+  Mat Ad, Ao;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatCopy(nt->Wfull, nt->J, SAME_NONZERO_PATTERN));
+  PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
+  PetscCall(ScaleBlockRows(nt, Ad, n, nc, PETSC_TRUE, eps, sigma));
+  if (Ao) PetscCall(ScaleBlockRows(nt, Ao, n, nc, PETSC_FALSE, 0.0, 0.0));
+  /* values changed through the arrays: assembling again tells PETSc (and the factorization) that J changed */
+  PetscCall(MatAssemblyBegin(nt->J, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(nt->J, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Set-up and solve                                                                                 */
+
+static PetscErrorCode EnsureWork(Newton *nt, PetscInt n)
+{
+  PetscFunctionBeginUser;
+  if (n <= nt->nalloc) PetscFunctionReturn(0);
+  PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
+  nt->nalloc = PetscMax(n, 2 * nt->nalloc);
+  PetscCall(PetscMalloc5(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->A, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->B, nt->nalloc,
+                         &nt->rho, nt->nalloc, &nt->rho_nat, nt->nalloc, &nt->diagblock));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode DestroyStepObjects(Newton *nt)
+{
+  PetscFunctionBeginUser;
+  PetscCall(MatDestroy(&nt->Wfull));
+  PetscCall(MatDestroy(&nt->J));
+  PetscCall(VecDestroy(&nt->F));
+  PetscCall(VecDestroy(&nt->d));
+  PetscCall(VecDestroy(&nt->Wd));
+  PetscCall(VecDestroy(&nt->rtry));
+  PetscCall(VecDestroy(&nt->utry));
+  PetscCall(VecDestroy(&nt->Ftry));
+  PetscCall(VecDestroy(&nt->rc));
+  PetscCall(VecDestroy(&nt->ueff));
+  PetscFunctionReturn(0);
+}
+
+/* MUMPS's null-pivot detection (ICNTL(24) = 1): a singular J (hyperstatic stick networks) gets a solution of its
+   consistent part instead of a failed factorization. Set on this step's factor before it is computed; an option
+   -solver_mat_mumps_icntl_24 given by the user still wins (read at the factorization). */
+static PetscErrorCode EnableNullPivots(Newton *nt)
+{
+  PC            pc;
+  Mat           F;
+  MatSolverType type;
+  PetscBool     mumps;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCLU, &mumps));
+  if (!mumps) PetscFunctionReturn(0);
+  PetscCall(PCFactorGetMatSolverType(pc, &type));
+  PetscCall(PetscStrcmp(type, MATSOLVERMUMPS, &mumps));
+  if (!mumps) PetscFunctionReturn(0);
+  PetscCall(PCFactorSetUpMatSolverType(pc));
+  PetscCall(PCFactorGetMatrix(pc, &F));
+  PetscCall(MatMumpsSetIcntl(F, 24, 1));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
+{
+  Newton        *nt = (Newton *)s->data;
+  KergsDofLayout layout;
+  PetscInt       n, nc;
+  PetscReal     *blocks;
+  Mat            Ad, Ao;
+  Vec            r;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSolverSetUpSweep(s, scene, contacts, ops)); /* active set, mu, and the residual's sweep on W */
+  PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
+  nc = layout.ncomp;
+  PetscCall(EnsureWork(nt, n));
+  PetscCall(DestroyStepObjects(nt));
+  PetscCall(KergsOperatorsGetFullW(ops, &nt->Wfull));
+  PetscCall(MatDuplicate(nt->Wfull, MAT_COPY_VALUES, &nt->J));
+  PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
+  PetscCall(LocateDiagonalBlocks(nt, Ad, n, nc));
+  PetscCall(PetscMalloc1(n * nc * nc + 1, &blocks));
+  PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, blocks));
+  for (PetscInt a = 0; a < n; a++) {
+    const PetscReal wnn = blocks[a * nc * nc];
+    nt->rho_nat[a]      = wnn > 0 ? 1.0 / wnn : 1.0;
+    nt->rho[a]          = nt->rho_factor * nt->rho_nat[a];
+  }
+  PetscCall(PetscFree(blocks));
+  PetscCall(VecDuplicate(r, &nt->F));
+  PetscCall(VecDuplicate(r, &nt->d));
+  PetscCall(VecDuplicate(r, &nt->Wd));
+  PetscCall(VecDuplicate(r, &nt->rtry));
+  PetscCall(VecDuplicate(r, &nt->utry));
+  PetscCall(VecDuplicate(r, &nt->Ftry));
+  PetscCall(VecDuplicate(r, &nt->rc));
+  PetscCall(VecDuplicate(r, &nt->ueff));
+  PetscCall(KSPReset(nt->ksp)); /* J's sizes and pattern are this step's */
+  PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
+  PetscCall(EnableNullPivots(nt));
+  PetscFunctionReturn(0);
+}
+
+/* Solve J d = -F; a failed factorization or solve is an error naming the option to change. */
+static PetscErrorCode NewtonDirection(KergsSolver s, Newton *nt)
+{
+  KSPConvergedReason reason;
+  PetscInt           its;
+  PetscLogDouble     t0, t1;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscTime(&t0));
+  PetscCall(VecScale(nt->F, -1.0));
+  PetscCall(KSPSolve(nt->ksp, nt->F, nt->d));
+  PetscCall(VecScale(nt->F, -1.0));
+  PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
+  PetscCall(KSPGetIterationNumber(nt->ksp, &its));
+  PetscCall(PetscTime(&t1));
+  nt->linear_its += its;
+  nt->linear_seconds += t1 - t0;
+  PetscCheck(reason >= 0, s->comm, PETSC_ERR_NOT_CONVERGED,
+             "newton: the linear solve of a Newton step failed (%s); try -solver_prox identity, a larger -solver_newton_shift, or another "
+             "-solver_ksp_type/-solver_pc_type",
+             KSPConvergedReasons[reason]);
+  PetscFunctionReturn(0);
+}
+
+/* The velocity of the problem solved by the inner iterations: with the proximal term, (W + sigma I) r + v^d - sigma r_c,
+   i.e. u + sigma (r - r_c) with u = W r + v^d. */
+static PetscErrorCode ProximalVelocity(Newton *nt, Vec r, Vec u, Vec ueff)
+{
+  PetscFunctionBeginUser;
+  PetscCall(VecCopy(u, ueff));
+  if (nt->sigma > 0) {
+    PetscCall(VecAXPY(ueff, nt->sigma, r));
+    PetscCall(VecAXPY(ueff, -nt->sigma, nt->rc));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Backtracking: the largest t = 2^-k (k <= -solver_newton_max_backtracks) with merit(r + t d) <= (1 - 2 armijo t)
+   merit(r). Without such a t the smallest step is taken anyway and *ok is false: where a contact sits exactly on a
+   kink of F (a grazing contact with r = 0 and u_n = 0, plenty after NLGS sweeps), the Newton direction need not
+   decrease the merit, but a tiny step moves the contact off the kink and the next Jacobian is right. On exit r, u
+   hold the new point. */
+static PetscErrorCode LineSearch(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *merit, PetscBool *ok)
+{
+  PetscReal t = 1.0, trial = 0.0;
+  PetscInt  k;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatMult(nt->Wfull, nt->d, nt->Wd));
+  for (k = 0;; k++) {
+    PetscCall(VecWAXPY(nt->rtry, t, nt->d, r));
+    PetscCall(VecWAXPY(nt->utry, t, nt->Wd, u));
+    PetscCall(ProximalVelocity(nt, nt->rtry, nt->utry, nt->ueff));
+    PetscCall(EvaluateFunction(s, nt, n, nc, nt->rtry, nt->ueff, nt->Ftry, PETSC_FALSE, &trial));
+    if (trial <= (1.0 - 2.0 * nt->armijo * t) * *merit || k == nt->max_backtracks) break;
+    t *= 0.5;
+  }
+  *ok = (PetscBool)(trial <= (1.0 - 2.0 * nt->armijo * t) * *merit);
+  nt->backtracks += k;
+  if (!*ok) nt->failed_searches++;
+  PetscCall(VecCopy(nt->rtry, r));
+  PetscCall(VecCopy(nt->utry, u));
+  *merit = trial;
+  PetscFunctionReturn(0);
+}
+
+/* At most `count` NLGS sweeps on W (the sweep of KergsSolverSetUpSweep), stopping early once the natural residual is
+   at most `target`; u = W r + v^d and the residual on exit. */
+static PetscErrorCode Sweeps(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscInt count, PetscReal target,
+                             PetscReal *res)
+{
+  KergsSweepMeasures m;
+
+  PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < count; k++) {
+    PetscCall(KergsSweepRun(s->sweep, r, vd, NULL, NULL, &m));
+    nt->sweeps++;
+    if ((k + 1) % nt->sweep_check == 0 && k + 1 < count) {
+      PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+      PetscCall(NaturalResidual(s, nt, n, nc, r, u, res));
+      if (*res <= target) break;
+    }
+  }
+  PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+  PetscCall(NaturalResidual(s, nt, n, nc, r, u, res));
+  PetscFunctionReturn(0);
+}
+
+/* Newton on the current (proximal) problem, from r: at most `count` steps, until |F| is at most `ftol`, or until
+   `NEWTON_MAX_FAILURES` line searches in a row failed (*ok false). */
+#define NEWTON_MAX_FAILURES 3
+static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscInt count, PetscReal ftol,
+                                  PetscInt *steps, PetscBool *ok)
+{
+  PetscReal merit;
+  PetscInt  failures  = 0;
+  PetscBool decreased = PETSC_TRUE;
+
+  PetscFunctionBeginUser;
+  *ok = PETSC_TRUE;
+  PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
+  PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit));
+  for (PetscInt k = 0; k < count && PetscSqrtReal(2.0 * merit) > ftol; k++) {
+    PetscCall(AssembleJacobian(nt, n, nc, nt->shift, nt->sigma));
+    PetscCall(NewtonDirection(s, nt));
+    PetscCall(LineSearch(s, nt, n, nc, r, u, &merit, &decreased));
+    (*steps)++;
+    failures = decreased ? 0 : failures + 1;
+    if (failures == NEWTON_MAX_FAILURES) {
+      *ok = PETSC_FALSE;
+      break;
+    }
+    PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
+    PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit)); /* the Jacobian blocks at the new point */
+  }
+  nt->merit = merit;
+  PetscFunctionReturn(0);
+}
+
+/* Mean W_nn over the active contacts: the scale of the proximal term. */
+static PetscErrorCode MeanCompliance(KergsSolver s, Newton *nt, PetscInt n, PetscReal *mean)
+{
+  PetscReal sums[2] = {0.0, 0.0};
+
+  PetscFunctionBeginUser;
+  for (PetscInt a = 0; a < n; a++)
+    if (s->active[a]) {
+      sums[0] += 1.0 / nt->rho_nat[a];
+      sums[1] += 1.0;
+    }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, s->comm));
+  *mean = sums[1] > 0 ? sums[0] / sums[1] : 1.0;
+  PetscFunctionReturn(0);
+}
+
+/* NLGS sweeps first, until the natural residual is at most -solver_newton_switch_tol (the contact states settle; a cold
+   start always sweeps, its residual being absolute). Then outer iterations: each solves, by at most
+   -solver_prox_inner_max Newton steps, the proximal problem with W + sigma I and v^d - sigma r_c around the current
+   r_c = r, and moves r_c to its solution. The proximal term makes every inner Jacobian nonsingular (without it,
+   -solver_prox none, J is singular where stick contacts carry a hyperstatic network); at the fixed point it vanishes,
+   so r solves the original problem. An outer iteration that does not halve the natural residual (Newton stalls where the
+   contact states are still wrong) is followed by a batch of NLGS sweeps, twice as long each time. -solver_max_it caps
+   the Newton steps, -solver_newton_max_sweeps the sweeps. */
+static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+                                         KergsSolveStats *stats)
+{
+  Newton        *nt = (Newton *)s->data;
+  KergsDofLayout layout;
+  PetscInt       n, nglobal, nc, steps = 0, batch = nt->sweep_batch;
+  PetscReal      res = 0.0, rmax, rnorm, wmean = 1.0;
+  PetscLogDouble t0, t1;
+  PetscBool      ok;
+  Vec            r, u, vd;
+
+  PetscFunctionBeginUser;
+  (void)scene;
+  PetscCall(PetscTime(&t0));
+  PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &r, &u, &vd));
+  PetscCall(VecGetSize(r, &nglobal));
+  nc             = layout.ncomp;
+  nt->linear_its = nt->backtracks = nt->failed_searches = nt->sweeps = nt->outer = 0;
+  nt->linear_seconds = nt->sigma = nt->merit = 0.0;
+  PetscCall(MeanCompliance(s, nt, n, &wmean));
+  PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
+  PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
+  if (res > nt->switch_tol || rmax == 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
+  while (res > s->tol && nglobal > 0 && steps < s->max_it) {
+    PetscReal before = res;
+    PetscCall(VecCopy(r, nt->rc));
+    nt->sigma = nt->prox == NEWTON_PROX_IDENTITY ? nt->sigma_fixed * wmean : 0.0;
+    /* inner tolerance: the proximal problem's |F| a fraction of the original residual's scale */
+    PetscCall(VecNorm(r, NORM_2, &rnorm));
+    PetscCall(InnerNewton(s, nt, n, nc, r, u, PetscMin(nt->inner_max, s->max_it - steps), nt->inner_rtol * res * rnorm, &steps, &ok));
+    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
+    nt->outer++;
+    if (!ok || res > 0.5 * before) { /* Newton stalled (wrong contact states): a batch of sweeps, twice as long each time */
+      if (nt->sweeps >= nt->max_sweeps) break;
+      PetscCall(Sweeps(s, nt, n, nc, r, u, vd, PetscMin(batch, nt->max_sweeps - nt->sweeps), s->tol, &res));
+      batch *= 2;
+    }
+  }
+  stats->iterations    = steps;
+  stats->criterion     = res;
+  stats->criterion_met = (PetscBool)(res <= s->tol || nglobal == 0);
+  PetscCall(PetscTime(&t1));
+  stats->sweep_seconds = t1 - t0;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
+{
+  Newton *nt = (Newton *)s->data;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSolveStatsAdd(st, "linear_iterations", (PetscReal)nt->linear_its));
+  PetscCall(KergsSolveStatsAdd(st, "linear_seconds", nt->linear_seconds));
+  PetscCall(KergsSolveStatsAdd(st, "backtracks", (PetscReal)nt->backtracks));
+  PetscCall(KergsSolveStatsAdd(st, "failed_line_searches", (PetscReal)nt->failed_searches));
+  PetscCall(KergsSolveStatsAdd(st, "newton_merit", nt->merit));
+  PetscCall(KergsSolveStatsAdd(st, "sweeps", (PetscReal)nt->sweeps));
+  PetscCall(KergsSolveStatsAdd(st, "outer_iterations", (PetscReal)nt->outer));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptionsObject, KergsSolver s)
+{
+  Newton *nt = (Newton *)s->data;
+
+  PetscFunctionBeginUser;
+  PetscOptionsHeadBegin(PetscOptionsObject, "Semismooth Newton on the Alart-Curnier formulation (newton)");
+  PetscCall(PetscOptionsReal("-solver_newton_rho", "Augmentation parameter rho = factor / W_aa,nn of each contact", "", nt->rho_factor,
+                             &nt->rho_factor, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_shift",
+                             "Shift eps of the Jacobian, J + eps I (J has entries of order 1): makes the Newton step defined where stick "
+                             "contacts carry a hyperstatic network",
+                             "", nt->shift, &nt->shift, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_armijo", "Sufficient decrease of the merit 1/2 |F|^2 in the line search", "", nt->armijo,
+                             &nt->armijo, NULL));
+  PetscCall(PetscOptionsInt("-solver_newton_max_backtracks", "Halvings of a Newton step before the smallest one is taken anyway", "",
+                            nt->max_backtracks, &nt->max_backtracks, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_switch_tol", "NLGS sweeps first, until the natural residual is at most this, then Newton", "",
+                             nt->switch_tol, &nt->switch_tol, NULL));
+  PetscCall(PetscOptionsInt("-solver_newton_sweeps", "Sweeps after the first stalled Newton phase (doubled after each)", "",
+                            nt->sweep_batch, &nt->sweep_batch, NULL));
+  PetscCall(PetscOptionsEnum("-solver_prox", "Proximal term of the outer iterations: identity (W + sigma I), none (plain Newton)", "",
+                             NewtonProxes, (PetscEnum)nt->prox, (PetscEnum *)&nt->prox, NULL));
+  PetscCall(PetscOptionsReal("-solver_prox_sigma", "sigma of the proximal term W + sigma I, relative to the mean W_nn", "", nt->sigma_fixed,
+                             &nt->sigma_fixed, NULL));
+  PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
+  PetscCall(PetscOptionsInt("-solver_newton_max_sweeps", "Most sweeps in one solve", "", nt->max_sweeps, &nt->max_sweeps, NULL));
+  PetscOptionsHeadEnd();
+  PetscCheck(nt->rho_factor > 0 && PetscIsNormalReal(nt->rho_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_rho %g must be positive", (double)nt->rho_factor);
+  PetscCheck(nt->shift >= 0 && !PetscIsInfOrNanReal(nt->shift), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_shift %g must be non-negative", (double)nt->shift);
+  PetscCheck(nt->armijo > 0 && nt->armijo < 0.5, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_armijo %g must lie in (0, 0.5)",
+             (double)nt->armijo);
+  PetscCheck(nt->max_backtracks >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_max_backtracks %" PetscInt_FMT " must be non-negative", nt->max_backtracks);
+  PetscCall(KSPSetFromOptions(nt->ksp));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
+{
+  Newton *nt = (Newton *)s->data;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer,
+      "Semismooth Newton on the Alart-Curnier function (rho = %g / W_nn), Armijo line search (%g, at most %" PetscInt_FMT
+      " halvings), shift %g\n",
+      (double)nt->rho_factor, (double)nt->armijo, nt->max_backtracks, (double)nt->shift));
+  PetscCall(KSPView(nt->ksp, viewer));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
+{
+  Newton *nt = (Newton *)s->data;
+
+  PetscFunctionBeginUser;
+  PetscCall(DestroyStepObjects(nt));
+  PetscCall(KSPDestroy(&nt->ksp));
+  PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
+  PetscCall(PetscFree(nt));
+  s->data = NULL;
+  PetscFunctionReturn(0);
+}
+
+/* Direct LU by default: MUMPS (any number of ranks, null-pivot detection on), PETSc's own on one rank without it. */
+static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
+{
+  PC          pc;
+  PetscBool   mumps;
+  PetscMPIInt size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCall(KSPCreate(s->comm, &nt->ksp));
+  PetscCall(KSPSetOptionsPrefix(nt->ksp, "solver_"));
+  PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PCSetType(pc, PCLU));
+  PetscCall(MatSolverTypeGet(MATSOLVERMUMPS, MATSEQAIJ, MAT_FACTOR_LU, &mumps, NULL, NULL));
+  if (mumps || size > 1) PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+  PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
+{
+  Newton *nt;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscNew(&nt));
+  nt->rho_factor     = 1.0;
+  nt->shift          = 1e-8;
+  nt->armijo         = 1e-4;
+  nt->max_backtracks = 30;
+  nt->switch_tol     = 1e-4;
+  nt->sweep_batch    = 100;
+  nt->max_sweeps     = 10000;
+  nt->sweep_check    = 10;
+  nt->prox           = NEWTON_PROX_IDENTITY;
+  nt->sigma_fixed    = 1e-4;
+  nt->inner_max      = 10;
+  nt->inner_rtol     = 1e-2;
+  PetscCall(CreateLinearSolver(s, nt));
+  s->data               = nt;
+  s->max_it             = 100;
+  s->tol                = 1e-10;
+  s->ops.setfromoptions = SolverSetFromOptions_Newton;
+  s->ops.setup          = SolverSetUp_Newton;
+  s->ops.solve          = SolverSolve_Newton;
+  s->ops.stats          = SolverStats_Newton;
+  s->ops.view           = SolverView_Newton;
+  s->ops.destroy        = SolverDestroy_Newton;
+  PetscFunctionReturn(0);
+}
