@@ -10,10 +10,10 @@ Siconos, and check both Siconos's and kergs's solutions with the same residual.
 The problem (docs/results.md, "FCLib file"): find u, r in R^m, m = 2 nc, unknowns per contact normal then
 tangential, with u = W r + q and Coulomb's law with coefficients mu (Signorini-Coulomb in velocity).
 
-Residual (kergs's own definition, DESIGN.md section 4 / src/law.c): per contact, with u = W r + q,
-De Saxce's modified velocity u~ = (u_n + mu |u_t|, u_t), rho = 1 / W_nn of that contact (1 if W_nn <= 0),
-e = r - proj_K(r - rho u~) with K = {|r_t| <= mu r_n} the Coulomb cone; residual = ||e||_2 / ||r||_2 (||e||_2
-when r = 0). It is recomputed here from r: Siconos's info and error are not a convergence certificate.
+Residual (kergs's own definition, docs/solver.md "Convergence criteria" / src/solver/law.c): per contact, with
+u = W r + q, De Saxce's modified velocity u~ = (u_n + mu |u_t|, u_t), rho = 1 / W_nn of that contact (1 if
+W_nn <= 0), e = r - proj_K(r - rho u~) with K = {|r_t| <= mu r_n} the Coulomb cone; residual = ||e||_2 / ||r||_2
+(||e||_2 when r = 0). It is recomputed here from r: Siconos's info and error are not a convergence certificate.
 
 Siconos 4.4 (Debian's python3-siconos, importable only from /usr/bin/python3) is built without FCLib, so the
 file is read with h5py. W goes to Siconos as a sparse block matrix (SBM, 2 x 2 blocks, through
