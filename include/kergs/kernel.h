@@ -27,8 +27,9 @@ PETSC_EXTERN PetscErrorCode KergsKernelSetFromOptions(KergsKernel);
 PETSC_EXTERN PetscErrorCode KergsKernelSetUp(KergsKernel, KergsScene, KergsContacts, KergsOperators);
 PETSC_EXTERN PetscErrorCode KergsKernelSetOmega(KergsKernel, PetscReal omega);
 /* The active contacts of the step. With -kernel_active_only, H_f is restricted to them (the law fixes r = 0 on
-   the others) and P is zero on the other components; by default H_f spans every potential contact, as in
-   Algorithm 1. The array must live until the next SetUp. NULL: every contact is active. */
+   the others) and P is zero on the other components: the paper's choice (its Algorithm 1 keeps the contacts whose
+   predicted gap is <= 0). By default H_f spans every potential contact (within the alert distance). The array must
+   live until the next SetUp. NULL: every contact is active. */
 PETSC_EXTERN PetscErrorCode KergsKernelSetActive(KergsKernel, const PetscBool *active);
 /* y = P x (x, y over all contact components, layout of ops->r) */
 PETSC_EXTERN PetscErrorCode KergsKernelProject(KergsKernel, Vec x, Vec y);

@@ -6,7 +6,7 @@
      elastic     Algorithm 5, parameter -predictor_epsilon: numerical contact stiffness pushing gaps back
    The DOF-space linear systems (M + c H_f D H_f^T) V~ = b are solved with a KSP whose options have the
    prefix predictor_ (default: direct Cholesky, CHOLMOD on one rank, MUMPS on several). D selects the normal
-   components of the active contacts (g^- < 0).
+   components of the active contacts (the solver's active set, predicted gap <= 0; g^- <= 0 without one).
 
    Units (impulses in mass x velocity). The linear law r_n = -(dt/eta) v_n makes eta/dt
    a compliance (velocity per impulse, 1/mass) like W_nn; the elastic law r_n = -(dt/eps) g^+ makes 1/eps a
