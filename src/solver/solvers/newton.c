@@ -18,6 +18,7 @@
    (ICNTL(24)) handles what is left. Convergence is the natural residual of the original problem (-solver_tol). */
 #include <kergs/private/solverimpl.h>
 #include <petscksp.h>
+#include <string.h>
 
 typedef enum { NEWTON_PROX_NONE, NEWTON_PROX_IDENTITY } NewtonProx;
 static const char *const NewtonProxes[] = {"none", "identity", "NewtonProx", "NEWTON_PROX_", NULL};
@@ -28,6 +29,7 @@ typedef struct {
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;  /* the proximal centre, and the proximal problem's velocity */
   PetscReal *A, *B;     /* per local contact, ncomp x ncomp row-major: J = A + B W */
+  PetscReal *Aused, *Bused; /* the blocks of the Jacobian last assembled (and factored) */
   PetscReal *rho;       /* per local contact: rho_n = rho_t = rho_factor / W_aa,nn */
   PetscReal *rho_nat;   /* per local contact: 1 / W_aa,nn, the natural residual's */
   PetscInt  *diagblock; /* per local block row: position of its own block in J's diagonal part */
@@ -42,12 +44,14 @@ typedef struct {
   PetscInt   max_sweeps;     /* -solver_newton_max_sweeps: sweeps over the whole solve */
   PetscInt   sweep_check;    /* residual checked every this many sweeps */
   NewtonProx prox;           /* -solver_prox */
-  PetscReal  sigma_fixed;    /* -solver_prox_sigma: sigma / mean W_nn */
+  PetscReal  alpha;          /* -solver_prox_alpha: sigma / mean W_nn = alpha * natural residual */
+  PetscReal  sigma_min, sigma_max; /* -solver_prox_sigma_min, _max: its bounds */
   PetscInt   inner_max;      /* -solver_prox_inner_max: Newton steps per outer iteration */
   PetscReal  inner_rtol;     /* inner tolerance on |F|, relative to the natural residual times |r| */
   PetscReal  sigma;          /* this outer iteration's sigma (0 without the proximal term) */
+  PetscReal  sigma_used;     /* sigma of the Jacobian last assembled (-1: none this step) */
   /* figures of the last solve */
-  PetscInt  linear_its, backtracks, failed_searches, sweeps, outer;
+  PetscInt  linear_its, backtracks, failed_searches, sweeps, outer, jacobians;
   PetscReal linear_seconds, last_shift, merit;
 } Newton;
 
@@ -233,11 +237,23 @@ static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt n, Petsc
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode AssembleJacobian(Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
+/* J = A + B (W + sigma I) + eps I, unless the contact states (A, B) and sigma are those of the last Jacobian: F is
+   piecewise linear, so once the states settle J stays the same and its factorization is reused (the Newton step then
+   costs one solve). */
+static PetscErrorCode AssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
 {
-  Mat Ad, Ao;
+  Mat       Ad, Ao;
+  PetscInt  changed = (PetscInt)(sigma != nt->sigma_used);
+  size_t    bytes   = (size_t)n * nc * nc * sizeof(PetscReal);
 
   PetscFunctionBeginUser;
+  if (!changed) changed = (PetscInt)(memcmp(nt->A, nt->Aused, bytes) || memcmp(nt->B, nt->Bused, bytes));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_MAX, s->comm));
+  if (!changed) PetscFunctionReturn(0);
+  PetscCall(PetscArraycpy(nt->Aused, nt->A, n * nc * nc));
+  PetscCall(PetscArraycpy(nt->Bused, nt->B, n * nc * nc));
+  nt->sigma_used = sigma;
+  nt->jacobians++;
   PetscCall(MatCopy(nt->Wfull, nt->J, SAME_NONZERO_PATTERN));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
   PetscCall(ScaleBlockRows(nt, Ad, n, nc, PETSC_TRUE, eps, sigma));
@@ -256,7 +272,9 @@ static PetscErrorCode EnsureWork(Newton *nt, PetscInt n)
   PetscFunctionBeginUser;
   if (n <= nt->nalloc) PetscFunctionReturn(0);
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
+  PetscCall(PetscFree2(nt->Aused, nt->Bused));
   nt->nalloc = PetscMax(n, 2 * nt->nalloc);
+  PetscCall(PetscMalloc2(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Aused, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Bused));
   PetscCall(PetscMalloc5(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->A, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->B, nt->nalloc,
                          &nt->rho, nt->nalloc, &nt->rho_nat, nt->nalloc, &nt->diagblock));
   PetscFunctionReturn(0);
@@ -339,6 +357,7 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(VecDuplicate(r, &nt->rc));
   PetscCall(VecDuplicate(r, &nt->ueff));
   PetscCall(KSPReset(nt->ksp)); /* J's sizes and pattern are this step's */
+  nt->sigma_used = -1.0;
   PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
   PetscCall(EnableNullPivots(nt));
   PetscFunctionReturn(0);
@@ -447,9 +466,13 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
   PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit));
   for (PetscInt k = 0; k < count && PetscSqrtReal(2.0 * merit) > ftol; k++) {
-    PetscCall(AssembleJacobian(nt, n, nc, nt->shift, nt->sigma));
+    PetscCall(AssembleJacobian(s, nt, n, nc, nt->shift, nt->sigma));
     PetscCall(NewtonDirection(s, nt));
-    PetscCall(LineSearch(s, nt, n, nc, r, u, &merit, &decreased));
+    {
+      PetscReal m0 = merit; PetscInt b0 = nt->backtracks;
+      PetscCall(LineSearch(s, nt, n, nc, r, u, &merit, &decreased));
+      if (getenv("KERGS_DEBUG_NEWTON")) PetscCall(PetscPrintf(s->comm, "   inner %d merit %.3e -> %.3e  halvings %d ok %d sigma %.2e\n", (int)k, (double)m0, (double)merit, (int)(nt->backtracks - b0), (int)decreased, (double)nt->sigma));
+    }
     (*steps)++;
     failures = decreased ? 0 : failures + 1;
     if (failures == NEWTON_MAX_FAILURES) {
@@ -461,6 +484,14 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   }
   nt->merit = merit;
   PetscFunctionReturn(0);
+}
+
+/* sigma / mean W_nn: alpha * residual within [sigma_min, sigma_max], rounded down to a power of 10 so that it changes
+   (and the Jacobian with it) only when the residual crosses a decade. */
+static PetscReal ProximalSigma(Newton *nt, PetscReal res)
+{
+  PetscReal sig = PetscClipInterval(nt->alpha * res, nt->sigma_min, nt->sigma_max);
+  return PetscPowReal(10.0, PetscFloorReal(PetscLog10Real(sig)));
 }
 
 /* Mean W_nn over the active contacts: the scale of the proximal term. */
@@ -506,7 +537,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, &u, &vd));
   PetscCall(VecGetSize(r, &nglobal));
   nc             = layout.ncomp;
-  nt->linear_its = nt->backtracks = nt->failed_searches = nt->sweeps = nt->outer = 0;
+  nt->linear_its = nt->backtracks = nt->failed_searches = nt->sweeps = nt->outer = nt->jacobians = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
@@ -515,12 +546,13 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   while (res > s->tol && nglobal > 0 && steps < s->max_it) {
     PetscReal before = res;
     PetscCall(VecCopy(r, nt->rc));
-    nt->sigma = nt->prox == NEWTON_PROX_IDENTITY ? nt->sigma_fixed * wmean : 0.0;
+    nt->sigma = nt->prox == NEWTON_PROX_IDENTITY ? ProximalSigma(nt, res) * wmean : 0.0;
     /* inner tolerance: the proximal problem's |F| a fraction of the original residual's scale */
     PetscCall(VecNorm(r, NORM_2, &rnorm));
     PetscCall(InnerNewton(s, nt, n, nc, r, u, PetscMin(nt->inner_max, s->max_it - steps), nt->inner_rtol * res * rnorm, &steps, &ok));
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
     nt->outer++;
+    if (getenv("KERGS_DEBUG_NEWTON")) PetscCall(PetscPrintf(s->comm, "outer %d res %.3e -> %.3e ok %d sweeps %d\n", (int)nt->outer, (double)before, (double)res, (int)ok, (int)nt->sweeps));
     if (!ok || res > 0.5 * before) { /* Newton stalled (wrong contact states): a batch of sweeps, twice as long each time */
       if (nt->sweeps >= nt->max_sweeps) break;
       PetscCall(Sweeps(s, nt, n, nc, r, u, vd, PetscMin(batch, nt->max_sweeps - nt->sweeps), s->tol, &res));
@@ -547,6 +579,7 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "newton_merit", nt->merit));
   PetscCall(KergsSolveStatsAdd(st, "sweeps", (PetscReal)nt->sweeps));
   PetscCall(KergsSolveStatsAdd(st, "outer_iterations", (PetscReal)nt->outer));
+  PetscCall(KergsSolveStatsAdd(st, "jacobians", (PetscReal)nt->jacobians));
   PetscFunctionReturn(0);
 }
 
@@ -572,8 +605,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                             nt->sweep_batch, &nt->sweep_batch, NULL));
   PetscCall(PetscOptionsEnum("-solver_prox", "Proximal term of the outer iterations: identity (W + sigma I), none (plain Newton)", "",
                              NewtonProxes, (PetscEnum)nt->prox, (PetscEnum *)&nt->prox, NULL));
-  PetscCall(PetscOptionsReal("-solver_prox_sigma", "sigma of the proximal term W + sigma I, relative to the mean W_nn", "", nt->sigma_fixed,
-                             &nt->sigma_fixed, NULL));
+  PetscCall(PetscOptionsReal("-solver_prox_alpha", "sigma of the proximal term W + sigma I: alpha * natural residual * mean W_nn", "", nt->alpha, &nt->alpha, NULL));
+  PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
+  PetscCall(PetscOptionsReal("-solver_prox_sigma_max", "Largest sigma / mean W_nn", "", nt->sigma_max, &nt->sigma_max, NULL));
   PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_max_sweeps", "Most sweeps in one solve", "", nt->max_sweeps, &nt->max_sweeps, NULL));
   PetscOptionsHeadEnd();
@@ -611,6 +645,7 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
   PetscCall(DestroyStepObjects(nt));
   PetscCall(KSPDestroy(&nt->ksp));
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
+  PetscCall(PetscFree2(nt->Aused, nt->Bused));
   PetscCall(PetscFree(nt));
   s->data = NULL;
   PetscFunctionReturn(0);
@@ -651,7 +686,9 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->max_sweeps     = 10000;
   nt->sweep_check    = 10;
   nt->prox           = NEWTON_PROX_IDENTITY;
-  nt->sigma_fixed    = 1e-4;
+  nt->alpha          = 1.0;
+  nt->sigma_min      = 1e-6;
+  nt->sigma_max      = 1e-2;
   nt->inner_max      = 10;
   nt->inner_rtol     = 1e-2;
   PetscCall(CreateLinearSolver(s, nt));
