@@ -1,7 +1,7 @@
 static const char help[] = "Tests of contact detection (src/detect.c): the cell-list search against a brute-force O(N^2)\n"
                            "search on a polydisperse packing with walls, ownership over ranks (by grain id, through ghosts),\n"
                            "persistence of impulses, the alert distance, one-sided walls and segment ends, coincident\n"
-                           "centres, and a timing.\n";
+                           "centres. (Its timing is a benchmark: scripts/bench_micro.c.)\n";
 
 /* The scenes come from KergsSceneCreate with two materials and hand-set walls; their disks are given with
    KergsSceneSetDisks (the same full arrays on every rank, each rank keeps its contiguous slice as its owned
@@ -566,61 +566,6 @@ static PetscErrorCode TestCoincidentCentres(void)
   PetscFunctionReturn(0);
 }
 
-/* A dense packing of 50,000 disks in random order (the worst case for memory access):
-   time one detection and a second one (with persistence), and print the cost per grain. */
-static PetscErrorCode TimeDetection(MPI_Comm comm)
-{
-  const PetscInt     nx = 250, ny = 200, ndisks = nx * ny;
-  KergsScene         s;
-  KergsContacts      ct;
-  PetscInt          *perm;
-  PetscReal         *x, *r;
-  unsigned long long seed = 7;
-  PetscLogDouble     t0, t1, t2, tmax[2], tloc[2];
-
-  PetscFunctionBeginUser;
-  PetscCall(SceneCreate(comm, 4, 0.05, &s));
-  /* jittered triangular lattice of spacing 2 (six neighbours each), radii 0.97 .. 1.03, stored in a random
-     permutation; gaps between neighbours spread over [-0.16, 0.16] around the alert distance 0.05 */
-  PetscCall(PetscMalloc3(ndisks, &perm, 2 * ndisks, &x, ndisks, &r));
-  for (PetscInt i = 0; i < ndisks; i++) perm[i] = i;
-  for (PetscInt i = ndisks - 1; i > 0; i--) {
-    PetscInt j = (PetscInt)(Uniform(&seed) * (PetscReal)(i + 1)), tmp = perm[i];
-    perm[i] = perm[j];
-    perm[j] = tmp;
-  }
-  for (PetscInt i = 0; i < ndisks; i++) {
-    const PetscInt k = perm[i], row = i / nx, col = i % nx;
-    x[2 * k]     = 2.0 * (PetscReal)col + (PetscReal)(row % 2) + 1.0 + 0.1 * (Uniform(&seed) - 0.5);
-    x[2 * k + 1] = PetscSqrtReal(3.0) * (PetscReal)row + 1.0 + 0.1 * (Uniform(&seed) - 0.5);
-    r[k]         = 0.97 + 0.06 * Uniform(&seed);
-  }
-  PetscCall(SceneSetDisks(s, ndisks, x, r, NULL));
-  PetscCall(SetWall(s, 0, PETSC_TRUE, 0, 0, 1, 0, 0));
-  PetscCall(SetWall(s, 1, PETSC_TRUE, 0, 1, 0, 0, 0));
-  PetscCall(SetWall(s, 2, PETSC_TRUE, 2.0 * nx + 1.0, 0, 2.0 * nx + 1.0, 1, 0));
-  PetscCall(SetWall(s, 3, PETSC_TRUE, 1, PetscSqrtReal(3.0) * ny, 0, PetscSqrtReal(3.0) * ny, 0));
-  PetscCall(KergsContactsCreate(comm, &ct));
-  PetscCallMPI(MPI_Barrier(comm));
-  PetscCall(PetscTime(&t0));
-  PetscCall(KergsContactsDetect(ct, s));
-  PetscCall(PetscTime(&t1));
-  PetscCall(KergsContactsDetect(ct, s));
-  PetscCall(PetscTime(&t2));
-  tloc[0] = t1 - t0;
-  tloc[1] = t2 - t1;
-  PetscCallMPI(MPI_Allreduce(tloc, tmax, 2, MPI_DOUBLE, MPI_MAX, comm));
-  PetscCheck(ct->nglobal > 2 * ndisks, comm, PETSC_ERR_PLIB, "timing packing: only %" PetscInt_FMT " contacts", ct->nglobal);
-  PetscCall(PetscPrintf(comm,
-                        "timing: %" PetscInt_FMT " disks, %" PetscInt_FMT
-                        " contacts, first detection %.0f ns per grain, second (persistent) %.0f ns per grain (slowest rank)\n",
-                        ndisks, ct->nglobal, 1e9 * tmax[0] / ndisks, 1e9 * tmax[1] / ndisks));
-  PetscCall(PetscFree3(perm, x, r));
-  PetscCall(KergsContactsDestroy(&ct));
-  PetscCall(KergsSceneDestroy(&s));
-  PetscFunctionReturn(0);
-}
-
 int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
@@ -628,7 +573,6 @@ int main(int argc, char **argv)
   PetscCall(TestPackingAndPersistence(PETSC_COMM_WORLD));
   PetscCall(TestAlertAndWalls());
   PetscCall(TestCoincidentCentres());
-  PetscCall(TimeDetection(PETSC_COMM_WORLD));
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "test_detect: all checks passed\n"));
   PetscCall(PetscFinalize());
   return 0;

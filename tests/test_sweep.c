@@ -5,31 +5,11 @@
      contacts inactive: the distributed solution equals the one computed on one rank;
    - W stored by its upper block triangle (SBAIJ) sweeps as W stored whole, on any number of ranks;
    - the NLGS-Jac entry points (extra right-hand side, replacement diagonal blocks) against the equivalent
-     problem (W + omega I) r + vd - omega r~;
-   - ns per contact per sweep on a larger lattice (printed only). */
-#include "internals.h"
+     problem (W + omega I) r + vd - omega r~.
+   The lattice is built by tests/lattice.h; its timing (ns per contact per sweep) is a benchmark, scripts/bench_micro.c. */
+#include "lattice.h"
 
-static const char help[] = "Tests of the NLGS sweep.\n"
-                           "  -perf_contacts <n>: number of contacts of the timing problem (default 50000)\n";
-
-/* A reproducible number in [0, 1) from an integer (splitmix64 finaliser). */
-static PetscReal Hash01(unsigned long long x)
-{
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  x = x ^ (x >> 31);
-  return (PetscReal)(x >> 11) / 9007199254740992.0;
-}
-
-/* Local contacts of this rank when ntotal contacts are split in contiguous blocks (PETSc's default split). */
-static PetscErrorCode LocalCount(MPI_Comm comm, PetscInt ntotal, PetscInt *nloc)
-{
-  PetscFunctionBeginUser;
-  *nloc = PETSC_DECIDE;
-  PetscCall(PetscSplitOwnership(comm, nloc, &ntotal));
-  PetscFunctionReturn(0);
-}
+static const char help[] = "Tests of the NLGS sweep.\n";
 
 /* Sweeps from r = 0 until quad < tol. Returns the number of sweeps and the quad of the first sweep. */
 static PetscErrorCode SolveBySweeps(KergsSweep sweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wd, PetscReal tol, PetscInt maxit, PetscInt *its,
@@ -141,122 +121,6 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   PetscFunctionReturn(0);
 }
 
-/* ---------------------------------------------------------------------------------------------------------
-   Triangular lattice of gx x gy disks, contacts with the right, upper and upper-right neighbours (contact
-   3 g + d, d = 0, 1, 2, kept when the neighbour exists; numbered in that order). Normals are the lattice
-   directions perturbed by a reproducible angle. W = H^T M^-1 H + shift I over ncomp components per contact,
-   rows distributed in contiguous blocks of contacts. */
-typedef struct {
-  PetscInt  gx, gy, ncontact;
-  PetscInt *ga, *gb; /* bodies a (neighbour) and b of each contact */
-  PetscReal *nx, *ny;
-} Lattice;
-
-static PetscErrorCode LatticeCreate(PetscInt gx, PetscInt gy, Lattice *L)
-{
-  const PetscInt di[3] = {1, 0, 1}, dj[3] = {0, 1, 1};
-  PetscInt       i, j, d, k = 0;
-
-  PetscFunctionBeginUser;
-  L->gx = gx;
-  L->gy = gy;
-  PetscCall(PetscMalloc4(3 * gx * gy, &L->ga, 3 * gx * gy, &L->gb, 3 * gx * gy, &L->nx, 3 * gx * gy, &L->ny));
-  for (j = 0; j < gy; j++)
-    for (i = 0; i < gx; i++)
-      for (d = 0; d < 3; d++) {
-        PetscReal ang;
-
-        if (i + di[d] >= gx || j + dj[d] >= gy) continue;
-        L->gb[k] = i + gx * j;
-        L->ga[k] = i + di[d] + gx * (j + dj[d]);
-        ang      = PetscAtan2Real((PetscReal)dj[d], (PetscReal)di[d]) + 0.2 * (Hash01(7 * k + 1) - 0.5);
-        L->nx[k] = PetscCosReal(ang);
-        L->ny[k] = PetscSinReal(ang);
-        k++;
-      }
-  L->ncontact = k;
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode LatticeDestroy(Lattice *L)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree4(L->ga, L->gb, L->nx, L->ny));
-  PetscFunctionReturn(0);
-}
-
-/* Sets the column(s) of contact k in Hs = M^{-1/2} H: force r_n n + r_t t and torque -R r_t on a, the
-   opposite force and torque -R r_t on b (DESIGN.md section 2). Disk radius R = 0.5, mass in [1, 2]. */
-static PetscErrorCode LatticeSetContactColumns(const Lattice *L, PetscInt k, PetscInt ncomp, Mat Hs)
-{
-  const PetscReal R = 0.5;
-  const PetscInt  body[2] = {L->ga[k], L->gb[k]};
-  const PetscReal sign[2] = {1.0, -1.0};
-  PetscInt        s;
-
-  PetscFunctionBeginUser;
-  for (s = 0; s < 2; s++) {
-    const PetscReal m = 1.0 + Hash01(3 * body[s] + 2), Inertia = 0.5 * m * R * R;
-    const PetscInt  rows[3] = {3 * body[s], 3 * body[s] + 1, 3 * body[s] + 2};
-    const PetscInt  cols[2] = {ncomp * k, ncomp * k + 1};
-    PetscScalar     v[3][2];
-
-    v[0][0] = sign[s] * L->nx[k] / PetscSqrtReal(m);
-    v[1][0] = sign[s] * L->ny[k] / PetscSqrtReal(m);
-    v[2][0] = 0.0;
-    v[0][1] = -sign[s] * L->ny[k] / PetscSqrtReal(m); /* t = (-n_y, n_x) */
-    v[1][1] = sign[s] * L->nx[k] / PetscSqrtReal(m);
-    v[2][1] = -R / PetscSqrtReal(Inertia);
-    if (ncomp == 2) PetscCall(MatSetValues(Hs, 3, rows, 2, cols, &v[0][0], INSERT_VALUES));
-    else {
-      PetscScalar vn[2] = {v[0][0], v[1][0]};
-
-      PetscCall(MatSetValues(Hs, 2, rows, 1, cols, vn, INSERT_VALUES));
-    }
-  }
-  PetscFunctionReturn(0);
-}
-
-/* W, v^d, mu and activity for the lattice on comm: contact k is inactive when k % 7 == 3; v^d_n in
-   [-1, 0.5), v^d_t in [-1, 1). */
-static PetscErrorCode LatticeProblem(MPI_Comm comm, const Lattice *L, PetscInt ncomp, PetscReal mu, PetscReal shift, Mat *W, Vec *vd, PetscReal **mus, PetscBool **active)
-{
-  const PetscInt ngrain = L->gx * L->gy;
-  Mat            Hs;
-  PetscInt       k, c, kstart, kend, nloc;
-
-  PetscFunctionBeginUser;
-  PetscCall(LocalCount(comm, L->ncontact, &nloc));
-  /* columns by contact, so that W = Hs^T Hs has ncomp x ncomp blocks: stored as BAIJ for the sweep when ncomp > 1 */
-  PetscCall(MatCreate(comm, &Hs));
-  PetscCall(MatSetSizes(Hs, PETSC_DECIDE, ncomp * nloc, 3 * ngrain, ncomp * L->ncontact));
-  PetscCall(MatSetBlockSizes(Hs, 1, ncomp));
-  PetscCall(MatSetType(Hs, MATAIJ));
-  PetscCall(MatSeqAIJSetPreallocation(Hs, 14 * ncomp, NULL));
-  PetscCall(MatMPIAIJSetPreallocation(Hs, 14 * ncomp, NULL, 14 * ncomp, NULL));
-  PetscCall(MatSetOption(Hs, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
-  PetscCall(MatGetOwnershipRangeColumn(Hs, &kstart, &kend));
-  kstart /= ncomp;
-  kend /= ncomp;
-  for (k = kstart; k < kend; k++) PetscCall(LatticeSetContactColumns(L, k, ncomp, Hs));
-  PetscCall(MatAssemblyBegin(Hs, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(Hs, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatTransposeMatMult(Hs, Hs, MAT_INITIAL_MATRIX, PETSC_DEFAULT, W));
-  if (ncomp > 1) PetscCall(MatConvert(*W, MATBAIJ, MAT_INPLACE_MATRIX, W));
-  PetscCall(MatShift(*W, shift));
-  PetscCall(MatDestroy(&Hs));
-
-  PetscCall(MatCreateVecs(*W, vd, NULL));
-  PetscCall(PetscMalloc2(kend - kstart, mus, kend - kstart, active));
-  for (k = kstart; k < kend; k++) {
-    (*mus)[k - kstart]    = mu;
-    (*active)[k - kstart] = (PetscBool)(k % 7 != 3);
-    for (c = 0; c < ncomp; c++) PetscCall(VecSetValue(*vd, ncomp * k + c, c == 0 ? -1.0 + 1.5 * Hash01(11 * k + 5) : -1.0 + 2.0 * Hash01(13 * k + 9), INSERT_VALUES));
-  }
-  PetscCall(VecAssemblyBegin(*vd));
-  PetscCall(VecAssemblyEnd(*vd));
-  PetscFunctionReturn(0);
-}
 
 /* Solve the lattice problem on comm (to quad < 1e-12); check residual and inactive contacts. Returns r. */
 static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattice *L, PetscInt ncomp, PetscReal mu, Vec *r, PetscReal *res, PetscInt *its)
@@ -441,48 +305,6 @@ static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
   PetscFunctionReturn(0);
 }
 
-/* Timing on a larger lattice (printed only). */
-static PetscErrorCode TimeSweeps(KergsSweep sweep)
-{
-  MPI_Comm           comm = PETSC_COMM_WORLD;
-  const PetscInt     ncomp = 2, nsweep = 20;
-  PetscInt           target = 50000, g, k, nnz;
-  Lattice            L;
-  Mat                W;
-  Vec                vd, r;
-  PetscReal         *mus, t0, t1;
-  PetscBool         *active;
-  KergsSweepMeasures m;
-  MatInfo            info;
-
-  PetscFunctionBeginUser;
-  PetscOptionsBegin(comm, NULL, "Sweep test options", NULL);
-  PetscCall(PetscOptionsInt("-perf_contacts", "number of contacts of the timing problem", NULL, target, &target, NULL));
-  PetscOptionsEnd();
-  g = (PetscInt)PetscCeilReal(PetscSqrtReal(target / 3.0)) + 1;
-  PetscCall(LatticeCreate(g, g, &L));
-  PetscCall(LatticeProblem(comm, &L, ncomp, 0.3, 0.05, &W, &vd, &mus, &active));
-  PetscCall(MatGetInfo(W, MAT_GLOBAL_SUM, &info));
-  nnz = (PetscInt)info.nz_used;
-  PetscCall(MatCreateVecs(W, &r, NULL));
-  PetscCall(KergsSweepSetUp(sweep, W, ncomp, mus, active));
-  PetscCall(VecSet(r, 0.0));
-  PetscCall(KergsSweepRun(sweep, r, vd, NULL, NULL, &m)); /* warm up */
-  PetscCallMPI(MPI_Barrier(comm));
-  t0 = MPI_Wtime();
-  for (k = 0; k < nsweep; k++) PetscCall(KergsSweepRun(sweep, r, vd, NULL, NULL, &m));
-  t1 = MPI_Wtime();
-  PetscCall(PetscPrintf(comm, "timing: %" PetscInt_FMT " contacts, %.1f nonzeros per row, %" PetscInt_FMT " sweeps: %.1f ns per local contact per sweep (quad after %" PetscInt_FMT " sweeps: %.2e)\n",
-                        L.ncontact, (double)nnz / (ncomp * L.ncontact), nsweep, 1e9 * (t1 - t0) / (nsweep * (PetscReal)sweep->n), nsweep + 1, (double)m.quad));
-  PetscCall(KergsSweepReset(sweep));
-  PetscCall(PetscFree2(mus, active));
-  PetscCall(VecDestroy(&r));
-  PetscCall(VecDestroy(&vd));
-  PetscCall(MatDestroy(&W));
-  PetscCall(LatticeDestroy(&L));
-  PetscFunctionReturn(0);
-}
-
 int main(int argc, char **argv)
 {
   KergsSweep sweep;
@@ -498,7 +320,6 @@ int main(int argc, char **argv)
   PetscCall(TestUpperStorage(1, 0.0));
   PetscCall(TestUpperStorage(2, 0.3));
   PetscCall(TestRegularisedEntryPoints(sweep));
-  PetscCall(TimeSweeps(sweep));
   PetscCall(KergsSweepDestroy(&sweep));
   PetscCall(PetscFinalize());
   return 0;
