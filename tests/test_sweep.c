@@ -7,13 +7,15 @@
    - the NLGS-Jac entry points (extra right-hand side, replacement diagonal blocks) against the equivalent
      problem (W + omega I) r + vd - omega r~.
    The lattice is built by tests/lattice.h; its timing (ns per contact per sweep) is a benchmark, scripts/bench_micro.c. */
+#include "testing.h"
 #include "lattice.h"
 
 static const char help[] = "Tests of the NLGS sweep.\n";
 
-/* Sweeps from r = 0 until quad < tol. Returns the number of sweeps and the quad of the first sweep. */
-static PetscErrorCode SolveBySweeps(KergsSweep sweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wd, PetscReal tol, PetscInt maxit, PetscInt *its,
-                                    PetscReal *quad0)
+/* Sweeps from r = 0 until quad < tol (at most maxit). Returns the number of sweeps and the quad of the first sweep;
+   checks that quad fell below tol (label names the problem). */
+static PetscErrorCode SolveBySweeps(const char *label, KergsSweep sweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wd, PetscReal tol, PetscInt maxit,
+                                    PetscInt *its, PetscReal *quad0)
 {
   KergsSweepMeasures m;
   PetscInt           k;
@@ -25,9 +27,8 @@ static PetscErrorCode SolveBySweeps(KergsSweep sweep, Vec r, Vec vd, const Petsc
     if (k == 0) *quad0 = m.quad;
     if (m.quad < tol) break;
   }
-  *its = k + 1;
-  PetscCheck(k < maxit, PetscObjectComm((PetscObject)r), PETSC_ERR_NOT_CONVERGED, "sweeps did not reach quad < %g in %" PetscInt_FMT " sweeps (quad %g)", (double)tol, maxit,
-             (double)m.quad);
+  *its = PetscMin(k + 1, maxit);
+  PetscCall(Checkf((PetscBool)(k < maxit), m.quad, tol, "%s: sweeps reach quad < %g within %" PetscInt_FMT " (quad at exit)", label, (double)tol, maxit));
   PetscFunctionReturn(0);
 }
 
@@ -77,7 +78,7 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   Vec                vd, r, v;
   PetscBool         *active;
   PetscInt           its, k, rstart, rend;
-  PetscReal          quad0, res, err = 0.0, rmax = 0.0, above;
+  PetscReal          quad0, res, err = 0.0, rmax = 0.0, above, rceiling = 0.0;
   const PetscScalar *ra;
   MPI_Comm           comm = PETSC_COMM_WORLD;
 
@@ -85,7 +86,7 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   PetscCall(BuildColumn(comm, N, gdt, 3 * gdt, &W, &vd, &active));
   PetscCall(MatCreateVecs(W, &r, &v));
   PetscCall(KergsSweepSetUp(sweep, W, 1, NULL, active));
-  PetscCall(SolveBySweeps(sweep, r, vd, NULL, NULL, 1e-10, 20000, &its, &quad0));
+  PetscCall(SolveBySweeps("column", sweep, r, vd, NULL, NULL, 1e-10, 20000, &its, &quad0));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
   PetscCall(VecGetOwnershipRange(r, &rstart, &rend));
   PetscCall(VecGetArrayRead(r, &ra));
@@ -95,23 +96,24 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
     for (above = 0.0, j = k; j < N; j++) above += gdt * ColumnMass(j);
     err  = PetscMax(err, PetscAbsReal(ra[k - rstart] - above));
     rmax = PetscMax(rmax, above);
-    if (k == N) PetscCheck(ra[k - rstart] == 0.0, comm, PETSC_ERR_PLIB, "column: the inactive ceiling contact carries r = %g", (double)ra[k - rstart]);
+    if (k == N) rceiling = PetscAbsReal(ra[k - rstart]);
   }
   PetscCall(VecRestoreArrayRead(r, &ra));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &err, 1, MPIU_REAL, MPIU_MAX, comm));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rmax, 1, MPIU_REAL, MPIU_MAX, comm));
-  PetscCall(PetscPrintf(comm, "column of %" PetscInt_FMT " disks: %" PetscInt_FMT " sweeps, first quad %g, natural residual %.2e, |r - r_exact| / |r_exact| = %.2e\n", N, its,
-                        (double)quad0, (double)res, (double)(err / rmax)));
-  PetscCheck(PetscAbsReal(quad0 - 1.0) < 1e-14, comm, PETSC_ERR_PLIB, "column: the first sweep from r = 0 must have quad = 1, got %g", (double)quad0);
-  PetscCheck(res < 1e-8, comm, PETSC_ERR_PLIB, "column: natural residual %g", (double)res);
-  PetscCheck(err < 1e-7 * rmax, comm, PETSC_ERR_PLIB, "column: impulses differ from the weights carried by %g", (double)(err / rmax));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rceiling, 1, MPIU_REAL, MPIU_MAX, comm));
+  PetscCall(PetscPrintf(comm, "column of %" PetscInt_FMT " disks: %" PetscInt_FMT " sweeps\n", N, its));
+  PetscCall(Check((PetscBool)(rceiling == 0.0), "column: the inactive ceiling contact carries r = 0", rceiling, 0));
+  PetscCall(Check((PetscBool)(PetscAbsReal(quad0 - 1.0) < 1e-14), "column: the first sweep from r = 0 has quad = 1", quad0, 1));
+  PetscCall(Check((PetscBool)(res < 1e-8), "column: natural residual", res, 1e-8));
+  PetscCall(Check((PetscBool)(err < 1e-7 * rmax), "column: impulses = weights carried (|r - r_exact| / |r_exact|)", err / rmax, 1e-7));
   /* all contacts open: vd >= 0 gives r = 0 and a natural residual of exactly 0 (absolute) */
   PetscCall(VecAbs(vd));
-  PetscCall(SolveBySweeps(sweep, r, vd, NULL, NULL, 1e-10, 10, &its, &quad0));
+  PetscCall(SolveBySweeps("column pulled apart", sweep, r, vd, NULL, NULL, 1e-10, 10, &its, &quad0));
   PetscCall(VecNorm(r, NORM_INFINITY, &err));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
-  PetscCheck(err == 0.0 && res == 0.0 && quad0 == 0.0, comm, PETSC_ERR_PLIB, "column pulled apart: |r| %g, residual %g, quad %g", (double)err, (double)res, (double)quad0);
-  PetscCall(PetscPrintf(comm, "column pulled apart (v^d >= 0): r = 0, quad 0, residual 0 after %" PetscInt_FMT " sweep(s): OK\n", its));
+  PetscCall(Check((PetscBool)(err == 0.0), "column pulled apart (v^d >= 0): r = 0", err, 0));
+  PetscCall(Check((PetscBool)(res == 0.0 && quad0 == 0.0), "column pulled apart: quad 0 and natural residual 0 (their sum)", res + quad0, 0));
   PetscCall(KergsSweepReset(sweep)); /* active is freed below */
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&v));
@@ -136,7 +138,7 @@ static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattic
   PetscCall(LatticeProblem(comm, L, ncomp, mu, 1.0, &W, &vd, &mus, &active));
   PetscCall(MatCreateVecs(W, r, &v));
   PetscCall(KergsSweepSetUp(sweep, W, ncomp, mus, active));
-  PetscCall(SolveBySweeps(sweep, *r, vd, NULL, NULL, 1e-12, 5000, its, &quad0));
+  PetscCall(SolveBySweeps(comm == PETSC_COMM_SELF ? "lattice on 1 rank" : "lattice", sweep, *r, vd, NULL, NULL, 1e-12, 5000, its, &quad0));
   PetscCall(KergsSweepNaturalResidual(sweep, *r, vd, v, res));
   n = sweep->n;
   PetscCall(VecGetArrayRead(*r, &ra));
@@ -145,7 +147,7 @@ static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattic
       for (c = 0; c < ncomp; c++) rin = PetscMax(rin, PetscAbsReal(ra[k * ncomp + c]));
   PetscCall(VecRestoreArrayRead(*r, &ra));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rin, 1, MPIU_REAL, MPIU_MAX, comm));
-  PetscCheck(rin == 0.0, comm, PETSC_ERR_PLIB, "lattice: an inactive contact carries |r| = %g", (double)rin);
+  PetscCall(Check((PetscBool)(rin == 0.0), "lattice: the inactive contacts carry r = 0 (largest |r|)", rin, 0));
   PetscCall(KergsSweepReset(sweep)); /* mus and active are freed below */
   PetscCall(PetscFree2(mus, active));
   PetscCall(VecDestroy(&vd));
@@ -180,10 +182,10 @@ static PetscErrorCode TestLatticeRanks(KergsSweep sweep, PetscInt ncomp, PetscRe
   PetscCall(VecNorm(rseq, NORM_INFINITY, &nrm));
   PetscCall(VecAXPY(rall, -1.0, rseq));
   PetscCall(VecNorm(rall, NORM_INFINITY, &diff));
-  PetscCall(PetscPrintf(comm, "lattice %" PetscInt_FMT " contacts, ncomp %" PetscInt_FMT ", mu %g: %d rank(s) %" PetscInt_FMT " sweeps residual %.2e; 1 rank %" PetscInt_FMT " sweeps residual %.2e; |r - r_1rank| / |r| = %.2e\n",
-                        L.ncontact, ncomp, (double)mu, size, its, (double)res, itsseq, (double)resseq, (double)(diff / nrm)));
-  PetscCheck(res < 1e-8 && resseq < 1e-8, comm, PETSC_ERR_PLIB, "lattice: natural residual %g (1 rank: %g)", (double)res, (double)resseq);
-  PetscCheck(nrm > 0 && diff < 1e-8 * nrm, comm, PETSC_ERR_PLIB, "lattice: the %d-rank solution differs from the 1-rank one by %g", size, (double)(diff / nrm));
+  PetscCall(PetscPrintf(comm, "lattice %" PetscInt_FMT " contacts, ncomp %" PetscInt_FMT ", mu %g: %d rank(s) %" PetscInt_FMT " sweeps; 1 rank %" PetscInt_FMT " sweeps\n", L.ncontact, ncomp,
+                        (double)mu, size, its, itsseq));
+  PetscCall(Checkf((PetscBool)(res < 1e-8 && resseq < 1e-8), PetscMax(res, resseq), 1e-8, "lattice ncomp %" PetscInt_FMT " mu %g: natural residual on %d and 1 rank(s)", ncomp, (double)mu, size));
+  PetscCall(Checkf((PetscBool)(nrm > 0 && diff < 1e-8 * nrm), nrm > 0 ? diff / nrm : -1, 1e-8, "lattice ncomp %" PetscInt_FMT " mu %g: %d-rank solution = 1-rank one (relative)", ncomp, (double)mu, size));
   PetscCall(VecScatterDestroy(&toall));
   PetscCall(VecDestroy(&rall));
   PetscCall(VecDestroy(&rseq));
@@ -232,9 +234,8 @@ static PetscErrorCode TestUpperStorage(PetscInt ncomp, PetscReal mu)
   PetscCall(VecNorm(r, NORM_INFINITY, &nrm));
   PetscCall(VecAXPY(ru, -1.0, r));
   PetscCall(VecNorm(ru, NORM_INFINITY, &diff));
-  PetscCall(PetscPrintf(comm, "upper storage, ncomp %" PetscInt_FMT ", mu %g: 7 sweeps, |r_upper - r_whole| / |r| = %.2e, quad %.6e / %.6e\n", ncomp, (double)mu,
-                        (double)(diff / nrm), (double)qu, (double)q));
-  PetscCheck(nrm > 0 && diff <= 1e-12 * nrm && PetscAbsReal(qu - q) <= 1e-10 * q, comm, PETSC_ERR_PLIB, "upper storage: the sweeps differ from whole storage (%g relative)", (double)(diff / nrm));
+  PetscCall(Checkf((PetscBool)(nrm > 0 && diff <= 1e-12 * nrm), nrm > 0 ? diff / nrm : -1, 1e-12, "upper storage, ncomp %" PetscInt_FMT " mu %g: 7 sweeps give r of whole storage (relative)", ncomp, (double)mu));
+  PetscCall(Checkf((PetscBool)(PetscAbsReal(qu - q) <= 1e-10 * q), qu, q, "upper storage, ncomp %" PetscInt_FMT " mu %g: same quad after 7 sweeps", ncomp, (double)mu));
   PetscCall(PetscFree2(mus, active));
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&ru));
@@ -276,7 +277,7 @@ static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
   PetscCall(VecRestoreArrayRead(rtilde, &rt));
   PetscCall(KergsSweepGetDiagonalBlocks(sweep, Wd));
   for (i = 0; i < n * ncomp * ncomp; i++) Wd[i] += (i % (ncomp * ncomp)) % (ncomp + 1) == 0 ? omega : 0.0;
-  PetscCall(SolveBySweeps(sweep, r, vd, extra, Wd, 1e-12, 5000, &its, &quad0));
+  PetscCall(SolveBySweeps("regularised sweep", sweep, r, vd, extra, Wd, 1e-12, 5000, &its, &quad0));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &resplain));
 
   PetscCall(MatDuplicate(W, MAT_COPY_VALUES, &Wreg));
@@ -286,10 +287,9 @@ static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
   PetscCall(KergsSweepCreate(comm, &check));
   PetscCall(KergsSweepSetUp(check, Wreg, ncomp, mus, active));
   PetscCall(KergsSweepNaturalResidual(check, r, vdreg, v, &res));
-  PetscCall(PetscPrintf(comm, "regularised sweep (extra, W_aa + omega I): %" PetscInt_FMT " sweeps, residual of (W + omega I) r + v^d - omega r~: %.2e (of the plain problem: %.2e)\n", its,
-                        (double)res, (double)resplain));
-  PetscCheck(res < 1e-8, comm, PETSC_ERR_PLIB, "regularised sweep: residual %g of the regularised problem", (double)res);
-  PetscCheck(resplain > 1e-4, comm, PETSC_ERR_PLIB, "regularised sweep: the plain problem is solved too (%g): extra/Wdiag were not used", (double)resplain);
+  PetscCall(PetscPrintf(comm, "regularised sweep (extra, W_aa + omega I): %" PetscInt_FMT " sweeps\n", its));
+  PetscCall(Check((PetscBool)(res < 1e-8), "regularised sweep: natural residual of (W + omega I) r + v^d - omega r~", res, 1e-8));
+  PetscCall(Check((PetscBool)(resplain > 1e-4), "regularised sweep: extra/Wdiag used (residual of the plain problem stays large)", resplain, 1e-4));
   PetscCall(KergsSweepDestroy(&check));
   PetscCall(KergsSweepReset(sweep));
   PetscCall(PetscFree2(extra, Wd));
@@ -321,6 +321,9 @@ int main(int argc, char **argv)
   PetscCall(TestUpperStorage(2, 0.3));
   PetscCall(TestRegularisedEntryPoints(sweep));
   PetscCall(KergsSweepDestroy(&sweep));
-  PetscCall(PetscFinalize());
-  return 0;
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
 }
