@@ -30,15 +30,21 @@ static inline PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got
   PetscFunctionReturn(0);
 }
 
-/* Check() with ok reduced over comm (logical and): collective on comm; got and want are printed as rank 0 has them. */
+/* Check() with ok reduced over comm (logical and): collective on comm. The got and want printed are those of the first
+   rank where the check fails (of rank 0 when it holds everywhere). */
 static inline PetscErrorCode CheckAll(MPI_Comm comm, PetscBool ok, const char *what, PetscReal got, PetscReal want)
 {
-  PetscBool all;
+  PetscMPIInt rank, size, first;
+  PetscReal   values[2] = {got, want};
 
   PetscFunctionBeginUser;
-  PetscCall(MPIU_Allreduce(&ok, &all, 1, MPIU_BOOL, MPI_LAND, comm));
-  PetscCall(PetscPrintf(comm, "%s %-72s got %.10g want %.10g\n", all ? "ok  " : "FAIL", what, (double)got, (double)want));
-  if (!all) nfail++;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  first = ok ? size : rank;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm));
+  if (first < size) PetscCallMPI(MPI_Bcast(values, 2, MPIU_REAL, first, comm));
+  PetscCall(PetscPrintf(comm, "%s %-72s got %.10g want %.10g\n", first == size ? "ok  " : "FAIL", what, (double)values[0], (double)values[1]));
+  if (first < size) nfail++;
   PetscFunctionReturn(0);
 }
 
