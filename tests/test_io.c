@@ -1,6 +1,6 @@
 /* io tests (1 and 2 ranks): results file (stats and snapshots round-trip exactly, atomic rename, 1-D stats,
    NaN fill, -output_none), sample write/read round-trip and its errors (truncated, missing, not HDF5, wrong
-   layout), FCLib export of a hand-built W (read back with libfclib's own reader) and PETSc's HDF5 still
+   layout, a repeated or negative grain id), FCLib export of a hand-built W (read back with libfclib's own reader) and PETSc's HDF5 still
    working after it. The scene's disks are set with KergsSceneSetDisks (distributed: owned slice plus ghosts);
    contacts and operators are built by hand from the headers.
    Option: -dir <directory> for the files written (default test_io_out). */
@@ -491,6 +491,23 @@ static PetscErrorCode CheckReadError(KergsScene target, const char path[], const
   PetscFunctionReturn(0);
 }
 
+/* The scene written with the grain id of the disk of global index g replaced by id (on its owner), then restored. */
+static PetscErrorCode WriteSampleWithId(KergsScene scene, const char path[], PetscInt g, PetscInt id)
+{
+  PetscInt saved = -1;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < scene->nowned; i++)
+    if (scene->dstart + i == g) {
+      saved         = scene->id[i];
+      scene->id[i] = id;
+    }
+  PetscCall(KergsSampleWrite(scene, path));
+  for (PetscInt i = 0; i < scene->nowned; i++)
+    if (scene->dstart + i == g) scene->id[i] = saved;
+  PetscFunctionReturn(0);
+}
+
 /* Every disk of a scene of NDISKS disks, gathered in global-index order on every rank. */
 static PetscErrorCode GatherDisks(KergsScene s, Disks *all)
 {
@@ -591,6 +608,13 @@ static PetscErrorCode TestSample(KergsScene scene, const char dir[])
   PetscCall(CheckReadError(target, bad, "a text file", NULL));
   PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s/sub/results.h5", dir));
   PetscCall(CheckReadError(target, bad, "an HDF5 file without /sample", NULL));
+  /* grain ids identify grains (persistence, ownership, outputs): a repeated or a negative one is refused, by id */
+  PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s/sample_repeated_id.h5", dir));
+  PetscCall(WriteSampleWithId(scene, bad, 4, DiskId(1)));
+  PetscCall(CheckReadError(target, bad, "a repeated grain id (disk 4 with disk 1's id 1003)", "disks 1 and 4 have the same grain id 1003"));
+  PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s/sample_negative_id.h5", dir));
+  PetscCall(WriteSampleWithId(scene, bad, 2, -5));
+  PetscCall(CheckReadError(target, bad, "a negative grain id", "disk 2 has id -5"));
   PetscCall(KergsSceneDestroy(&target));
   PetscFunctionReturn(0);
 }
