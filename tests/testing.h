@@ -10,7 +10,8 @@
    - When a failed check makes what follows meaningless or unsafe (an index out of range, a missing object), the
      test function returns after the Check(), it does not turn the check into a PetscCheck().
    - Check() and Checkf() are local: on several ranks their ok, got and want must already agree on every rank
-     (reduce first; rank 0 prints). CheckAll() is collective and reduces ok itself (logical and over comm).
+     (reduce first; rank 0 prints). CheckAll() and CheckTrue() (a yes/no property) are collective and reduce ok
+     themselves (logical and over comm).
    No local Expect()-style macros: one style, one line format, one exit code. */
 #ifndef KERGS_TESTING_H
 #define KERGS_TESTING_H
@@ -46,6 +47,12 @@ static inline PetscErrorCode CheckAll(MPI_Comm comm, PetscBool ok, const char *w
   PetscCall(PetscPrintf(comm, "%s %-72s got %.10g want %.10g\n", first == size ? "ok  " : "FAIL", what, (double)values[0], (double)values[1]));
   if (first < size) nfail++;
   PetscFunctionReturn(0);
+}
+
+/* CheckAll() of a yes/no property: printed as got 0 or 1, want 1. Collective on comm. */
+static inline PetscErrorCode CheckTrue(MPI_Comm comm, PetscBool ok, const char *what)
+{
+  return CheckAll(comm, ok, what, ok ? 1 : 0, 1);
 }
 
 /* Check() with a printf-style description. */
