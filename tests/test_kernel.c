@@ -575,7 +575,9 @@ int main(int argc, char **argv)
   PetscCall(TestFreePatch());
   PetscCall(TestFrictionalRow());
   PetscCall(TestCholmodParallel());
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
-  PetscCall(PetscFinalize());
-  return nfail ? 1 : 0;
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
 }
