@@ -70,7 +70,7 @@ static PetscErrorCode LatticeDestroy(Lattice *L)
 }
 
 /* Sets the column(s) of contact k in Hs = M^{-1/2} H: force r_n n + r_t t and torque -R r_t on a, the
-   opposite force and torque -R r_t on b (DESIGN.md section 2). Disk radius R = 0.5, mass in [1, 2]. */
+   opposite force and torque -R r_t on b (the statics of a contact). Disk radius R = 0.5, mass in [1, 2]. */
 static PetscErrorCode LatticeSetContactColumns(const Lattice *L, PetscInt k, PetscInt ncomp, Mat Hs)
 {
   const PetscReal R = 0.5;

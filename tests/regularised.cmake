@@ -1,12 +1,13 @@
 # Kernel-regularised solvers (NLKerGS-P, NLGS-Jac) at the extremes of their parameters, on 1 and 2 ranks: finite, the
 # recorded residual is the natural residual of the impulses (recomputed by the test), convergence claimed under the
-# natural criterion is true of the impulses, and plain NLGS hits its cap at every step of the infeasible straight row.
+# natural criterion is true of the impulses, a step that hit the cap says so, and plain NLGS reports every step of the
+# infeasible straight row not converged.
 kergs_test(NAME regularised_1 SOURCE test_regularised.c NPROCS 1)
 kergs_test(NAME regularised_2 SOURCE test_regularised.c NPROCS 2)
 
 # Known defect, issue 9: regularised solvers report convergence on the infeasible row.
-# cases/confine5_straight.opts has no solution at velocity level, so every solver must hit its cap at every step and
-# say so (statistic `converged` 0). The kernel-regularised solvers decide convergence on the regularised problem (under
+# cases/confine5_straight.opts has no solution at velocity level, so no step may count as converged, whatever the
+# solver (statistic `converged` 0 at every step). The kernel-regularised solvers decide convergence on the regularised problem (under
 # the scene's quad criterion), which has a solution: they report every step converged. Each test below asserts the
 # CORRECT behaviour (test_regularised -straight_row_solver ...) and passes only while that assertion FAILS, without a
 # crash, through expect_error.sh. When issue 9 is fixed (convergence decided on the original problem's natural
