@@ -16,7 +16,7 @@ static const char help[] = "kergs micro-benchmarks (JSON lines).\n";
 
 static PetscErrorCode BenchSweep(MPI_Comm comm)
 {
-  const PetscInt     ncomp = 2;
+  const PetscInt     ncomp  = 2;
   PetscInt           target = 50000, nsweep = 20, g, nnz;
   KergsSweep         sweep;
   KergsSweepMeasures m;
@@ -51,7 +51,8 @@ static PetscErrorCode BenchSweep(MPI_Comm comm)
   PetscCallMPI(MPI_Allreduce(&tloc, &tmax, 1, MPI_DOUBLE, MPI_MAX, comm));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
   PetscCall(PetscPrintf(comm,
-                        "{\"bench\": \"sweep_lattice\", \"ranks\": %d, \"contacts\": %" PetscInt_FMT ", \"nonzeros_per_row\": %.2f, \"sweeps\": %" PetscInt_FMT
+                        "{\"bench\": \"sweep_lattice\", \"ranks\": %d, \"contacts\": %" PetscInt_FMT
+                        ", \"nonzeros_per_row\": %.2f, \"sweeps\": %" PetscInt_FMT
                         ", \"ns_per_contact_sweep\": %.2f, \"quad\": %.3e, \"natural_residual\": %.3e}\n",
                         size, L.ncontact, (double)nnz / (ncomp * L.ncontact), nsweep + 1, 1e9 * tmax, (double)m.quad, (double)res));
   PetscCall(KergsSweepDestroy(&sweep));
@@ -83,11 +84,12 @@ static PetscErrorCode BenchKernel(MPI_Comm comm)
   PetscCall(PetscOptionsGetIntArray(NULL, NULL, "-kernel_lattice", n, &two, NULL));
   /* the lattice fills its box: the top and right walls are one radius beyond the last disks */
   w = 0.005;
-  PetscCall(PetscSNPrintf(opts, sizeof(opts),
-                          "-gravity 0,-9.81 -friction 0.3 -dt 1e-4 -disks_source lattice -lattice_type hex -lattice_n %" PetscInt_FMT ",%" PetscInt_FMT
-                          " -lattice_radius %g -lattice_origin %g,%g -box 0,0,%.10g,%.10g -wall_box_top_velocity 0,-0.05 -wall_box_right_velocity -0.05,0 "
-                          "-alert 5e-4 -solver_max_it 20",
-                          n[0], n[1], w, w, w, (2 * n[0] + 1) * w, PetscFloorReal(1e7 * w * (2 + PetscSqrtReal(3.0) * (n[1] - 1))) / 1e7));
+  PetscCall(PetscSNPrintf(
+      opts, sizeof(opts),
+      "-gravity 0,-9.81 -friction 0.3 -dt 1e-4 -disks_source lattice -lattice_type hex -lattice_n %" PetscInt_FMT ",%" PetscInt_FMT
+      " -lattice_radius %g -lattice_origin %g,%g -box 0,0,%.10g,%.10g -wall_box_top_velocity 0,-0.05 -wall_box_right_velocity -0.05,0 "
+      "-alert 5e-4 -solver_max_it 20",
+      n[0], n[1], w, w, w, (2 * n[0] + 1) * w, PetscFloorReal(1e7 * w * (2 + PetscSqrtReal(3.0) * (n[1] - 1))) / 1e7));
   PetscCall(MakeStepperOn(comm, opts, &st));
   PetscCall(KergsStepperStep(st));
   PetscCall(KergsContactsDetect(st->contacts, st->scene));
@@ -125,8 +127,9 @@ static PetscErrorCode BenchKernel(MPI_Comm comm)
   if (nx == 0) nx = 1;
   PetscCall(KergsKernelGetStats(k, &ks));
   PetscCall(PetscPrintf(comm,
-                        "{\"bench\": \"kernel_hex\", \"ranks\": %d, \"disks\": %" PetscInt_FMT ", \"rows\": %" PetscInt_FMT ", \"cols\": %" PetscInt_FMT
-                        ", \"rank_Hf\": %" PetscInt_FMT ", \"package\": \"%s\", \"factor_seconds\": %.4g, \"apply_ms\": %.4g, \"diag_exact_seconds\": %.4g, "
+                        "{\"bench\": \"kernel_hex\", \"ranks\": %d, \"disks\": %" PetscInt_FMT ", \"rows\": %" PetscInt_FMT
+                        ", \"cols\": %" PetscInt_FMT ", \"rank_Hf\": %" PetscInt_FMT
+                        ", \"package\": \"%s\", \"factor_seconds\": %.4g, \"apply_ms\": %.4g, \"diag_exact_seconds\": %.4g, "
                         "\"diag_bound_seconds\": %.4g, \"HfPx_over_x\": %.3e, \"PPx_minus_Px_over_x\": %.3e}\n",
                         size, st->scene->ndisks, ks.nrows, ks.ncols, ks.rank, ks.package ? ks.package : "", (double)ks.factor_seconds,
                         1e3 * (double)(t1 - t0) / napply, (double)tex, (double)tbd, (double)(nHPx / nx), (double)(dPP / nx)));

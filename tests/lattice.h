@@ -31,8 +31,8 @@ static PetscErrorCode LocalCount(MPI_Comm comm, PetscInt ntotal, PetscInt *nloc)
    directions perturbed by a reproducible angle. W = H^T M^-1 H + shift I over ncomp components per contact,
    rows distributed in contiguous blocks of contacts. */
 typedef struct {
-  PetscInt  gx, gy, ncontact;
-  PetscInt *ga, *gb; /* bodies a (neighbour) and b of each contact */
+  PetscInt   gx, gy, ncontact;
+  PetscInt  *ga, *gb; /* bodies a (neighbour) and b of each contact */
   PetscReal *nx, *ny;
 } Lattice;
 
@@ -73,7 +73,7 @@ static PetscErrorCode LatticeDestroy(Lattice *L)
    opposite force and torque -R r_t on b (the statics of a contact). Disk radius R = 0.5, mass in [1, 2]. */
 static PetscErrorCode LatticeSetContactColumns(const Lattice *L, PetscInt k, PetscInt ncomp, Mat Hs)
 {
-  const PetscReal R = 0.5;
+  const PetscReal R       = 0.5;
   const PetscInt  body[2] = {L->ga[k], L->gb[k]};
   const PetscReal sign[2] = {1.0, -1.0};
   PetscInt        s;
@@ -91,7 +91,8 @@ static PetscErrorCode LatticeSetContactColumns(const Lattice *L, PetscInt k, Pet
     v[0][1] = -sign[s] * L->ny[k] / PetscSqrtReal(m); /* t = (-n_y, n_x) */
     v[1][1] = sign[s] * L->nx[k] / PetscSqrtReal(m);
     v[2][1] = -R / PetscSqrtReal(Inertia);
-    if (ncomp == 2) PetscCall(MatSetValues(Hs, 3, rows, 2, cols, &v[0][0], INSERT_VALUES));
+    if (ncomp == 2)
+      PetscCall(MatSetValues(Hs, 3, rows, 2, cols, &v[0][0], INSERT_VALUES));
     else {
       PetscScalar vn[2] = {v[0][0], v[1][0]};
 
@@ -103,7 +104,8 @@ static PetscErrorCode LatticeSetContactColumns(const Lattice *L, PetscInt k, Pet
 
 /* W, v^d, mu and activity for the lattice on comm: contact k is inactive when k % 7 == 3; v^d_n in
    [-1, 0.5), v^d_t in [-1, 1). */
-static PetscErrorCode LatticeProblem(MPI_Comm comm, const Lattice *L, PetscInt ncomp, PetscReal mu, PetscReal shift, Mat *W, Vec *vd, PetscReal **mus, PetscBool **active)
+static PetscErrorCode LatticeProblem(MPI_Comm comm, const Lattice *L, PetscInt ncomp, PetscReal mu, PetscReal shift, Mat *W, Vec *vd,
+                                     PetscReal **mus, PetscBool **active)
 {
   const PetscInt ngrain = L->gx * L->gy;
   Mat            Hs;
@@ -135,7 +137,8 @@ static PetscErrorCode LatticeProblem(MPI_Comm comm, const Lattice *L, PetscInt n
   for (k = kstart; k < kend; k++) {
     (*mus)[k - kstart]    = mu;
     (*active)[k - kstart] = (PetscBool)(k % 7 != 3);
-    for (c = 0; c < ncomp; c++) PetscCall(VecSetValue(*vd, ncomp * k + c, c == 0 ? -1.0 + 1.5 * Hash01(11 * k + 5) : -1.0 + 2.0 * Hash01(13 * k + 9), INSERT_VALUES));
+    for (c = 0; c < ncomp; c++)
+      PetscCall(VecSetValue(*vd, ncomp * k + c, c == 0 ? -1.0 + 1.5 * Hash01(11 * k + 5) : -1.0 + 2.0 * Hash01(13 * k + 9), INSERT_VALUES));
   }
   PetscCall(VecAssemblyBegin(*vd));
   PetscCall(VecAssemblyEnd(*vd));

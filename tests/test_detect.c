@@ -67,8 +67,8 @@ static PetscErrorCode SceneSetDisks(KergsScene s, PetscInt n, const PetscReal x[
   for (PetscInt i = 0; i < n; i++) material[i] = i % 2;
   PetscCall(KergsSceneSetDisks(s, n, x, r, material, NULL));
   PetscCall(PetscFree(material));
-  PetscCheck(s->ndisks == n && s->nowned == s->dend - s->dstart, PETSC_COMM_SELF, PETSC_ERR_PLIB, "SetDisks: %" PetscInt_FMT " disks, %" PetscInt_FMT " owned",
-             s->ndisks, s->nowned);
+  PetscCheck(s->ndisks == n && s->nowned == s->dend - s->dstart, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "SetDisks: %" PetscInt_FMT " disks, %" PetscInt_FMT " owned", s->ndisks, s->nowned);
   for (PetscInt i = 0; i < s->nowned; i++) s->id[i] = id ? id[s->dstart + i] : 1000 + s->dstart + i;
   s->frictional = PETSC_TRUE;
   PetscFunctionReturn(0);
@@ -173,7 +173,7 @@ static PetscErrorCode BruteForce(KergsScene s, Reference **ref, PetscInt *nref)
 {
   PetscInt   n = 0, cap = 16;
   Reference *r;
-  Disks     g;
+  Disks      g;
 
   PetscFunctionBeginUser;
   PetscCall(DisksGather(s, &g));
@@ -236,9 +236,15 @@ enum {
   FAULT_MU,
   NFAULTS
 };
-static const char *const FaultNames[NFAULTS] = {"bodies a, b and kind as brute force", "grain ids as brute force", "gaps as brute force (to 1e-12)",
-                                                "|n| = 1", "normals as brute force (to 1e-12)", "n points from b to a",
-                                                "t = (-n_y, n_x)", "radii as brute force", "friction coefficients as brute force"};
+static const char *const FaultNames[NFAULTS] = {"bodies a, b and kind as brute force",
+                                                "grain ids as brute force",
+                                                "gaps as brute force (to 1e-12)",
+                                                "|n| = 1",
+                                                "normals as brute force (to 1e-12)",
+                                                "n points from b to a",
+                                                "t = (-n_y, n_x)",
+                                                "radii as brute force",
+                                                "friction coefficients as brute force"};
 
 /* Geometry and bookkeeping of one contact against its reference: a is an owned disk, b a local disk (owned or
    ghost) or a wall, both the reference's bodies (global index and grain id), n, t, gap, radii, mu as expected.
@@ -275,7 +281,8 @@ static PetscErrorCode CheckFaults(MPI_Comm comm, const char label[], PetscInt fa
 {
   PetscFunctionBeginUser;
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, fault, NFAULTS, MPIU_INT, MPI_SUM, comm));
-  for (PetscInt f = 0; f < NFAULTS; f++) PetscCall(Checkf((PetscBool)(fault[f] == 0), fault[f], 0, "%s: %s (contacts not)", label, FaultNames[f]));
+  for (PetscInt f = 0; f < NFAULTS; f++)
+    PetscCall(Checkf((PetscBool)(fault[f] == 0), fault[f], 0, "%s: %s (contacts not)", label, FaultNames[f]));
   PetscFunctionReturn(0);
 }
 
@@ -380,7 +387,8 @@ static PetscErrorCode MoveDisks(KergsScene s, PetscReal step, unsigned long long
 
 /* The impulses carried over by the last detection: a contact whose key (grain id of a, kind, idb) was in
    oldkeys (sorted) is persistent with PairImpulse, any other is fresh. counts: kept, new. */
-static PetscErrorCode CheckPersistence(const char label[], KergsContacts ct, KergsScene s, const PetscInt oldkeys[], PetscInt nold, PetscInt counts[2])
+static PetscErrorCode CheckPersistence(const char label[], KergsContacts ct, KergsScene s, const PetscInt oldkeys[], PetscInt nold,
+                                       PetscInt counts[2])
 {
   PetscInt wrong[2] = {0, 0}; /* persistent flags, impulses */
 
@@ -388,7 +396,7 @@ static PetscErrorCode CheckPersistence(const char label[], KergsContacts ct, Ker
   for (PetscInt k = 0; k < ct->n; k++) {
     const KergsContact *c      = &ct->c[k];
     const PetscInt      key[3] = {s->id[c->a], c->kind, c->idb};
-    const PetscBool     was    = (PetscBool)(nold > 0 && bsearch(key, oldkeys, (size_t)nold, 3 * sizeof(PetscInt), CompareKeyTriples) != NULL);
+    const PetscBool     was = (PetscBool)(nold > 0 && bsearch(key, oldkeys, (size_t)nold, 3 * sizeof(PetscInt), CompareKeyTriples) != NULL);
 
     if (c->persistent != was) wrong[0]++;
     for (PetscInt d = 0; d < KERGS_MAXCOMP; d++)
@@ -399,7 +407,8 @@ static PetscErrorCode CheckPersistence(const char label[], KergsContacts ct, Ker
     counts[was ? 0 : 1]++;
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, wrong, 2, MPIU_INT, MPI_SUM, s->comm));
-  PetscCall(Checkf((PetscBool)(wrong[0] == 0), wrong[0], 0, "%s: persistent flag set exactly on the pairs seen before (contacts not)", label));
+  PetscCall(
+      Checkf((PetscBool)(wrong[0] == 0), wrong[0], 0, "%s: persistent flag set exactly on the pairs seen before (contacts not)", label));
   PetscCall(Checkf((PetscBool)(wrong[1] == 0), wrong[1], 0, "%s: impulses carried over, zero for new pairs (contacts not)", label));
   PetscFunctionReturn(0);
 }
@@ -441,7 +450,8 @@ static PetscErrorCode TestPackingAndPersistence(MPI_Comm comm)
   /* ownership follows the grain ids, not the indices; on several ranks, cut pairs are seen through ghosts and owned
      by either side */
   PetscCall(Checkf((PetscBool)(stats[1] > 0 && (size == 1 || (stats[2] > 0 && stats[0] - stats[2] > 0))), stats[1], 1,
-                   "ownership by grain id exercised: contacts owned by the disk of larger index (%" PetscInt_FMT " across ranks)", stats[2]));
+                   "ownership by grain id exercised: contacts owned by the disk of larger index (%" PetscInt_FMT " across ranks)",
+                   stats[2]));
   for (PetscInt k = 0; k < ct->n; k++) {
     if (ct->c[k].persistent || ct->c[k].r[0] != 0.0 || ct->c[k].r[1] != 0.0) nstale++;
     nwall += ct->c[k].kind == KERGS_CONTACT_DISK_WALL;
@@ -458,8 +468,10 @@ static PetscErrorCode TestPackingAndPersistence(MPI_Comm comm)
   PetscCall(CheckAgainstBruteForce(ct, s, "after a small move", NULL));
   PetscCall(CheckPersistence("after a small move", ct, s, oldkeys, nold, counts));
   PetscCallMPI(MPI_Allreduce(counts, gcounts, 2, MPIU_INT, MPI_SUM, comm));
-  PetscCall(Checkf((PetscBool)(gcounts[0] > 0 && gcounts[1] > 0 && gcounts[0] + gcounts[1] == ct->nglobal), PetscMin(gcounts[0], gcounts[1]), 1,
-                   "after a small move: persistence exercised (%" PetscInt_FMT " pairs kept, %" PetscInt_FMT " new: the fewer)", gcounts[0], gcounts[1]));
+  PetscCall(Checkf((PetscBool)(gcounts[0] > 0 && gcounts[1] > 0 && gcounts[0] + gcounts[1] == ct->nglobal),
+                   PetscMin(gcounts[0], gcounts[1]), 1,
+                   "after a small move: persistence exercised (%" PetscInt_FMT " pairs kept, %" PetscInt_FMT " new: the fewer)", gcounts[0],
+                   gcounts[1]));
   PetscCall(PetscFree(oldkeys));
 
   /* a move well within half the ghost skin (the alert distance 0.02): the layer is kept, its ghosts refreshed, and
@@ -468,7 +480,8 @@ static PetscErrorCode TestPackingAndPersistence(MPI_Comm comm)
   PetscCall(SetImpulses(ct, s, &oldkeys, &nold));
   PetscCall(MoveDisks(s, 0.004, &seed));
   PetscCall(KergsContactsDetect(ct, s));
-  PetscCall(CheckAll(comm, (PetscBool)(size == 1 || s->ghost_rebuilds == rebuilds), "tiny move (<= 0.003): the ghost layer is kept (builds so far)", s->ghost_rebuilds, rebuilds));
+  PetscCall(CheckAll(comm, (PetscBool)(size == 1 || s->ghost_rebuilds == rebuilds),
+                     "tiny move (<= 0.003): the ghost layer is kept (builds so far)", s->ghost_rebuilds, rebuilds));
   PetscCall(CheckAgainstBruteForce(ct, s, "after a tiny move (ghosts refreshed, not rebuilt)", NULL));
   counts[0] = counts[1] = 0;
   PetscCall(CheckPersistence("after a tiny move", ct, s, oldkeys, nold, counts));
@@ -497,16 +510,16 @@ static PetscErrorCode TestAlertAndWalls(void)
       {201.05, -0.5},                       /* beyond the end b (and behind the bottom line): none */
       {1.0e6, 1.0e6},                       /* far away */
   };
-  const PetscInt  ndisks   = (PetscInt)(sizeof(pos) / sizeof(pos[0]));
-  Reference expect[] = {
-      {0, KERGS_CONTACT_DISK_DISK, 1, 0.1 - eps, {-1.0, 0.0}, 0, 0, 0, 0, 0},
-      {4, KERGS_CONTACT_DISK_WALL, 0, 0.1 - eps, {0.0, 1.0}, 0, 0, 0, 0, 0},
-      {7, KERGS_CONTACT_DISK_WALL, 1, 0.05, {1.0, 0.0}, 0, 0, 0, 0, 0},
+  const PetscInt ndisks   = (PetscInt)(sizeof(pos) / sizeof(pos[0]));
+  Reference      expect[] = {
+           {0, KERGS_CONTACT_DISK_DISK, 1, 0.1 - eps, {-1.0, 0.0}, 0, 0, 0, 0, 0},
+           {4, KERGS_CONTACT_DISK_WALL, 0, 0.1 - eps, {0.0, 1.0}, 0, 0, 0, 0, 0},
+           {7, KERGS_CONTACT_DISK_WALL, 1, 0.05, {1.0, 0.0}, 0, 0, 0, 0, 0},
   };
   PetscReal     x[2 * (sizeof(pos) / sizeof(pos[0]))], r[sizeof(pos) / sizeof(pos[0])];
   KergsScene    s;
   KergsContacts ct;
-  Disks        g;
+  Disks         g;
 
   PetscFunctionBeginUser;
   PetscCall(SceneCreate(PETSC_COMM_SELF, 2, alert, &s));
@@ -531,13 +544,15 @@ static PetscErrorCode TestAlertAndWalls(void)
     for (PetscInt k = 0; k < 3; k++) ContactFaults(s, &ct->c[k], &expect[k], fault);
     PetscCall(CheckFaults(PETSC_COMM_SELF, "alert 0.1", fault));
   }
-  PetscCall(Check((PetscBool)(ct->ncellx * ct->ncelly <= 4 * ndisks + 64), "a far disk keeps the grid small (cells)", ct->ncellx * ct->ncelly, 4 * ndisks + 64));
+  PetscCall(Check((PetscBool)(ct->ncellx * ct->ncelly <= 4 * ndisks + 64), "a far disk keeps the grid small (cells)",
+                  ct->ncellx * ct->ncelly, 4 * ndisks + 64));
 
   /* the same object again with a shrunk alert: the two contacts at gap 0.1 - eps drop out */
   s->alert = 0.1 - 2 * eps;
   PetscCall(KergsContactsDetect(ct, s));
   PetscCall(Check((PetscBool)(ct->n == 1 && ct->c[0].a == 7), "alert 0.1 - 2e-9: only the contact at gap 0.05 is left", ct->n, 1));
-  PetscCall(Check((PetscBool)(ct->n >= 1 && ct->c[0].persistent), "alert 0.1 - 2e-9: the kept wall contact is persistent", ct->n >= 1 && ct->c[0].persistent, 1));
+  PetscCall(Check((PetscBool)(ct->n >= 1 && ct->c[0].persistent), "alert 0.1 - 2e-9: the kept wall contact is persistent",
+                  ct->n >= 1 && ct->c[0].persistent, 1));
   PetscCall(KergsContactsDestroy(&ct));
   PetscCall(KergsSceneDestroy(&s));
   PetscFunctionReturn(0);
@@ -546,10 +561,10 @@ static PetscErrorCode TestAlertAndWalls(void)
 /* Two disks on the same centre have no normal: detection must fail and name both grains. */
 static PetscErrorCode TestCoincidentCentres(void)
 {
-  KergsScene     s;
-  KergsContacts  ct;
-  PetscErrorCode ierr;
-  char          *message = NULL, *has1, *has2;
+  KergsScene      s;
+  KergsContacts   ct;
+  PetscErrorCode  ierr;
+  char           *message = NULL, *has1, *has2;
   const PetscReal x[6] = {5.0, 0.0, 0.0, 0.0, 0.0, 0.0}, r[3] = {0.5, 0.5, 0.5};
 
   PetscFunctionBeginUser;
@@ -559,12 +574,14 @@ static PetscErrorCode TestCoincidentCentres(void)
   PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
   ierr = KergsContactsDetect(ct, s);
   PetscCall(PetscPopErrorHandler());
-  PetscCall(Check((PetscBool)(ierr == PETSC_ERR_ARG_WRONG), "coincident centres: detection fails with PETSC_ERR_ARG_WRONG", ierr, PETSC_ERR_ARG_WRONG));
+  PetscCall(Check((PetscBool)(ierr == PETSC_ERR_ARG_WRONG), "coincident centres: detection fails with PETSC_ERR_ARG_WRONG", ierr,
+                  PETSC_ERR_ARG_WRONG));
   PetscCall(PetscErrorMessage(ierr, NULL, &message));
   has1 = has2 = NULL;
   if (message) PetscCall(PetscStrstr(message, "1001", &has1));
   if (message) PetscCall(PetscStrstr(message, "1002", &has2));
-  PetscCall(Checkf((PetscBool)(has1 && has2), has1 && has2, 1, "coincident centres: the message names grains 1001 and 1002 [%s]", message ? message : ""));
+  PetscCall(Checkf((PetscBool)(has1 && has2), has1 && has2, 1, "coincident centres: the message names grains 1001 and 1002 [%s]",
+                   message ? message : ""));
   PetscCall(KergsContactsDestroy(&ct));
   PetscCall(KergsSceneDestroy(&s));
   PetscFunctionReturn(0);

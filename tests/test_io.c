@@ -163,10 +163,11 @@ static PetscErrorCode ContactsBuild(KergsScene scene, PetscInt step, KergsContac
       if (c.kind == KERGS_CONTACT_DISK_DISK) {
         const PetscInt gb = c.b;
         c.b               = LocalIndexOf(scene, gb);
-        PetscCheck(c.b >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "disk %" PetscInt_FMT " of contact (%" PetscInt_FMT ", %" PetscInt_FMT
-                   ") is neither owned nor a ghost here", gb, c.a, gb);
-        PetscCheck(scene->id[c.b] == c.idb, PETSC_COMM_SELF, PETSC_ERR_PLIB, "disk %" PetscInt_FMT " has grain id %" PetscInt_FMT
-                   ", expected %" PetscInt_FMT, gb, scene->id[c.b], c.idb);
+        PetscCheck(c.b >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                   "disk %" PetscInt_FMT " of contact (%" PetscInt_FMT ", %" PetscInt_FMT ") is neither owned nor a ghost here", gb, c.a,
+                   gb);
+        PetscCheck(scene->id[c.b] == c.idb, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                   "disk %" PetscInt_FMT " has grain id %" PetscInt_FMT ", expected %" PetscInt_FMT, gb, scene->id[c.b], c.idb);
       }
       c.a        = c.a - scene->dstart;
       ct->c[n++] = c;
@@ -225,7 +226,7 @@ static PetscErrorCode DatasetShape(PetscViewer viewer, const char path[], int *n
   PetscCall(PetscViewerHDF5GetFileId(viewer, &file));
   dset    = H5Dopen2(file, path, H5P_DEFAULT);
   dims[0] = dims[1] = 0;
-  *ndims  = -1; /* no such dataset: the caller's check fails */
+  *ndims            = -1; /* no such dataset: the caller's check fails */
   if (dset < 0) PetscFunctionReturn(0);
   space   = H5Dget_space(dset);
   *ndims  = H5Sget_simple_extent_ndims(space);
@@ -297,7 +298,8 @@ static PetscErrorCode CheckStats(PetscViewer viewer, MPI_Comm comm)
 
   PetscFunctionBeginUser;
   PetscCall(DatasetShape(viewer, "/stats/energy", &ndims, dims));
-  PetscCall(CheckAll(comm, (PetscBool)(ndims == 1 && dims[0] == NSTEPS), "stats: /stats/energy is a 1-D dataset of one entry per step", (PetscReal)dims[0], NSTEPS));
+  PetscCall(CheckAll(comm, (PetscBool)(ndims == 1 && dims[0] == NSTEPS), "stats: /stats/energy is a 1-D dataset of one entry per step",
+                     (PetscReal)dims[0], NSTEPS));
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, "/stats", "nrows", PETSC_INT, NULL, &nrows));
   PetscCall(CheckAll(comm, (PetscBool)(nrows == NSTEPS), "stats: attribute nrows = number of steps", nrows, NSTEPS));
   PetscCall(PetscViewerHDF5PushGroup(viewer, "/stats"));
@@ -334,13 +336,14 @@ static PetscErrorCode CheckSnapshot(PetscViewer viewer, KergsScene scene)
   PetscCall(PetscViewerHDF5HasGroup(viewer, "/snapshots/000004", &has));
   if (has) nsnap = 5;
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, "/", "nsnapshots", PETSC_INT, NULL, &nsnapattr));
-  PetscCall(CheckAll(comm, (PetscBool)(nsnap == 4 && nsnapattr == 4), "snapshots: -output_every 2 over 5 steps gives 4 (steps 0, 2, 4, 5), repeats ignored",
-                     nsnapattr, 4));
+  PetscCall(CheckAll(comm, (PetscBool)(nsnap == 4 && nsnapattr == 4),
+                     "snapshots: -output_every 2 over 5 steps gives 4 (steps 0, 2, 4, 5), repeats ignored", nsnapattr, 4));
   PetscCall(PetscViewerHDF5PushGroup(viewer, "/snapshots/000003"));
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "step", PETSC_INT, NULL, &step));
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "time", PETSC_REAL, NULL, &time));
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "ncontacts", PETSC_INT, NULL, &ncontacts));
-  PetscCall(CheckAll(comm, (PetscBool)(step == NSTEPS && time == NSTEPS * 0.1 + 1.0 / 3.0 && ncontacts == NDISKS), "snapshot: attributes step, time, ncontacts (step)", step, NSTEPS));
+  PetscCall(CheckAll(comm, (PetscBool)(step == NSTEPS && time == NSTEPS * 0.1 + 1.0 / 3.0 && ncontacts == NDISKS),
+                     "snapshot: attributes step, time, ncontacts (step)", step, NSTEPS));
   PetscCall(LoadAll(viewer, comm, "x", KERGS_DIM * NDISKS, KERGS_DIM, &x));
   PetscCall(LoadAll(viewer, comm, "radius", NDISKS, 1, &radius));
   PetscCall(LoadAll(viewer, comm, "id", NDISKS, 1, &id));
@@ -379,9 +382,11 @@ static PetscErrorCode CheckSnapshot(PetscViewer viewer, KergsScene scene)
   PetscCall(CheckAll(comm, okr, "snapshot: contact impulses (normal, tangential) round-trip exactly, in global contact order", okr, 1));
   PetscCall(CheckAll(comm, okab, "snapshot: contact bodies a, b (global disk indices) and kinds round-trip", okab, 1));
   PetscCall(DatasetShape(viewer, "/snapshots/000003/x", &ndims, dims));
-  PetscCall(CheckAll(comm, (PetscBool)(ndims == 2 && dims[0] == NDISKS && dims[1] == KERGS_DIM), "snapshot: x is stored as (ndisks, 2) (dimensions)", ndims, 2));
+  PetscCall(CheckAll(comm, (PetscBool)(ndims == 2 && dims[0] == NDISKS && dims[1] == KERGS_DIM),
+                     "snapshot: x is stored as (ndisks, 2) (dimensions)", ndims, 2));
   PetscCall(DatasetShape(viewer, "/snapshots/000003/r", &ndims, dims));
-  PetscCall(CheckAll(comm, (PetscBool)(ndims == 2 && dims[0] == NDISKS && dims[1] == KERGS_MAXCOMP), "snapshot: r is stored as (ncontacts, 2) (dimensions)", ndims, 2));
+  PetscCall(CheckAll(comm, (PetscBool)(ndims == 2 && dims[0] == NDISKS && dims[1] == KERGS_MAXCOMP),
+                     "snapshot: r is stored as (ncontacts, 2) (dimensions)", ndims, 2));
   PetscCall(PetscFree(x));
   PetscCall(PetscFree(radius));
   PetscCall(PetscFree(id));
@@ -408,7 +413,8 @@ static PetscErrorCode TestResults(KergsScene scene, const char dir[])
   PetscCall(WriteResults(scene, path));
   PetscCall(FileExists(comm, path, &exists));
   PetscCall(FileExists(comm, tmp, &tmpexists));
-  PetscCall(CheckAll(comm, (PetscBool)(exists && !tmpexists), "close: the final file exists (directory created), the .tmp does not", exists, 1));
+  PetscCall(
+      CheckAll(comm, (PetscBool)(exists && !tmpexists), "close: the final file exists (directory created), the .tmp does not", exists, 1));
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
   PetscCall(CheckStats(viewer, comm));
   PetscCall(CheckSnapshot(viewer, scene));
@@ -483,11 +489,12 @@ static PetscErrorCode CheckReadError(KergsScene target, const char path[], const
   PetscCall(PetscPopErrorHandler());
   if (ierr) PetscCall(PetscErrorMessage(ierr, NULL, &specific));
   named = (PetscBool)(ierr != 0 && specific && strstr(specific, base) && (!needle || strstr(specific, needle)));
-  PetscCall(PetscSNPrintf(line, sizeof(line), "sample: %s is refused, the message naming the file%s%s%s", what, needle ? " and \"" : "", needle ? needle : "",
-                          needle ? "\"" : ""));
+  PetscCall(PetscSNPrintf(line, sizeof(line), "sample: %s is refused, the message naming the file%s%s%s", what, needle ? " and \"" : "",
+                          needle ? needle : "", needle ? "\"" : ""));
   PetscCall(CheckAll(target->comm, named, line, ierr != 0, 1));
   if (specific) PetscCall(PetscPrintf(target->comm, "      (%s)\n", specific));
-  PetscCall(CheckAll(target->comm, (PetscBool)(target->ndisks == before), "sample: a failed read leaves the scene's disks unchanged", target->ndisks, before));
+  PetscCall(CheckAll(target->comm, (PetscBool)(target->ndisks == before), "sample: a failed read leaves the scene's disks unchanged",
+                     target->ndisks, before));
   PetscFunctionReturn(0);
 }
 
@@ -499,7 +506,7 @@ static PetscErrorCode WriteSampleWithId(KergsScene scene, const char path[], Pet
   PetscFunctionBeginUser;
   for (PetscInt i = 0; i < scene->nowned; i++)
     if (scene->dstart + i == g) {
-      saved         = scene->id[i];
+      saved        = scene->id[i];
       scene->id[i] = id;
     }
   PetscCall(KergsSampleWrite(scene, path));

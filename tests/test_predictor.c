@@ -410,10 +410,10 @@ static PetscErrorCode TestInactive(void)
 
   PetscFunctionBeginUser;
   PetscCall(MakeStepperOn(PETSC_COMM_WORLD,
-                        "-gravity 0,-10 -dt 1e-3 -friction 0.2 -disks_source list -disks_x 0,0.0999,0,0.3039 -disks_radius 0.1 -walls "
-                        "floor -wall_floor_a -1,0 "
-                        "-wall_floor_b 1,0 -wall_floor_infinite -alert 0.01",
-                        &st));
+                          "-gravity 0,-10 -dt 1e-3 -friction 0.2 -disks_source list -disks_x 0,0.0999,0,0.3039 -disks_radius 0.1 -walls "
+                          "floor -wall_floor_a -1,0 "
+                          "-wall_floor_b 1,0 -wall_floor_infinite -alert 0.01",
+                          &st));
   PetscCall(Prepare(st, 0, &active));
   PetscCall(Check((PetscBool)(st->contacts->nglobal == 2), "inactive: 2 potential contacts (floor g<0, upper pair g>0)",
                   (PetscReal)st->contacts->nglobal, 2));

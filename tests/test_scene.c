@@ -121,21 +121,20 @@ static PetscErrorCode TestList(MPI_Comm comm)
   PetscCall(CheckTrue(comm, (PetscBool)(s->ndisks == 3 && s->nwalls == 0), "list: 3 disks, no walls"));
   PetscCall(DisksGather(s, &all));
   PetscCall(CheckTrue(comm,
-                   (PetscBool)(all.x[2] == 1.0 && all.x[5] == 0.8 && all.radius[1] == 0.2 && all.material[1] == 1 && all.v[1] == 2.0 &&
-                               all.v[5] == -1.0),
-                   "list: positions, radii, materials and velocities as given"));
-  PetscCall(CheckTrue(comm,
-                   (PetscBool)(Close(all.mass[0], m0, 1e-14) && Close(all.mass[1], m1, 1e-14) &&
-                               Close(all.inertia[1], 0.5 * m1 * 0.04, 1e-14)),
-                   "list: mass = density pi r^2, inertia = m r^2 / 2"));
+                      (PetscBool)(all.x[2] == 1.0 && all.x[5] == 0.8 && all.radius[1] == 0.2 && all.material[1] == 1 && all.v[1] == 2.0 &&
+                                  all.v[5] == -1.0),
+                      "list: positions, radii, materials and velocities as given"));
+  PetscCall(CheckTrue(
+      comm, (PetscBool)(Close(all.mass[0], m0, 1e-14) && Close(all.mass[1], m1, 1e-14) && Close(all.inertia[1], 0.5 * m1 * 0.04, 1e-14)),
+      "list: mass = density pi r^2, inertia = m r^2 / 2"));
   PetscCall(CheckTrue(comm, (PetscBool)(all.id[0] == 0 && all.id[1] == 1 && all.id[2] == 2 && all.rot[2] == 0.0 && all.omega[2] == 0.0),
-                   "list: id = index, rot = omega = 0"));
+                      "list: id = index, rot = omega = 0"));
   PetscCall(DisksFree(&all));
   PetscCall(KergsSceneFriction(s, 0, 1, &mu01));
   PetscCall(KergsSceneFriction(s, 1, 0, &mu10));
   PetscCall(KergsSceneFriction(s, 0, 0, &mu00));
   PetscCall(CheckTrue(comm, (PetscBool)(mu01 == 0.4 && mu10 == 0.4 && mu00 == 0.0),
-                   "list: -friction_pairs sets mu symmetrically, others keep -friction (0)"));
+                      "list: -friction_pairs sets mu symmetrically, others keep -friction (0)"));
   PetscCall(CheckTrue(comm, s->frictional, "list: frictional, since materials 0 and 1 both have disks"));
   PetscCall(CheckTrue(
       comm, (PetscBool)(s->dt == 0.01 && s->nsteps == 10 && s->theta == 0.5 && s->gaprule == KERGS_GAP_LMGC90 && s->gravity[1] == -1.0),
@@ -179,7 +178,7 @@ static PetscErrorCode TestLattice(MPI_Comm comm)
   PetscCall(DisksGather(s, &all));
   PetscCall(PairStats(&all, 0.2, 1e-12, &dmin, &nat, &overlap));
   PetscCall(CheckTrue(comm, (PetscBool)(s->ndisks == 12 && all.x[0] == 1.0 && all.x[1] == 2.0),
-                   "square lattice: 12 disks, the first at the origin"));
+                      "square lattice: 12 disks, the first at the origin"));
   PetscCall(DisksFree(&all));
   PetscCall(PetscSNPrintf(what, sizeof(what),
                           "square lattice: nearest-neighbour distance 2r = 0.2 (%.17g), 17 touching pairs (%" PetscInt_FMT ")",
@@ -261,8 +260,8 @@ static PetscErrorCode TestRandom(MPI_Comm comm)
     if (allsame.x[2 * i] != all.x[2 * i] || allsame.x[2 * i + 1] != all.x[2 * i + 1] || allsame.radius[i] != all.radius[i])
       identical = PETSC_FALSE;
   PetscCall(CheckTrue(comm, identical, "random: same seed, same sample (bitwise)"));
-  PetscCall(
-      CheckTrue(comm, (PetscBool)(other->ndisks == 300 && Checksum(&allother) != sum), "random: a different seed gives a different sample"));
+  PetscCall(CheckTrue(comm, (PetscBool)(other->ndisks == 300 && Checksum(&allother) != sum),
+                      "random: a different seed gives a different sample"));
   PetscCall(DisksFree(&all));
   PetscCall(DisksFree(&allsame));
   PetscCall(DisksFree(&allother));
@@ -310,9 +309,9 @@ static PetscErrorCode TestWalls(MPI_Comm comm)
   if (!s) PetscFunctionReturn(0);
   PetscCall(CheckTrue(comm, (PetscBool)(s->nwalls == 5), "open box + 2 declared walls: 5 walls"));
   PetscCall(CheckTrue(comm,
-                   (PetscBool)(s->walls[1].kind == KERGS_WALL_FREE && s->walls[1].mass == 5.0 && s->walls[1].force[0] == -1.0 &&
-                               s->walls[1].v[0] == -0.5),
-                   "box wall overridden into a free wall with mass, force and initial velocity"));
+                      (PetscBool)(s->walls[1].kind == KERGS_WALL_FREE && s->walls[1].mass == 5.0 && s->walls[1].force[0] == -1.0 &&
+                                  s->walls[1].v[0] == -0.5),
+                      "box wall overridden into a free wall with mass, force and initial velocity"));
   {
     const PetscReal t[]  = {0.0, 0.49, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0};
     const PetscReal vy[] = {0.0, 0.0, -1.0, -1.0, 2.0, 2.0, 0.0, 0.0};
@@ -326,7 +325,7 @@ static PetscErrorCode TestWalls(MPI_Comm comm)
   }
   PetscCall(KergsWallVelocityAt(&s->walls[4], 10.0, v));
   PetscCall(CheckTrue(comm, (PetscBool)(s->walls[4].infinite && v[0] == 0.25 && v[1] == 0.0 && s->walls[4].v[0] == 0.25),
-                   "floor: infinite, constant velocity program"));
+                      "floor: infinite, constant velocity program"));
   PetscCall(KergsWallVelocityAt(&s->walls[1], 10.0, v));
   PetscCall(CheckTrue(comm, (PetscBool)(v[0] == -0.5), "free wall: VelocityAt gives its current velocity"));
   PetscCall(KergsSceneView(s, PETSC_VIEWER_STDOUT_(comm)));
@@ -347,21 +346,21 @@ static PetscErrorCode TestSetDisksEnergy(MPI_Comm comm)
   PetscCall(KergsSceneCreate(comm, &s));
   s->density[0] = 2.0;
   PetscCall(KergsSceneSetDisks(s, 3, x, r, mat, v));
-  m           = 2.0 * PETSC_PI * 0.25;
-  inertia     = 0.5 * m * 0.25;
+  m       = 2.0 * PETSC_PI * 0.25;
+  inertia = 0.5 * m * 0.25;
   if (s->dstart == 0 && s->nowned > 0) s->omega[0] = 2.0; /* disk 0, on its owner */
   PetscCall(KergsSceneKineticEnergy(s, &ek, &vmax));
   PetscCall(CheckTrue(comm, (PetscBool)(Close(ek, 0.5 * m * 26.0 + 0.5 * inertia * 4.0, 1e-14) && vmax == 5.0),
-                   "kinetic energy 1/2 m v^2 + 1/2 I w^2 and largest speed"));
+                      "kinetic energy 1/2 m v^2 + 1/2 I w^2 and largest speed"));
   PetscCall(DisksGather(s, &all));
   PetscCall(CheckTrue(comm,
-                   (PetscBool)(Close(all.mass[0], m, 1e-14) && Close(all.mass[2], 2.0 * PETSC_PI, 1e-14) &&
-                               Close(all.inertia[0], inertia, 1e-14) && Close(s->alert, 0.1 * 2.0 / 3.0, 1e-14)),
-                   "SetDisks: masses from density, alert from mean radius"));
+                      (PetscBool)(Close(all.mass[0], m, 1e-14) && Close(all.mass[2], 2.0 * PETSC_PI, 1e-14) &&
+                                  Close(all.inertia[0], inertia, 1e-14) && Close(s->alert, 0.1 * 2.0 / 3.0, 1e-14)),
+                      "SetDisks: masses from density, alert from mean radius"));
   PetscCall(CheckTrue(comm,
-                   (PetscBool)(all.x[2] == 2.0 && all.radius[2] == 1.0 && all.v[0] == 3.0 && all.v[3] == 1.0 && all.id[1] == 1 &&
-                               all.omega[0] == 2.0 && all.omega[1] == 0.0),
-                   "SetDisks: each rank keeps its slice of the full arrays, gathered back in global-index order"));
+                      (PetscBool)(all.x[2] == 2.0 && all.radius[2] == 1.0 && all.v[0] == 3.0 && all.v[3] == 1.0 && all.id[1] == 1 &&
+                                  all.omega[0] == 2.0 && all.omega[1] == 0.0),
+                      "SetDisks: each rank keeps its slice of the full arrays, gathered back in global-index order"));
   PetscCall(DisksFree(&all));
   PetscCall(CheckOwnership(s));
   PetscCall(KergsSceneCheck(s));

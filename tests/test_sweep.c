@@ -14,8 +14,8 @@ static const char help[] = "Tests of the NLGS sweep.\n";
 
 /* Sweeps from r = 0 until quad < tol (at most maxit). Returns the number of sweeps and the quad of the first sweep;
    checks that quad fell below tol (label names the problem). */
-static PetscErrorCode SolveBySweeps(const char *label, KergsSweep sweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wd, PetscReal tol, PetscInt maxit,
-                                    PetscInt *its, PetscReal *quad0)
+static PetscErrorCode SolveBySweeps(const char *label, KergsSweep sweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wd,
+                                    PetscReal tol, PetscInt maxit, PetscInt *its, PetscReal *quad0)
 {
   KergsSweepMeasures m;
   PetscInt           k;
@@ -28,7 +28,8 @@ static PetscErrorCode SolveBySweeps(const char *label, KergsSweep sweep, Vec r, 
     if (m.quad < tol) break;
   }
   *its = PetscMin(k + 1, maxit);
-  PetscCall(Checkf((PetscBool)(k < maxit), m.quad, tol, "%s: sweeps reach quad < %g within %" PetscInt_FMT " (quad at exit)", label, (double)tol, maxit));
+  PetscCall(Checkf((PetscBool)(k < maxit), m.quad, tol, "%s: sweeps reach quad < %g within %" PetscInt_FMT " (quad at exit)", label,
+                   (double)tol, maxit));
   PetscFunctionReturn(0);
 }
 
@@ -72,7 +73,7 @@ static PetscErrorCode BuildColumn(MPI_Comm comm, PetscInt N, PetscReal gdt, Pets
 
 static PetscErrorCode TestColumn(KergsSweep sweep)
 {
-  const PetscInt     N = 12;
+  const PetscInt     N   = 12;
   const PetscReal    gdt = 9.81e-3;
   Mat                W;
   Vec                vd, r, v;
@@ -113,7 +114,8 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   PetscCall(VecNorm(r, NORM_INFINITY, &err));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
   PetscCall(Check((PetscBool)(err == 0.0), "column pulled apart (v^d >= 0): r = 0", err, 0));
-  PetscCall(Check((PetscBool)(res == 0.0 && quad0 == 0.0), "column pulled apart: quad 0 and natural residual 0 (their sum)", res + quad0, 0));
+  PetscCall(
+      Check((PetscBool)(res == 0.0 && quad0 == 0.0), "column pulled apart: quad 0 and natural residual 0 (their sum)", res + quad0, 0));
   PetscCall(KergsSweepReset(sweep)); /* active is freed below */
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&v));
@@ -123,9 +125,9 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   PetscFunctionReturn(0);
 }
 
-
 /* Solve the lattice problem on comm (to quad < 1e-12); check residual and inactive contacts. Returns r. */
-static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattice *L, PetscInt ncomp, PetscReal mu, Vec *r, PetscReal *res, PetscInt *its)
+static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattice *L, PetscInt ncomp, PetscReal mu, Vec *r, PetscReal *res,
+                                   PetscInt *its)
 {
   Mat                W;
   Vec                vd, v;
@@ -160,14 +162,14 @@ static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattic
    problem on PETSC_COMM_SELF for reference). W is positive definite: r is unique when frictionless. */
 static PetscErrorCode TestLatticeRanks(KergsSweep sweep, PetscInt ncomp, PetscReal mu)
 {
-  MPI_Comm           comm = PETSC_COMM_WORLD;
-  KergsSweep         seq;
-  Lattice            L;
-  Vec                r, rseq, rall;
-  VecScatter         toall;
-  PetscReal          res, resseq, diff, nrm;
-  PetscInt           its, itsseq;
-  PetscMPIInt        size;
+  MPI_Comm    comm = PETSC_COMM_WORLD;
+  KergsSweep  seq;
+  Lattice     L;
+  Vec         r, rseq, rall;
+  VecScatter  toall;
+  PetscReal   res, resseq, diff, nrm;
+  PetscInt    its, itsseq;
+  PetscMPIInt size;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(comm, &size));
@@ -182,10 +184,14 @@ static PetscErrorCode TestLatticeRanks(KergsSweep sweep, PetscInt ncomp, PetscRe
   PetscCall(VecNorm(rseq, NORM_INFINITY, &nrm));
   PetscCall(VecAXPY(rall, -1.0, rseq));
   PetscCall(VecNorm(rall, NORM_INFINITY, &diff));
-  PetscCall(PetscPrintf(comm, "lattice %" PetscInt_FMT " contacts, ncomp %" PetscInt_FMT ", mu %g: %d rank(s) %" PetscInt_FMT " sweeps; 1 rank %" PetscInt_FMT " sweeps\n", L.ncontact, ncomp,
-                        (double)mu, size, its, itsseq));
-  PetscCall(Checkf((PetscBool)(res < 1e-8 && resseq < 1e-8), PetscMax(res, resseq), 1e-8, "lattice ncomp %" PetscInt_FMT " mu %g: natural residual on %d and 1 rank(s)", ncomp, (double)mu, size));
-  PetscCall(Checkf((PetscBool)(nrm > 0 && diff < 1e-8 * nrm), nrm > 0 ? diff / nrm : -1, 1e-8, "lattice ncomp %" PetscInt_FMT " mu %g: %d-rank solution = 1-rank one (relative)", ncomp, (double)mu, size));
+  PetscCall(PetscPrintf(comm,
+                        "lattice %" PetscInt_FMT " contacts, ncomp %" PetscInt_FMT ", mu %g: %d rank(s) %" PetscInt_FMT
+                        " sweeps; 1 rank %" PetscInt_FMT " sweeps\n",
+                        L.ncontact, ncomp, (double)mu, size, its, itsseq));
+  PetscCall(Checkf((PetscBool)(res < 1e-8 && resseq < 1e-8), PetscMax(res, resseq), 1e-8,
+                   "lattice ncomp %" PetscInt_FMT " mu %g: natural residual on %d and 1 rank(s)", ncomp, (double)mu, size));
+  PetscCall(Checkf((PetscBool)(nrm > 0 && diff < 1e-8 * nrm), nrm > 0 ? diff / nrm : -1, 1e-8,
+                   "lattice ncomp %" PetscInt_FMT " mu %g: %d-rank solution = 1-rank one (relative)", ncomp, (double)mu, size));
   PetscCall(VecScatterDestroy(&toall));
   PetscCall(VecDestroy(&rall));
   PetscCall(VecDestroy(&rseq));
@@ -195,7 +201,8 @@ static PetscErrorCode TestLatticeRanks(KergsSweep sweep, PetscInt ncomp, PetscRe
 }
 
 /* r after nsweep sweeps from r = 0 (and the last quad) on the lattice problem W stored as given. */
-static PetscErrorCode SweepsFromZero(Mat W, Vec vd, PetscInt ncomp, const PetscReal *mus, const PetscBool *active, PetscInt nsweep, Vec r, PetscReal *quad)
+static PetscErrorCode SweepsFromZero(Mat W, Vec vd, PetscInt ncomp, const PetscReal *mus, const PetscBool *active, PetscInt nsweep, Vec r,
+                                     PetscReal *quad)
 {
   KergsSweep         sw;
   KergsSweepMeasures m = {0, 0};
@@ -234,8 +241,10 @@ static PetscErrorCode TestUpperStorage(PetscInt ncomp, PetscReal mu)
   PetscCall(VecNorm(r, NORM_INFINITY, &nrm));
   PetscCall(VecAXPY(ru, -1.0, r));
   PetscCall(VecNorm(ru, NORM_INFINITY, &diff));
-  PetscCall(Checkf((PetscBool)(nrm > 0 && diff <= 1e-12 * nrm), nrm > 0 ? diff / nrm : -1, 1e-12, "upper storage, ncomp %" PetscInt_FMT " mu %g: 7 sweeps give r of whole storage (relative)", ncomp, (double)mu));
-  PetscCall(Checkf((PetscBool)(PetscAbsReal(qu - q) <= 1e-10 * q), qu, q, "upper storage, ncomp %" PetscInt_FMT " mu %g: same quad after 7 sweeps", ncomp, (double)mu));
+  PetscCall(Checkf((PetscBool)(nrm > 0 && diff <= 1e-12 * nrm), nrm > 0 ? diff / nrm : -1, 1e-12,
+                   "upper storage, ncomp %" PetscInt_FMT " mu %g: 7 sweeps give r of whole storage (relative)", ncomp, (double)mu));
+  PetscCall(Checkf((PetscBool)(PetscAbsReal(qu - q) <= 1e-10 * q), qu, q,
+                   "upper storage, ncomp %" PetscInt_FMT " mu %g: same quad after 7 sweeps", ncomp, (double)mu));
   PetscCall(PetscFree2(mus, active));
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&ru));
@@ -251,7 +260,7 @@ static PetscErrorCode TestUpperStorage(PetscInt ncomp, PetscReal mu)
    must solve (W + omega I) r + v^d - omega r~ with the law, checked by a second sweep set up on W + omega I. */
 static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
 {
-  MPI_Comm           comm = PETSC_COMM_WORLD;
+  MPI_Comm           comm  = PETSC_COMM_WORLD;
   const PetscInt     ncomp = 2;
   const PetscReal    omega = 0.7;
   KergsSweep         check;
@@ -289,7 +298,8 @@ static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
   PetscCall(KergsSweepNaturalResidual(check, r, vdreg, v, &res));
   PetscCall(PetscPrintf(comm, "regularised sweep (extra, W_aa + omega I): %" PetscInt_FMT " sweeps\n", its));
   PetscCall(Check((PetscBool)(res < 1e-8), "regularised sweep: natural residual of (W + omega I) r + v^d - omega r~", res, 1e-8));
-  PetscCall(Check((PetscBool)(resplain > 1e-4), "regularised sweep: extra/Wdiag used (residual of the plain problem stays large)", resplain, 1e-4));
+  PetscCall(Check((PetscBool)(resplain > 1e-4), "regularised sweep: extra/Wdiag used (residual of the plain problem stays large)", resplain,
+                  1e-4));
   PetscCall(KergsSweepDestroy(&check));
   PetscCall(KergsSweepReset(sweep));
   PetscCall(PetscFree2(extra, Wd));

@@ -44,16 +44,14 @@ static inline PetscErrorCode CheckAll(MPI_Comm comm, PetscBool ok, const char *w
   first = ok ? size : rank;
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm));
   if (first < size) PetscCallMPI(MPI_Bcast(values, 2, MPIU_REAL, first, comm));
-  PetscCall(PetscPrintf(comm, "%s %-72s got %.10g want %.10g\n", first == size ? "ok  " : "FAIL", what, (double)values[0], (double)values[1]));
+  PetscCall(
+      PetscPrintf(comm, "%s %-72s got %.10g want %.10g\n", first == size ? "ok  " : "FAIL", what, (double)values[0], (double)values[1]));
   if (first < size) nfail++;
   PetscFunctionReturn(0);
 }
 
 /* CheckAll() of a yes/no property: printed as got 0 or 1, want 1. Collective on comm. */
-static inline PetscErrorCode CheckTrue(MPI_Comm comm, PetscBool ok, const char *what)
-{
-  return CheckAll(comm, ok, what, ok ? 1 : 0, 1);
-}
+static inline PetscErrorCode CheckTrue(MPI_Comm comm, PetscBool ok, const char *what) { return CheckAll(comm, ok, what, ok ? 1 : 0, 1); }
 
 /* Check() with a printf-style description. */
 static inline PetscErrorCode Checkf(PetscBool ok, PetscReal got, PetscReal want, const char *fmt, ...)
@@ -82,10 +80,7 @@ static inline PetscErrorCode MakeStepperOn(MPI_Comm comm, const char *opts, Kerg
   PetscFunctionReturn(0);
 }
 
-static inline PetscErrorCode MakeStepper(const char *opts, KergsStepper *st)
-{
-  return MakeStepperOn(PETSC_COMM_WORLD, opts, st);
-}
+static inline PetscErrorCode MakeStepper(const char *opts, KergsStepper *st) { return MakeStepperOn(PETSC_COMM_WORLD, opts, st); }
 
 /* The statistic `name` recorded for step row `row` (-1: the last step). */
 static inline PetscErrorCode StatAt(KergsResults res, const char *name, PetscInt row, PetscReal *value)
@@ -156,7 +151,8 @@ static inline PetscErrorCode IndependentNaturalResidual(KergsStepper st, PetscRe
   PetscCall(KergsSolverGetActive(solver, &active));
   nc = L.ncomp;
   PetscCall(VecGetLocalSize(r, &nloc));
-  PetscCheck(nloc == n * nc, PETSC_COMM_SELF, PETSC_ERR_PLIB, "IndependentNaturalResidual: %" PetscInt_FMT " impulse entries for %" PetscInt_FMT " contacts", nloc, n);
+  PetscCheck(nloc == n * nc, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "IndependentNaturalResidual: %" PetscInt_FMT " impulse entries for %" PetscInt_FMT " contacts", nloc, n);
   PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
   PetscCall(VecDuplicate(r, &v));
   PetscCall(VecDuplicate(r, &diag));
@@ -206,7 +202,8 @@ static inline PetscErrorCode GatherById(KergsScene sc, const PetscReal *owned, P
   PetscCall(KergsSceneAllGatherReal(sc, owned, bs, all));
   PetscCall(KergsSceneAllGatherInt(sc, sc->id, 1, ids));
   for (PetscInt g = 0; g < sc->ndisks; g++) {
-    PetscCheck(ids[g] >= 0 && ids[g] < sc->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "GatherById: grain id %" PetscInt_FMT " outside [0, %" PetscInt_FMT ")", ids[g], sc->ndisks);
+    PetscCheck(ids[g] >= 0 && ids[g] < sc->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+               "GatherById: grain id %" PetscInt_FMT " outside [0, %" PetscInt_FMT ")", ids[g], sc->ndisks);
     for (PetscInt d = 0; d < bs; d++) out[bs * ids[g] + d] = all[bs * g + d];
   }
   PetscCall(PetscFree2(all, ids));
@@ -216,7 +213,8 @@ static inline PetscErrorCode GatherById(KergsScene sc, const PetscReal *owned, P
 /* The closing line and the exit code of a test program. */
 static inline int Finish(void)
 {
-  PetscCallAbort(PETSC_COMM_WORLD, PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
+  PetscCallAbort(PETSC_COMM_WORLD,
+                 PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
   return nfail ? 1 : 0;
 }
 
