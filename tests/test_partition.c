@@ -1,4 +1,4 @@
-/* Partition and migration (issue 4, DESIGN.md section 6): the physics does not depend on the number of ranks nor on
+/* Partition and migration (issue 4): the physics does not depend on the number of ranks nor on
    how the grains are numbered and owned. Each check compares a run on PETSC_COMM_WORLD against a reference run of
    the same scene in the same process (on PETSC_COMM_SELF, or on PETSC_COMM_WORLD with the contiguous layout), grain
    by grain through the persistent ids, after every step. Runs on 1, 2 and 3 ranks. */
@@ -367,7 +367,7 @@ static PetscErrorCode TestRenumberingKeepsPhysics(void)
   PetscFunctionReturn(0);
 }
 
-/* Per grain id, the force and torque the contacts put on it (DESIGN.md section 2): r_n n + r_t t and -R_a r_t on
+/* Per grain id, the force and torque the contacts put on it: r_n n + r_t t and -R_a r_t on
    body a, the opposite force and -R_b r_t on body b. */
 static PetscErrorCode ImpulsesById(KergsStepper st, PetscReal *P)
 {

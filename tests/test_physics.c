@@ -114,7 +114,7 @@ static PetscErrorCode TestSlopes(void)
   PetscFunctionReturn(0);
 }
 
-/* Sum over every rank's contacts of the impulses they put on each disk (force and torque), DESIGN.md section 2,
+/* Sum over every rank's contacts of the impulses they put on each disk (force and torque),
    by global disk index. */
 static PetscErrorCode DiskImpulses(KergsStepper st, PetscReal *P /* 3 per disk, global, summed over ranks */)
 {
@@ -201,7 +201,7 @@ static PetscErrorCode TestMomentumBalance(void)
   PetscFunctionReturn(0);
 }
 
-/* H^T assembled as a Mat agrees with the kinematics of DESIGN.md section 2 (v_n = n.(u_a - u_b),
+/* H^T assembled as a Mat agrees with the contact kinematics (v_n = n.(u_a - u_b),
    v_t = t.(u_a - u_b) - Ra w_a - Rb w_b) and H with the statics (force r_n n + r_t t, torque -Ra r_t on a,
    the opposite force and torque -Rb r_t on b); hence <H r, V> = <r, H^T V>. */
 static PetscErrorCode TestAdjoint(void)

@@ -450,7 +450,7 @@ static PetscErrorCode TestInactive(void)
 
 /* 8 x 6 disks of radius 0.05 on a hex lattice whose neighbours are 0.0999 apart (overlap 1e-4), in a box whose
    walls overlap the outer disks by 1e-4; the right wall moves outward at 0.05 (inward, the confined
-   lattice would have no solution at velocity level: DESIGN.md section 3). */
+   lattice would have no solution at velocity level). */
 static PetscErrorCode LatticeOptions(char *opts, size_t len)
 {
   const PetscInt  nx = 8, ny = 6;
@@ -529,7 +529,7 @@ static PetscErrorCode ContactKeys(KergsStepper st, Vec *keys)
   PetscFunctionReturn(0);
 }
 
-/* |H_f r~|: unique for the frictionless unilateral problem even where r~ is not (DESIGN.md section 3) */
+/* |H_f r~|: unique for the frictionless unilateral problem even where r~ is not */
 static PetscErrorCode HfNorm(KergsStepper st, Vec r, Vec *Hr)
 {
   PetscFunctionBeginUser;
