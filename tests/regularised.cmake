@@ -21,5 +21,6 @@ function(kergs_known_defect_straight_row solver predictor)
   set_tests_properties(${name} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 120 LABELS known_defect)
 endfunction()
 kergs_known_defect_straight_row(nlgsjac linear)
-kergs_known_defect_straight_row(nlgsjac none)
 kergs_known_defect_straight_row(nlkergs linear)
+# fixed by the convergence decision on the original problem (856bedb): must pass
+kergs_test(NAME regularised_straight_row_nlgsjac_none SOURCE test_regularised.c NPROCS 1 ARGS -straight_row_solver nlgsjac -straight_row_predictor none)
