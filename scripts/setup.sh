@@ -4,7 +4,7 @@ set -euo pipefail
 KERGS_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 KERGS_BUILD=${KERGS_BUILD:-$KERGS_ROOT/build}
 KERGS_PACKAGES="petsc-dev libmetis-dev libhdf5-openmpi-dev openmpi-bin cmake pkg-config make gcc libopenblas0-pthread
-  libfclib-dev python3-h5py python3-matplotlib python3-numpy python3-scipy python3-siconos"
+  libfclib-dev python3-h5py python3-matplotlib python3-numpy python3-scipy python3-siconos valgrind"
 KERGS_PACKAGES="$KERGS_PACKAGES clang-format" # tests/check_format.sh
 
 kergs_install() {

@@ -17,8 +17,8 @@ static inline PetscErrorCode DisksGather(KergsScene s, Disks *all)
 
   PetscFunctionBeginUser;
   all->n = n;
-  PetscCall(PetscMalloc7(KERGS_DIM * n + 1, &all->x, KERGS_DIM * n + 1, &all->v, KERGS_NROT * n + 1, &all->rot, KERGS_NROT * n + 1, &all->omega,
-                         n + 1, &all->radius, n + 1, &all->mass, n + 1, &all->inertia));
+  PetscCall(PetscMalloc7(KERGS_DIM * n + 1, &all->x, KERGS_DIM * n + 1, &all->v, KERGS_NROT * n + 1, &all->rot, KERGS_NROT * n + 1,
+                         &all->omega, n + 1, &all->radius, n + 1, &all->mass, n + 1, &all->inertia));
   PetscCall(PetscMalloc2(n + 1, &all->id, n + 1, &all->material));
   PetscCall(KergsSceneAllGatherReal(s, s->x, KERGS_DIM, all->x));
   PetscCall(KergsSceneAllGatherReal(s, s->v, KERGS_DIM, all->v));

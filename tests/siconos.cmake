@@ -7,7 +7,7 @@
 #    on 1 and 2 ranks); Siconos solves it; both residuals must be below 1e-8, the (unique) velocities of the
 #    frictionless problem must agree within 1e-6, and the 2-rank file must hold the same W, q, mu as the
 #    1-rank one up to the order of the contacts.
-# Siconos imports only in Debian's /usr/bin/python3 (TOOLCHAIN.md): without it these tests are not registered.
+# Siconos imports only in Debian's /usr/bin/python3 (Debian package python3-siconos): without it these tests are not registered.
 
 set(KERGS_SICONOS_PYTHON /usr/bin/python3 CACHE FILEPATH "Python interpreter that imports siconos.numerics and h5py")
 execute_process(COMMAND ${KERGS_SICONOS_PYTHON} -c "import siconos.numerics, h5py, scipy.sparse"
@@ -98,7 +98,7 @@ siconos_export(c5_friction_2ranks 2 ${E}/c5_friction_2ranks.fclib.h5 -friction 0
 # frictionless: u (and W r) are unique, so Siconos's and kergs's must agree
 siconos_test(siconos_fclib FIXTURES siconos_c5
              ARGS ${E}/c5.fclib.h5 --check-residual 1e-8 --check-u 1e-6 --expect-frictionless --check-min-contacts 4)
-# with friction only the residuals are compared: exact solutions may differ (DESIGN.md section 3)
+# with friction only the residuals are compared: exact solutions may differ (the frictional law need not have a unique solution)
 siconos_test(siconos_fclib_frictional FIXTURES siconos_c5_friction
              ARGS ${E}/c5_friction.fclib.h5 --check-residual 1e-8 --expect-frictional --check-min-contacts 4)
 # 2 ranks export the same problem as 1 rank, whatever the order of the contacts

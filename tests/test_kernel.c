@@ -1,7 +1,8 @@
 /* The kernel projector P = I - H_f^T (H_f H_f^T)^+ H_f on packings built by the engine: projector identities,
    the rank of H_f and its causes against a dense eigenvalue computation, exact diagonal blocks of Z against
    P e_j column by column, the cheap bound, symbolic reuse, empty and fully peeled cases, collinear contacts
-   (null pivots), and timings on a few thousand grains. Runs on 1 and 2 ranks; every check is global. */
+   (null pivots). Runs on 1 and 2 ranks; every check is global. Timings on a few thousand grains are a benchmark
+   (scripts/bench_micro.c). */
 static const char help[] = "kergs kernel projector tests.\n";
 
 #include "testing.h"
@@ -507,50 +508,6 @@ static PetscErrorCode TestFrictionalRow(void)
   PetscFunctionReturn(0);
 }
 
-/* Timings on a few thousand grains (printed only): a compressed hexagonal crystal of 2,000 disks. */
-static PetscErrorCode TimeLarge(void)
-{
-  KergsStepper   st;
-  KergsKernel    k;
-  Vec            x, y;
-  PetscLogDouble t0, t1;
-  PetscReal      tex, tbd;
-  const PetscInt napply = 20;
-
-  PetscFunctionBeginUser;
-  PetscCall(
-      MakeStepper("-gravity 0,-9.81 -friction 0.3 -dt 1e-4 -disks_source lattice -lattice_type hex -lattice_n 50,40 -lattice_radius 0.005 "
-                  "-lattice_origin 0.005,0.005 -box 0,0,0.505,0.3477499 -wall_box_top_velocity 0,-0.05 -wall_box_right_velocity -0.05,0 "
-                  "-alert 5e-4 -solver_max_it 20",
-                  &st));
-  PetscCall(KergsStepperStep(st));
-  PetscCall(Assemble(st));
-  PetscCall(MakeKernel("", st, &k));
-  PetscCall(VecDuplicate(st->ops->r, &x));
-  PetscCall(VecDuplicate(st->ops->r, &y));
-  PetscCall(VecSet(x, 1.0));
-  PetscCall(PetscTime(&t0));
-  for (PetscInt i = 0; i < napply; i++) PetscCall(KergsKernelProject(k, x, y));
-  PetscCall(PetscTime(&t1));
-  k->diagtype = KERGS_KERNEL_DIAG_EXACT;
-  PetscCall(KergsKernelComputeDiagonalBlocks(k));
-  tex         = k->diag_seconds;
-  k->diagtype = KERGS_KERNEL_DIAG_BOUND;
-  PetscCall(KergsKernelComputeDiagonalBlocks(k));
-  tbd = k->diag_seconds;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
-                        "     timing, %" PetscInt_FMT " disks, H_f %" PetscInt_FMT " x %" PetscInt_FMT " (rank %" PetscInt_FMT
-                        "), %s: set-up and factor %.3g s, apply %.3g ms, diagonal exact %.3g s, bound %.3g s\n",
-                        st->scene->ndisks, k->nrows, k->ncols, k->rank, k->used, (double)k->factor_seconds,
-                        1e3 * (double)(t1 - t0) / napply, (double)tex, (double)tbd));
-  PetscCall(CheckProjector("2000 disks", k, st));
-  PetscCall(VecDestroy(&x));
-  PetscCall(VecDestroy(&y));
-  PetscCall(KergsKernelDestroy(&k));
-  PetscCall(KergsStepperDestroy(&st));
-  PetscFunctionReturn(0);
-}
-
 /* A frictionless hexagonal patch without walls: more contact components than DOFs, yet H_f H_f^T is singular by
    the patch's rigid motions (two translations and the rotation, which frictionless contacts do not see).
    The automatic solver tries CHOLMOD on one rank, which must be rejected for MUMPS. */
@@ -618,8 +575,9 @@ int main(int argc, char **argv)
   PetscCall(TestFreePatch());
   PetscCall(TestFrictionalRow());
   PetscCall(TestCholmodParallel());
-  PetscCall(TimeLarge());
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
-  PetscCall(PetscFinalize());
-  return nfail ? 1 : 0;
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
 }

@@ -1,4 +1,4 @@
-/* Partition and migration (issue 4, DESIGN.md section 6): the physics does not depend on the number of ranks nor on
+/* Partition and migration (issue 4): the physics does not depend on the number of ranks nor on
    how the grains are numbered and owned. Each check compares a run on PETSC_COMM_WORLD against a reference run of
    the same scene in the same process (on PETSC_COMM_SELF, or on PETSC_COMM_WORLD with the contiguous layout), grain
    by grain through the persistent ids, after every step. Runs on 1, 2 and 3 ranks. */
@@ -46,8 +46,10 @@ static PetscErrorCode GatherGrainsById(KergsScene sc, GrainsById *g, PetscBool *
   PetscCall(KergsSceneAllGatherInt(sc, sc->id, 1, ids));
   *ok = PETSC_TRUE;
   for (PetscInt i = 0; i < g->n; i++) {
-    if (ids[i] < 0 || ids[i] >= g->n || seen[ids[i]]) *ok = PETSC_FALSE;
-    else seen[ids[i]] = 1;
+    if (ids[i] < 0 || ids[i] >= g->n || seen[ids[i]])
+      *ok = PETSC_FALSE;
+    else
+      seen[ids[i]] = 1;
   }
   if (*ok) {
     PetscCall(GatherById(sc, sc->x, KERGS_DIM, g->x));
@@ -318,7 +320,8 @@ static PetscErrorCode TestGhostRebuilds(void)
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   for (PetscInt big = 0; big < 2; big++) {
-    PetscCall(StepperWithExtra(PETSC_COMM_WORLD, DEPOSIT, big ? "-partition_type contiguous -ghost_skin 2" : "-partition_type contiguous", &st));
+    PetscCall(
+        StepperWithExtra(PETSC_COMM_WORLD, DEPOSIT, big ? "-partition_type contiguous -ghost_skin 2" : "-partition_type contiguous", &st));
     for (PetscInt s = 0; s < 50; s++) PetscCall(KergsStepperStep(st));
     built[big] = st->scene->ghost_rebuilds;
     PetscCall(KergsStepperDestroy(&st));
@@ -326,7 +329,8 @@ static PetscErrorCode TestGhostRebuilds(void)
   if (size > 1) {
     PetscCall(Check((PetscBool)(built[0] > 1), "ghosts: rebuilt as the grains fall (default skin)", (PetscReal)built[0], 2));
     PetscCall(Check((PetscBool)(built[1] == 1), "ghosts: built once with a skin larger than the box", (PetscReal)built[1], 1));
-  } else PetscCall(Check((PetscBool)(built[0] == 0 && built[1] == 0), "ghosts: none on one rank", (PetscReal)(built[0] + built[1]), 0));
+  } else
+    PetscCall(Check((PetscBool)(built[0] == 0 && built[1] == 0), "ghosts: none on one rank", (PetscReal)(built[0] + built[1]), 0));
   PetscFunctionReturn(0);
 }
 
@@ -363,7 +367,7 @@ static PetscErrorCode TestRenumberingKeepsPhysics(void)
   PetscFunctionReturn(0);
 }
 
-/* Per grain id, the force and torque the contacts put on it (DESIGN.md section 2): r_n n + r_t t and -R_a r_t on
+/* Per grain id, the force and torque the contacts put on it: r_n n + r_t t and -R_a r_t on
    body a, the opposite force and -R_b r_t on body b. */
 static PetscErrorCode ImpulsesById(KergsStepper st, PetscReal *P)
 {
@@ -470,17 +474,20 @@ static PetscErrorCode TestMigrationKeepsImpulses(PetscBool frictional)
   PetscCall(ImpulsesById(tst, P1));
   PetscCall(PetscSNPrintf(what, sizeof(what), "%s: same force and torque on every grain, relative", label));
   PetscCall(Check((PetscBool)(MaxDiff(3 * n, P0, P1, &scale) <= 1e-14 * scale), what, MaxDiff(3 * n, P0, P1, &scale) / scale, 0));
-  if (frictional) PetscCall(Check((PetscBool)(rtmax > 1e-8), "migration, frictional: some tangential impulse to carry (largest |r_t|)", rtmax, 1e-8));
+  if (frictional)
+    PetscCall(Check((PetscBool)(rtmax > 1e-8), "migration, frictional: some tangential impulse to carry (largest |r_t|)", rtmax, 1e-8));
   /* the next 2 steps (step 5 does not converge: the row starts to jam) */
   PetscCall(RunLockstep(ref, tst, 2, &L));
   if (frictional) {
     PetscCall(Check((PetscBool)(L.compared == 2 && L.convergence_mismatch == 0), "migration, frictional: the next 2 steps converge",
                     (PetscReal)(L.compared - L.convergence_mismatch), 2));
     PetscCall(Check((PetscBool)(L.contact_mismatch == 0 && L.layout_bad == 0),
-                    "migration, frictional: same contacts as the 1-rank run, valid layout", (PetscReal)(L.contact_mismatch + L.layout_bad), 0));
-    PetscCall(PetscPrintf(PETSC_COMM_WORLD,
-                          "     migration, frictional: velocities by id differ from the 1-rank run by %.3g of the largest speed (not unique)\n",
-                          (double)L.dv));
+                    "migration, frictional: same contacts as the 1-rank run, valid layout", (PetscReal)(L.contact_mismatch + L.layout_bad),
+                    0));
+    PetscCall(
+        PetscPrintf(PETSC_COMM_WORLD,
+                    "     migration, frictional: velocities by id differ from the 1-rank run by %.3g of the largest speed (not unique)\n",
+                    (double)L.dv));
   } else
     PetscCall(ReportLockstep("migration, frictionless, after reversal", &L, 2));
   PetscCall(PetscFree(before));
@@ -547,13 +554,13 @@ static PetscErrorCode TestRobustness(void)
 }
 
 /* A grain touching grains of three ranks at once: disk 0 rests on disks 1 and 2 (on a frictionless floor, so that
-   they slide apart and the stack collapses: every grain moves) and carries disk 3. With the contiguous split of 4 disks over 3 ranks (2, 1, 1), disk 0 is on rank 0 with disk 1,
-   disk 2 on rank 1 and disk 3 on rank 2: its three contacts join three ranks, and two of them need ghosts. The run
-   must match the 1-rank run step by step, with every contact found once; on 3 ranks the check also asserts that
-   the grain's neighbours are owned by 3 distinct ranks (on fewer ranks, by all of them). */
-#define TRIPLE \
-  "-gravity 0,-9.81 -dt 1e-3 -alert 0.01 -disks_source list -disks_radius 0.1 " \
-  "-disks_x 0.5,0.273205081,0.4,0.100000001,0.6,0.100000001,0.5,0.473205082 " \
+   they slide apart and the stack collapses: every grain moves) and carries disk 3. With the contiguous split of 4 disks over 3 ranks (2, 1,
+   1), disk 0 is on rank 0 with disk 1, disk 2 on rank 1 and disk 3 on rank 2: its three contacts join three ranks, and two of them need
+   ghosts. The run must match the 1-rank run step by step, with every contact found once; on 3 ranks the check also asserts that the grain's
+   neighbours are owned by 3 distinct ranks (on fewer ranks, by all of them). */
+#define TRIPLE                                                                                                                             \
+  "-gravity 0,-9.81 -dt 1e-3 -alert 0.01 -disks_source list -disks_radius 0.1 "                                                            \
+  "-disks_x 0.5,0.273205081,0.4,0.100000001,0.6,0.100000001,0.5,0.473205082 "                                                              \
   "-walls floor -wall_floor_a 0,0 -wall_floor_b 1,0 -partition_type contiguous " TIGHT
 
 static PetscErrorCode TestGrainOnThreeRanks(void)
@@ -571,7 +578,7 @@ static PetscErrorCode TestGrainOnThreeRanks(void)
   PetscCall(RunLockstep(ref, tst, 20, &L));
   PetscCall(ReportLockstep("grain on three ranks", &L, 20));
   {
-    KergsScene sc = tst->scene;
+    KergsScene sc      = tst->scene;
     PetscBool  seen[4] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
     for (PetscInt k = 0; k < tst->contacts->n; k++) { /* disk 0 has the smallest id: it owns its disk-disk contacts */
       const KergsContact *c = &tst->contacts->c[k];
@@ -584,8 +591,8 @@ static PetscErrorCode TestGrainOnThreeRanks(void)
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &owners, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &ncontacts0, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
   PetscCall(Check((PetscBool)(ncontacts0 == 3), "grain on three ranks: grain 0 has 3 disk contacts", (PetscReal)ncontacts0, 3));
-  PetscCall(Check((PetscBool)(owners == PetscMin(size, 3)), "grain on three ranks: its neighbours' owners (distinct ranks)", (PetscReal)owners,
-                  (PetscReal)PetscMin(size, 3)));
+  PetscCall(Check((PetscBool)(owners == PetscMin(size, 3)), "grain on three ranks: its neighbours' owners (distinct ranks)",
+                  (PetscReal)owners, (PetscReal)PetscMin(size, 3)));
   PetscCall(KergsStepperDestroy(&ref));
   PetscCall(KergsStepperDestroy(&tst));
   PetscFunctionReturn(0);
@@ -680,22 +687,25 @@ static PetscErrorCode TestMeasuredWork(void)
   if (size == 1) PetscFunctionReturn(0);
   PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20", NULL, &st));
   p = st->partition;
-  PetscCall(StepTo(st, 11)); /* METIS replaced the geometric partition at step 10 (modelled work: deterministic) */
-  p->work = KERGS_PARTITION_WORK_MEASURED;  /* from here on, with the times set below */
+  PetscCall(StepTo(st, 11));               /* METIS replaced the geometric partition at step 10 (modelled work: deterministic) */
+  p->work = KERGS_PARTITION_WORK_MEASURED; /* from here on, with the times set below */
   PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
   before             = m.my_work;
   p->compute_seconds = (rank == 0 ? 2e-9 : 1e-9) * m.my_work; /* rank 0: twice the time per unit */
   PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
   PetscCall(MPIU_Allreduce(&p->compute_seconds, &tmax, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
   PetscCall(MPIU_Allreduce(&p->compute_seconds, &tsum, 1, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
-  PetscCall(Check((PetscBool)(PetscAbsReal(m.imbalance - tmax / (tsum / size)) < 1e-12), "measured work: imbalance of the times", m.imbalance, tmax / (tsum / size)));
-  PetscCall(Check((PetscBool)(rank == 0 ? p->work_scale > 1.2 : p->work_scale < 1.0), "measured work: rank 0's factor above 1, the others' below", p->work_scale, rank == 0 ? 1.2 : 1.0));
+  PetscCall(Check((PetscBool)(PetscAbsReal(m.imbalance - tmax / (tsum / size)) < 1e-12), "measured work: imbalance of the times",
+                  m.imbalance, tmax / (tsum / size)));
+  PetscCall(Check((PetscBool)(rank == 0 ? p->work_scale > 1.2 : p->work_scale < 1.0),
+                  "measured work: rank 0's factor above 1, the others' below", p->work_scale, rank == 0 ? 1.2 : 1.0));
   PetscCall(KergsPartitionApply(p, st->scene, st->contacts));
   PetscCall(KergsContactsDetect(st->contacts, st->scene)); /* the contacts of the new layout */
   p->compute_seconds = 0;                                  /* the old times describe the old ownership */
   PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
   after = m.my_work;
-  if (rank == 0) PetscCall(Check((PetscBool)(after < 0.85 * before), "measured work: the slow rank gets less modelled work", after, before));
+  if (rank == 0)
+    PetscCall(Check((PetscBool)(after < 0.85 * before), "measured work: the slow rank gets less modelled work", after, before));
   PetscCall(ReportPartition("measured work", st));
   PetscCall(KergsStepperDestroy(&st));
   PetscFunctionReturn(0);
@@ -732,7 +742,8 @@ static PetscErrorCode TestGhostsNearOwned(void)
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &far, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &worst, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
-  PetscCall(Check((PetscBool)(far == 0 && st->partition->last_method == KERGS_PARTITION_METIS), "ghosts: each within reach of an owned disk (METIS parts)", worst, 1));
+  PetscCall(Check((PetscBool)(far == 0 && st->partition->last_method == KERGS_PARTITION_METIS),
+                  "ghosts: each within reach of an owned disk (METIS parts)", worst, 1));
   PetscCall(ReportPartition("ghosts near owned", st));
   PetscCall(KergsStepperDestroy(&st));
   PetscFunctionReturn(0);

@@ -89,7 +89,11 @@ static PetscErrorCode DefiningResiduals(KergsStepper st, KergsPredictor p, const
   const PetscInt     nc = ops->ncomp;
 
   PetscFunctionBeginUser;
-  PetscCheck(p->Vtilde, st->comm, PETSC_ERR_PLIB, "predictor %s kept no V~", p->type);
+  if (!p->Vtilde) { /* a predictor that solves a DOF-space system keeps V~: without it, nothing to check */
+    PetscCall(Checkf(PETSC_FALSE, 0, 1, "predictor %s kept its V~", p->type));
+    *mom = *law = PETSC_MAX_REAL;
+    PetscFunctionReturn(0);
+  }
   /* momentum */
   PetscCall(VecDuplicate(ops->Vf, &a));
   PetscCall(VecDuplicate(ops->Vf, &b));
@@ -406,10 +410,10 @@ static PetscErrorCode TestInactive(void)
 
   PetscFunctionBeginUser;
   PetscCall(MakeStepperOn(PETSC_COMM_WORLD,
-                        "-gravity 0,-10 -dt 1e-3 -friction 0.2 -disks_source list -disks_x 0,0.0999,0,0.3039 -disks_radius 0.1 -walls "
-                        "floor -wall_floor_a -1,0 "
-                        "-wall_floor_b 1,0 -wall_floor_infinite -alert 0.01",
-                        &st));
+                          "-gravity 0,-10 -dt 1e-3 -friction 0.2 -disks_source list -disks_x 0,0.0999,0,0.3039 -disks_radius 0.1 -walls "
+                          "floor -wall_floor_a -1,0 "
+                          "-wall_floor_b 1,0 -wall_floor_infinite -alert 0.01",
+                          &st));
   PetscCall(Prepare(st, 0, &active));
   PetscCall(Check((PetscBool)(st->contacts->nglobal == 2), "inactive: 2 potential contacts (floor g<0, upper pair g>0)",
                   (PetscReal)st->contacts->nglobal, 2));
@@ -446,7 +450,7 @@ static PetscErrorCode TestInactive(void)
 
 /* 8 x 6 disks of radius 0.05 on a hex lattice whose neighbours are 0.0999 apart (overlap 1e-4), in a box whose
    walls overlap the outer disks by 1e-4; the right wall moves outward at 0.05 (inward, the confined
-   lattice would have no solution at velocity level: DESIGN.md section 3). */
+   lattice would have no solution at velocity level). */
 static PetscErrorCode LatticeOptions(char *opts, size_t len)
 {
   const PetscInt  nx = 8, ny = 6;
@@ -492,7 +496,12 @@ static PetscErrorCode CompareWithReference(Vec a, Vec b, PetscReal *rel)
   PetscCall(GatherAll(a, &all));
   PetscCall(VecGetSize(all, &na));
   PetscCall(VecGetSize(b, &nbs));
-  PetscCheck(na == nbs, PETSC_COMM_SELF, PETSC_ERR_PLIB, "different sizes %" PetscInt_FMT " and %" PetscInt_FMT, na, nbs);
+  if (na != nbs) { /* global sizes: the same answer on every rank */
+    PetscCall(Check(PETSC_FALSE, "prediction on all ranks has the size of the 1-rank one", na, nbs));
+    PetscCall(VecDestroy(&all));
+    *rel = PETSC_MAX_REAL;
+    PetscFunctionReturn(0);
+  }
   PetscCall(VecNorm(b, NORM_INFINITY, &nb));
   PetscCall(VecAXPY(all, -1.0, b));
   PetscCall(VecNorm(all, NORM_INFINITY, &d));
@@ -520,7 +529,7 @@ static PetscErrorCode ContactKeys(KergsStepper st, Vec *keys)
   PetscFunctionReturn(0);
 }
 
-/* |H_f r~|: unique for the frictionless unilateral problem even where r~ is not (DESIGN.md section 3) */
+/* |H_f r~|: unique for the frictionless unilateral problem even where r~ is not */
 static PetscErrorCode HfNorm(KergsStepper st, Vec r, Vec *Hr)
 {
   PetscFunctionBeginUser;
@@ -606,7 +615,7 @@ static PetscErrorCode TestLatticeRanks(void)
 /* ---------------------------------------------------------------------------------------------------- */
 /* Bad options are refused with the option's name.                                                       */
 
-static PetscErrorCode ExpectError(const char *opts, PetscErrorCode want)
+static PetscErrorCode CheckError(const char *opts, PetscErrorCode want)
 {
   KergsPredictor p;
   PetscErrorCode ierr;
@@ -628,12 +637,12 @@ static PetscErrorCode ExpectError(const char *opts, PetscErrorCode want)
 static PetscErrorCode TestOptions(void)
 {
   PetscFunctionBeginUser;
-  PetscCall(ExpectError("-predictor_type linear -predictor_eta -1", PETSC_ERR_ARG_OUTOFRANGE));
-  PetscCall(ExpectError("-predictor_type linear -predictor_eta 0", PETSC_ERR_ARG_OUTOFRANGE));
-  PetscCall(ExpectError("-predictor_type elastic -predictor_epsilon -1e-3", PETSC_ERR_ARG_OUTOFRANGE));
-  PetscCall(ExpectError("-predictor_type unilateral -predictor_unilateral_tol 0", PETSC_ERR_ARG_OUTOFRANGE));
-  PetscCall(ExpectError("-predictor_type unilateral -predictor_unilateral_max_it 0", PETSC_ERR_ARG_OUTOFRANGE));
-  PetscCall(ExpectError("-predictor_type elastik", PETSC_ERR_ARG_UNKNOWN_TYPE));
+  PetscCall(CheckError("-predictor_type linear -predictor_eta -1", PETSC_ERR_ARG_OUTOFRANGE));
+  PetscCall(CheckError("-predictor_type linear -predictor_eta 0", PETSC_ERR_ARG_OUTOFRANGE));
+  PetscCall(CheckError("-predictor_type elastic -predictor_epsilon -1e-3", PETSC_ERR_ARG_OUTOFRANGE));
+  PetscCall(CheckError("-predictor_type unilateral -predictor_unilateral_tol 0", PETSC_ERR_ARG_OUTOFRANGE));
+  PetscCall(CheckError("-predictor_type unilateral -predictor_unilateral_max_it 0", PETSC_ERR_ARG_OUTOFRANGE));
+  PetscCall(CheckError("-predictor_type elastik", PETSC_ERR_ARG_UNKNOWN_TYPE));
   PetscFunctionReturn(0);
 }
 
@@ -674,7 +683,9 @@ int main(int argc, char **argv)
   PetscCall(TestInactive());
   PetscCall(TestLatticeRanks());
   PetscCall(TestOptions());
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
-  PetscCall(PetscFinalize());
-  return nfail ? 1 : 0;
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
 }

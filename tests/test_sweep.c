@@ -5,35 +5,17 @@
      contacts inactive: the distributed solution equals the one computed on one rank;
    - W stored by its upper block triangle (SBAIJ) sweeps as W stored whole, on any number of ranks;
    - the NLGS-Jac entry points (extra right-hand side, replacement diagonal blocks) against the equivalent
-     problem (W + omega I) r + vd - omega r~;
-   - ns per contact per sweep on a larger lattice (printed only). */
-#include "internals.h"
+     problem (W + omega I) r + vd - omega r~.
+   The lattice is built by tests/lattice.h; its timing (ns per contact per sweep) is a benchmark, scripts/bench_micro.c. */
+#include "testing.h"
+#include "lattice.h"
 
-static const char help[] = "Tests of the NLGS sweep.\n"
-                           "  -perf_contacts <n>: number of contacts of the timing problem (default 50000)\n";
+static const char help[] = "Tests of the NLGS sweep.\n";
 
-/* A reproducible number in [0, 1) from an integer (splitmix64 finaliser). */
-static PetscReal Hash01(unsigned long long x)
-{
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  x = x ^ (x >> 31);
-  return (PetscReal)(x >> 11) / 9007199254740992.0;
-}
-
-/* Local contacts of this rank when ntotal contacts are split in contiguous blocks (PETSc's default split). */
-static PetscErrorCode LocalCount(MPI_Comm comm, PetscInt ntotal, PetscInt *nloc)
-{
-  PetscFunctionBeginUser;
-  *nloc = PETSC_DECIDE;
-  PetscCall(PetscSplitOwnership(comm, nloc, &ntotal));
-  PetscFunctionReturn(0);
-}
-
-/* Sweeps from r = 0 until quad < tol. Returns the number of sweeps and the quad of the first sweep. */
-static PetscErrorCode SolveBySweeps(KergsSweep sweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wd, PetscReal tol, PetscInt maxit, PetscInt *its,
-                                    PetscReal *quad0)
+/* Sweeps from r = 0 until quad < tol (at most maxit). Returns the number of sweeps and the quad of the first sweep;
+   checks that quad fell below tol (label names the problem). */
+static PetscErrorCode SolveBySweeps(const char *label, KergsSweep sweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wd,
+                                    PetscReal tol, PetscInt maxit, PetscInt *its, PetscReal *quad0)
 {
   KergsSweepMeasures m;
   PetscInt           k;
@@ -45,9 +27,9 @@ static PetscErrorCode SolveBySweeps(KergsSweep sweep, Vec r, Vec vd, const Petsc
     if (k == 0) *quad0 = m.quad;
     if (m.quad < tol) break;
   }
-  *its = k + 1;
-  PetscCheck(k < maxit, PetscObjectComm((PetscObject)r), PETSC_ERR_NOT_CONVERGED, "sweeps did not reach quad < %g in %" PetscInt_FMT " sweeps (quad %g)", (double)tol, maxit,
-             (double)m.quad);
+  *its = PetscMin(k + 1, maxit);
+  PetscCall(Checkf((PetscBool)(k < maxit), m.quad, tol, "%s: sweeps reach quad < %g within %" PetscInt_FMT " (quad at exit)", label,
+                   (double)tol, maxit));
   PetscFunctionReturn(0);
 }
 
@@ -91,13 +73,13 @@ static PetscErrorCode BuildColumn(MPI_Comm comm, PetscInt N, PetscReal gdt, Pets
 
 static PetscErrorCode TestColumn(KergsSweep sweep)
 {
-  const PetscInt     N = 12;
+  const PetscInt     N   = 12;
   const PetscReal    gdt = 9.81e-3;
   Mat                W;
   Vec                vd, r, v;
   PetscBool         *active;
   PetscInt           its, k, rstart, rend;
-  PetscReal          quad0, res, err = 0.0, rmax = 0.0, above;
+  PetscReal          quad0, res, err = 0.0, rmax = 0.0, above, rceiling = 0.0;
   const PetscScalar *ra;
   MPI_Comm           comm = PETSC_COMM_WORLD;
 
@@ -105,7 +87,7 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   PetscCall(BuildColumn(comm, N, gdt, 3 * gdt, &W, &vd, &active));
   PetscCall(MatCreateVecs(W, &r, &v));
   PetscCall(KergsSweepSetUp(sweep, W, 1, NULL, active));
-  PetscCall(SolveBySweeps(sweep, r, vd, NULL, NULL, 1e-10, 20000, &its, &quad0));
+  PetscCall(SolveBySweeps("column", sweep, r, vd, NULL, NULL, 1e-10, 20000, &its, &quad0));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
   PetscCall(VecGetOwnershipRange(r, &rstart, &rend));
   PetscCall(VecGetArrayRead(r, &ra));
@@ -115,23 +97,25 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
     for (above = 0.0, j = k; j < N; j++) above += gdt * ColumnMass(j);
     err  = PetscMax(err, PetscAbsReal(ra[k - rstart] - above));
     rmax = PetscMax(rmax, above);
-    if (k == N) PetscCheck(ra[k - rstart] == 0.0, comm, PETSC_ERR_PLIB, "column: the inactive ceiling contact carries r = %g", (double)ra[k - rstart]);
+    if (k == N) rceiling = PetscAbsReal(ra[k - rstart]);
   }
   PetscCall(VecRestoreArrayRead(r, &ra));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &err, 1, MPIU_REAL, MPIU_MAX, comm));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rmax, 1, MPIU_REAL, MPIU_MAX, comm));
-  PetscCall(PetscPrintf(comm, "column of %" PetscInt_FMT " disks: %" PetscInt_FMT " sweeps, first quad %g, natural residual %.2e, |r - r_exact| / |r_exact| = %.2e\n", N, its,
-                        (double)quad0, (double)res, (double)(err / rmax)));
-  PetscCheck(PetscAbsReal(quad0 - 1.0) < 1e-14, comm, PETSC_ERR_PLIB, "column: the first sweep from r = 0 must have quad = 1, got %g", (double)quad0);
-  PetscCheck(res < 1e-8, comm, PETSC_ERR_PLIB, "column: natural residual %g", (double)res);
-  PetscCheck(err < 1e-7 * rmax, comm, PETSC_ERR_PLIB, "column: impulses differ from the weights carried by %g", (double)(err / rmax));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rceiling, 1, MPIU_REAL, MPIU_MAX, comm));
+  PetscCall(PetscPrintf(comm, "column of %" PetscInt_FMT " disks: %" PetscInt_FMT " sweeps\n", N, its));
+  PetscCall(Check((PetscBool)(rceiling == 0.0), "column: the inactive ceiling contact carries r = 0", rceiling, 0));
+  PetscCall(Check((PetscBool)(PetscAbsReal(quad0 - 1.0) < 1e-14), "column: the first sweep from r = 0 has quad = 1", quad0, 1));
+  PetscCall(Check((PetscBool)(res < 1e-8), "column: natural residual", res, 1e-8));
+  PetscCall(Check((PetscBool)(err < 1e-7 * rmax), "column: impulses = weights carried (|r - r_exact| / |r_exact|)", err / rmax, 1e-7));
   /* all contacts open: vd >= 0 gives r = 0 and a natural residual of exactly 0 (absolute) */
   PetscCall(VecAbs(vd));
-  PetscCall(SolveBySweeps(sweep, r, vd, NULL, NULL, 1e-10, 10, &its, &quad0));
+  PetscCall(SolveBySweeps("column pulled apart", sweep, r, vd, NULL, NULL, 1e-10, 10, &its, &quad0));
   PetscCall(VecNorm(r, NORM_INFINITY, &err));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
-  PetscCheck(err == 0.0 && res == 0.0 && quad0 == 0.0, comm, PETSC_ERR_PLIB, "column pulled apart: |r| %g, residual %g, quad %g", (double)err, (double)res, (double)quad0);
-  PetscCall(PetscPrintf(comm, "column pulled apart (v^d >= 0): r = 0, quad 0, residual 0 after %" PetscInt_FMT " sweep(s): OK\n", its));
+  PetscCall(Check((PetscBool)(err == 0.0), "column pulled apart (v^d >= 0): r = 0", err, 0));
+  PetscCall(
+      Check((PetscBool)(res == 0.0 && quad0 == 0.0), "column pulled apart: quad 0 and natural residual 0 (their sum)", res + quad0, 0));
   PetscCall(KergsSweepReset(sweep)); /* active is freed below */
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&v));
@@ -141,125 +125,9 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   PetscFunctionReturn(0);
 }
 
-/* ---------------------------------------------------------------------------------------------------------
-   Triangular lattice of gx x gy disks, contacts with the right, upper and upper-right neighbours (contact
-   3 g + d, d = 0, 1, 2, kept when the neighbour exists; numbered in that order). Normals are the lattice
-   directions perturbed by a reproducible angle. W = H^T M^-1 H + shift I over ncomp components per contact,
-   rows distributed in contiguous blocks of contacts. */
-typedef struct {
-  PetscInt  gx, gy, ncontact;
-  PetscInt *ga, *gb; /* bodies a (neighbour) and b of each contact */
-  PetscReal *nx, *ny;
-} Lattice;
-
-static PetscErrorCode LatticeCreate(PetscInt gx, PetscInt gy, Lattice *L)
-{
-  const PetscInt di[3] = {1, 0, 1}, dj[3] = {0, 1, 1};
-  PetscInt       i, j, d, k = 0;
-
-  PetscFunctionBeginUser;
-  L->gx = gx;
-  L->gy = gy;
-  PetscCall(PetscMalloc4(3 * gx * gy, &L->ga, 3 * gx * gy, &L->gb, 3 * gx * gy, &L->nx, 3 * gx * gy, &L->ny));
-  for (j = 0; j < gy; j++)
-    for (i = 0; i < gx; i++)
-      for (d = 0; d < 3; d++) {
-        PetscReal ang;
-
-        if (i + di[d] >= gx || j + dj[d] >= gy) continue;
-        L->gb[k] = i + gx * j;
-        L->ga[k] = i + di[d] + gx * (j + dj[d]);
-        ang      = PetscAtan2Real((PetscReal)dj[d], (PetscReal)di[d]) + 0.2 * (Hash01(7 * k + 1) - 0.5);
-        L->nx[k] = PetscCosReal(ang);
-        L->ny[k] = PetscSinReal(ang);
-        k++;
-      }
-  L->ncontact = k;
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode LatticeDestroy(Lattice *L)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree4(L->ga, L->gb, L->nx, L->ny));
-  PetscFunctionReturn(0);
-}
-
-/* Sets the column(s) of contact k in Hs = M^{-1/2} H: force r_n n + r_t t and torque -R r_t on a, the
-   opposite force and torque -R r_t on b (DESIGN.md section 2). Disk radius R = 0.5, mass in [1, 2]. */
-static PetscErrorCode LatticeSetContactColumns(const Lattice *L, PetscInt k, PetscInt ncomp, Mat Hs)
-{
-  const PetscReal R = 0.5;
-  const PetscInt  body[2] = {L->ga[k], L->gb[k]};
-  const PetscReal sign[2] = {1.0, -1.0};
-  PetscInt        s;
-
-  PetscFunctionBeginUser;
-  for (s = 0; s < 2; s++) {
-    const PetscReal m = 1.0 + Hash01(3 * body[s] + 2), Inertia = 0.5 * m * R * R;
-    const PetscInt  rows[3] = {3 * body[s], 3 * body[s] + 1, 3 * body[s] + 2};
-    const PetscInt  cols[2] = {ncomp * k, ncomp * k + 1};
-    PetscScalar     v[3][2];
-
-    v[0][0] = sign[s] * L->nx[k] / PetscSqrtReal(m);
-    v[1][0] = sign[s] * L->ny[k] / PetscSqrtReal(m);
-    v[2][0] = 0.0;
-    v[0][1] = -sign[s] * L->ny[k] / PetscSqrtReal(m); /* t = (-n_y, n_x) */
-    v[1][1] = sign[s] * L->nx[k] / PetscSqrtReal(m);
-    v[2][1] = -R / PetscSqrtReal(Inertia);
-    if (ncomp == 2) PetscCall(MatSetValues(Hs, 3, rows, 2, cols, &v[0][0], INSERT_VALUES));
-    else {
-      PetscScalar vn[2] = {v[0][0], v[1][0]};
-
-      PetscCall(MatSetValues(Hs, 2, rows, 1, cols, vn, INSERT_VALUES));
-    }
-  }
-  PetscFunctionReturn(0);
-}
-
-/* W, v^d, mu and activity for the lattice on comm: contact k is inactive when k % 7 == 3; v^d_n in
-   [-1, 0.5), v^d_t in [-1, 1). */
-static PetscErrorCode LatticeProblem(MPI_Comm comm, const Lattice *L, PetscInt ncomp, PetscReal mu, PetscReal shift, Mat *W, Vec *vd, PetscReal **mus, PetscBool **active)
-{
-  const PetscInt ngrain = L->gx * L->gy;
-  Mat            Hs;
-  PetscInt       k, c, kstart, kend, nloc;
-
-  PetscFunctionBeginUser;
-  PetscCall(LocalCount(comm, L->ncontact, &nloc));
-  /* columns by contact, so that W = Hs^T Hs has ncomp x ncomp blocks: stored as BAIJ for the sweep when ncomp > 1 */
-  PetscCall(MatCreate(comm, &Hs));
-  PetscCall(MatSetSizes(Hs, PETSC_DECIDE, ncomp * nloc, 3 * ngrain, ncomp * L->ncontact));
-  PetscCall(MatSetBlockSizes(Hs, 1, ncomp));
-  PetscCall(MatSetType(Hs, MATAIJ));
-  PetscCall(MatSeqAIJSetPreallocation(Hs, 14 * ncomp, NULL));
-  PetscCall(MatMPIAIJSetPreallocation(Hs, 14 * ncomp, NULL, 14 * ncomp, NULL));
-  PetscCall(MatSetOption(Hs, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
-  PetscCall(MatGetOwnershipRangeColumn(Hs, &kstart, &kend));
-  kstart /= ncomp;
-  kend /= ncomp;
-  for (k = kstart; k < kend; k++) PetscCall(LatticeSetContactColumns(L, k, ncomp, Hs));
-  PetscCall(MatAssemblyBegin(Hs, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(Hs, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatTransposeMatMult(Hs, Hs, MAT_INITIAL_MATRIX, PETSC_DEFAULT, W));
-  if (ncomp > 1) PetscCall(MatConvert(*W, MATBAIJ, MAT_INPLACE_MATRIX, W));
-  PetscCall(MatShift(*W, shift));
-  PetscCall(MatDestroy(&Hs));
-
-  PetscCall(MatCreateVecs(*W, vd, NULL));
-  PetscCall(PetscMalloc2(kend - kstart, mus, kend - kstart, active));
-  for (k = kstart; k < kend; k++) {
-    (*mus)[k - kstart]    = mu;
-    (*active)[k - kstart] = (PetscBool)(k % 7 != 3);
-    for (c = 0; c < ncomp; c++) PetscCall(VecSetValue(*vd, ncomp * k + c, c == 0 ? -1.0 + 1.5 * Hash01(11 * k + 5) : -1.0 + 2.0 * Hash01(13 * k + 9), INSERT_VALUES));
-  }
-  PetscCall(VecAssemblyBegin(*vd));
-  PetscCall(VecAssemblyEnd(*vd));
-  PetscFunctionReturn(0);
-}
-
 /* Solve the lattice problem on comm (to quad < 1e-12); check residual and inactive contacts. Returns r. */
-static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattice *L, PetscInt ncomp, PetscReal mu, Vec *r, PetscReal *res, PetscInt *its)
+static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattice *L, PetscInt ncomp, PetscReal mu, Vec *r, PetscReal *res,
+                                   PetscInt *its)
 {
   Mat                W;
   Vec                vd, v;
@@ -272,7 +140,7 @@ static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattic
   PetscCall(LatticeProblem(comm, L, ncomp, mu, 1.0, &W, &vd, &mus, &active));
   PetscCall(MatCreateVecs(W, r, &v));
   PetscCall(KergsSweepSetUp(sweep, W, ncomp, mus, active));
-  PetscCall(SolveBySweeps(sweep, *r, vd, NULL, NULL, 1e-12, 5000, its, &quad0));
+  PetscCall(SolveBySweeps(comm == PETSC_COMM_SELF ? "lattice on 1 rank" : "lattice", sweep, *r, vd, NULL, NULL, 1e-12, 5000, its, &quad0));
   PetscCall(KergsSweepNaturalResidual(sweep, *r, vd, v, res));
   n = sweep->n;
   PetscCall(VecGetArrayRead(*r, &ra));
@@ -281,7 +149,7 @@ static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattic
       for (c = 0; c < ncomp; c++) rin = PetscMax(rin, PetscAbsReal(ra[k * ncomp + c]));
   PetscCall(VecRestoreArrayRead(*r, &ra));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rin, 1, MPIU_REAL, MPIU_MAX, comm));
-  PetscCheck(rin == 0.0, comm, PETSC_ERR_PLIB, "lattice: an inactive contact carries |r| = %g", (double)rin);
+  PetscCall(Check((PetscBool)(rin == 0.0), "lattice: the inactive contacts carry r = 0 (largest |r|)", rin, 0));
   PetscCall(KergsSweepReset(sweep)); /* mus and active are freed below */
   PetscCall(PetscFree2(mus, active));
   PetscCall(VecDestroy(&vd));
@@ -294,14 +162,14 @@ static PetscErrorCode SolveLattice(MPI_Comm comm, KergsSweep sweep, const Lattic
    problem on PETSC_COMM_SELF for reference). W is positive definite: r is unique when frictionless. */
 static PetscErrorCode TestLatticeRanks(KergsSweep sweep, PetscInt ncomp, PetscReal mu)
 {
-  MPI_Comm           comm = PETSC_COMM_WORLD;
-  KergsSweep         seq;
-  Lattice            L;
-  Vec                r, rseq, rall;
-  VecScatter         toall;
-  PetscReal          res, resseq, diff, nrm;
-  PetscInt           its, itsseq;
-  PetscMPIInt        size;
+  MPI_Comm    comm = PETSC_COMM_WORLD;
+  KergsSweep  seq;
+  Lattice     L;
+  Vec         r, rseq, rall;
+  VecScatter  toall;
+  PetscReal   res, resseq, diff, nrm;
+  PetscInt    its, itsseq;
+  PetscMPIInt size;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(comm, &size));
@@ -316,10 +184,14 @@ static PetscErrorCode TestLatticeRanks(KergsSweep sweep, PetscInt ncomp, PetscRe
   PetscCall(VecNorm(rseq, NORM_INFINITY, &nrm));
   PetscCall(VecAXPY(rall, -1.0, rseq));
   PetscCall(VecNorm(rall, NORM_INFINITY, &diff));
-  PetscCall(PetscPrintf(comm, "lattice %" PetscInt_FMT " contacts, ncomp %" PetscInt_FMT ", mu %g: %d rank(s) %" PetscInt_FMT " sweeps residual %.2e; 1 rank %" PetscInt_FMT " sweeps residual %.2e; |r - r_1rank| / |r| = %.2e\n",
-                        L.ncontact, ncomp, (double)mu, size, its, (double)res, itsseq, (double)resseq, (double)(diff / nrm)));
-  PetscCheck(res < 1e-8 && resseq < 1e-8, comm, PETSC_ERR_PLIB, "lattice: natural residual %g (1 rank: %g)", (double)res, (double)resseq);
-  PetscCheck(nrm > 0 && diff < 1e-8 * nrm, comm, PETSC_ERR_PLIB, "lattice: the %d-rank solution differs from the 1-rank one by %g", size, (double)(diff / nrm));
+  PetscCall(PetscPrintf(comm,
+                        "lattice %" PetscInt_FMT " contacts, ncomp %" PetscInt_FMT ", mu %g: %d rank(s) %" PetscInt_FMT
+                        " sweeps; 1 rank %" PetscInt_FMT " sweeps\n",
+                        L.ncontact, ncomp, (double)mu, size, its, itsseq));
+  PetscCall(Checkf((PetscBool)(res < 1e-8 && resseq < 1e-8), PetscMax(res, resseq), 1e-8,
+                   "lattice ncomp %" PetscInt_FMT " mu %g: natural residual on %d and 1 rank(s)", ncomp, (double)mu, size));
+  PetscCall(Checkf((PetscBool)(nrm > 0 && diff < 1e-8 * nrm), nrm > 0 ? diff / nrm : -1, 1e-8,
+                   "lattice ncomp %" PetscInt_FMT " mu %g: %d-rank solution = 1-rank one (relative)", ncomp, (double)mu, size));
   PetscCall(VecScatterDestroy(&toall));
   PetscCall(VecDestroy(&rall));
   PetscCall(VecDestroy(&rseq));
@@ -329,7 +201,8 @@ static PetscErrorCode TestLatticeRanks(KergsSweep sweep, PetscInt ncomp, PetscRe
 }
 
 /* r after nsweep sweeps from r = 0 (and the last quad) on the lattice problem W stored as given. */
-static PetscErrorCode SweepsFromZero(Mat W, Vec vd, PetscInt ncomp, const PetscReal *mus, const PetscBool *active, PetscInt nsweep, Vec r, PetscReal *quad)
+static PetscErrorCode SweepsFromZero(Mat W, Vec vd, PetscInt ncomp, const PetscReal *mus, const PetscBool *active, PetscInt nsweep, Vec r,
+                                     PetscReal *quad)
 {
   KergsSweep         sw;
   KergsSweepMeasures m = {0, 0};
@@ -368,9 +241,10 @@ static PetscErrorCode TestUpperStorage(PetscInt ncomp, PetscReal mu)
   PetscCall(VecNorm(r, NORM_INFINITY, &nrm));
   PetscCall(VecAXPY(ru, -1.0, r));
   PetscCall(VecNorm(ru, NORM_INFINITY, &diff));
-  PetscCall(PetscPrintf(comm, "upper storage, ncomp %" PetscInt_FMT ", mu %g: 7 sweeps, |r_upper - r_whole| / |r| = %.2e, quad %.6e / %.6e\n", ncomp, (double)mu,
-                        (double)(diff / nrm), (double)qu, (double)q));
-  PetscCheck(nrm > 0 && diff <= 1e-12 * nrm && PetscAbsReal(qu - q) <= 1e-10 * q, comm, PETSC_ERR_PLIB, "upper storage: the sweeps differ from whole storage (%g relative)", (double)(diff / nrm));
+  PetscCall(Checkf((PetscBool)(nrm > 0 && diff <= 1e-12 * nrm), nrm > 0 ? diff / nrm : -1, 1e-12,
+                   "upper storage, ncomp %" PetscInt_FMT " mu %g: 7 sweeps give r of whole storage (relative)", ncomp, (double)mu));
+  PetscCall(Checkf((PetscBool)(PetscAbsReal(qu - q) <= 1e-10 * q), qu, q,
+                   "upper storage, ncomp %" PetscInt_FMT " mu %g: same quad after 7 sweeps", ncomp, (double)mu));
   PetscCall(PetscFree2(mus, active));
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&ru));
@@ -386,7 +260,7 @@ static PetscErrorCode TestUpperStorage(PetscInt ncomp, PetscReal mu)
    must solve (W + omega I) r + v^d - omega r~ with the law, checked by a second sweep set up on W + omega I. */
 static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
 {
-  MPI_Comm           comm = PETSC_COMM_WORLD;
+  MPI_Comm           comm  = PETSC_COMM_WORLD;
   const PetscInt     ncomp = 2;
   const PetscReal    omega = 0.7;
   KergsSweep         check;
@@ -412,7 +286,7 @@ static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
   PetscCall(VecRestoreArrayRead(rtilde, &rt));
   PetscCall(KergsSweepGetDiagonalBlocks(sweep, Wd));
   for (i = 0; i < n * ncomp * ncomp; i++) Wd[i] += (i % (ncomp * ncomp)) % (ncomp + 1) == 0 ? omega : 0.0;
-  PetscCall(SolveBySweeps(sweep, r, vd, extra, Wd, 1e-12, 5000, &its, &quad0));
+  PetscCall(SolveBySweeps("regularised sweep", sweep, r, vd, extra, Wd, 1e-12, 5000, &its, &quad0));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &resplain));
 
   PetscCall(MatDuplicate(W, MAT_COPY_VALUES, &Wreg));
@@ -422,10 +296,10 @@ static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
   PetscCall(KergsSweepCreate(comm, &check));
   PetscCall(KergsSweepSetUp(check, Wreg, ncomp, mus, active));
   PetscCall(KergsSweepNaturalResidual(check, r, vdreg, v, &res));
-  PetscCall(PetscPrintf(comm, "regularised sweep (extra, W_aa + omega I): %" PetscInt_FMT " sweeps, residual of (W + omega I) r + v^d - omega r~: %.2e (of the plain problem: %.2e)\n", its,
-                        (double)res, (double)resplain));
-  PetscCheck(res < 1e-8, comm, PETSC_ERR_PLIB, "regularised sweep: residual %g of the regularised problem", (double)res);
-  PetscCheck(resplain > 1e-4, comm, PETSC_ERR_PLIB, "regularised sweep: the plain problem is solved too (%g): extra/Wdiag were not used", (double)resplain);
+  PetscCall(PetscPrintf(comm, "regularised sweep (extra, W_aa + omega I): %" PetscInt_FMT " sweeps\n", its));
+  PetscCall(Check((PetscBool)(res < 1e-8), "regularised sweep: natural residual of (W + omega I) r + v^d - omega r~", res, 1e-8));
+  PetscCall(Check((PetscBool)(resplain > 1e-4), "regularised sweep: extra/Wdiag used (residual of the plain problem stays large)", resplain,
+                  1e-4));
   PetscCall(KergsSweepDestroy(&check));
   PetscCall(KergsSweepReset(sweep));
   PetscCall(PetscFree2(extra, Wd));
@@ -437,48 +311,6 @@ static PetscErrorCode TestRegularisedEntryPoints(KergsSweep sweep)
   PetscCall(VecDestroy(&rtilde));
   PetscCall(MatDestroy(&W));
   PetscCall(MatDestroy(&Wreg));
-  PetscCall(LatticeDestroy(&L));
-  PetscFunctionReturn(0);
-}
-
-/* Timing on a larger lattice (printed only). */
-static PetscErrorCode TimeSweeps(KergsSweep sweep)
-{
-  MPI_Comm           comm = PETSC_COMM_WORLD;
-  const PetscInt     ncomp = 2, nsweep = 20;
-  PetscInt           target = 50000, g, k, nnz;
-  Lattice            L;
-  Mat                W;
-  Vec                vd, r;
-  PetscReal         *mus, t0, t1;
-  PetscBool         *active;
-  KergsSweepMeasures m;
-  MatInfo            info;
-
-  PetscFunctionBeginUser;
-  PetscOptionsBegin(comm, NULL, "Sweep test options", NULL);
-  PetscCall(PetscOptionsInt("-perf_contacts", "number of contacts of the timing problem", NULL, target, &target, NULL));
-  PetscOptionsEnd();
-  g = (PetscInt)PetscCeilReal(PetscSqrtReal(target / 3.0)) + 1;
-  PetscCall(LatticeCreate(g, g, &L));
-  PetscCall(LatticeProblem(comm, &L, ncomp, 0.3, 0.05, &W, &vd, &mus, &active));
-  PetscCall(MatGetInfo(W, MAT_GLOBAL_SUM, &info));
-  nnz = (PetscInt)info.nz_used;
-  PetscCall(MatCreateVecs(W, &r, NULL));
-  PetscCall(KergsSweepSetUp(sweep, W, ncomp, mus, active));
-  PetscCall(VecSet(r, 0.0));
-  PetscCall(KergsSweepRun(sweep, r, vd, NULL, NULL, &m)); /* warm up */
-  PetscCallMPI(MPI_Barrier(comm));
-  t0 = MPI_Wtime();
-  for (k = 0; k < nsweep; k++) PetscCall(KergsSweepRun(sweep, r, vd, NULL, NULL, &m));
-  t1 = MPI_Wtime();
-  PetscCall(PetscPrintf(comm, "timing: %" PetscInt_FMT " contacts, %.1f nonzeros per row, %" PetscInt_FMT " sweeps: %.1f ns per local contact per sweep (quad after %" PetscInt_FMT " sweeps: %.2e)\n",
-                        L.ncontact, (double)nnz / (ncomp * L.ncontact), nsweep, 1e9 * (t1 - t0) / (nsweep * (PetscReal)sweep->n), nsweep + 1, (double)m.quad));
-  PetscCall(KergsSweepReset(sweep));
-  PetscCall(PetscFree2(mus, active));
-  PetscCall(VecDestroy(&r));
-  PetscCall(VecDestroy(&vd));
-  PetscCall(MatDestroy(&W));
   PetscCall(LatticeDestroy(&L));
   PetscFunctionReturn(0);
 }
@@ -498,8 +330,10 @@ int main(int argc, char **argv)
   PetscCall(TestUpperStorage(1, 0.0));
   PetscCall(TestUpperStorage(2, 0.3));
   PetscCall(TestRegularisedEntryPoints(sweep));
-  PetscCall(TimeSweeps(sweep));
   PetscCall(KergsSweepDestroy(&sweep));
-  PetscCall(PetscFinalize());
-  return 0;
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
 }

@@ -1,18 +1,70 @@
-/* Helpers shared by the whole-engine test programs: a check line that counts failures, a stepper configured
-   only by given options, and a recorded statistic by name. */
+/* Helpers shared by the test programs: the checks, a stepper configured only by given options, a recorded statistic by
+   name, a per-disk field gathered by grain id, the natural residual of a step recomputed independently of the library.
+
+   Assertion rule, for every program under tests/:
+   - A property under test is asserted with Check() (or CheckAll(), Checkf() below): one line per check, "ok  " or
+     "FAIL" with what was got and what was wanted. A failure is counted and the program goes on, so that one run
+     reports every broken property; Finish() prints "PASSED"/"FAILED" with the count and gives the exit code.
+   - PetscCheck() is kept only for set-up failures that are not the property under test (a file the test cannot
+     write, a library it cannot load, an object the test itself built inconsistently): the program aborts there.
+   - When a failed check makes what follows meaningless or unsafe (an index out of range, a missing object), the
+     test function returns after the Check(), it does not turn the check into a PetscCheck().
+   - Check() and Checkf() are local: on several ranks their ok, got and want must already agree on every rank
+     (reduce first; rank 0 prints). CheckAll() and CheckTrue() (a yes/no property) are collective and reduce ok
+     themselves (logical and over comm).
+   No local Expect()-style macros: one style, one line format, one exit code. */
 #ifndef KERGS_TESTING_H
 #define KERGS_TESTING_H
 
 #include "internals.h"
+#include <stdarg.h>
 
 static PetscInt nfail = 0;
 
-/* Print one line per check ("ok" or "FAIL", with what was got and wanted) and count the failures. */
+/* Print one line per check ("ok" or "FAIL", with what was got and wanted) and count the failures. Local: ok, got and
+   want must agree on every rank (rank 0 of PETSC_COMM_WORLD prints). */
 static inline PetscErrorCode Check(PetscBool ok, const char *what, PetscReal got, PetscReal want)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s %-72s got %.10g want %.10g\n", ok ? "ok  " : "FAIL", what, (double)got, (double)want));
   if (!ok) nfail++;
+  PetscFunctionReturn(0);
+}
+
+/* Check() with ok reduced over comm (logical and): collective on comm. The got and want printed are those of the first
+   rank where the check fails (of rank 0 when it holds everywhere). */
+static inline PetscErrorCode CheckAll(MPI_Comm comm, PetscBool ok, const char *what, PetscReal got, PetscReal want)
+{
+  PetscMPIInt rank, size, first;
+  PetscReal   values[2] = {got, want};
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  first = ok ? size : rank;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm));
+  if (first < size) PetscCallMPI(MPI_Bcast(values, 2, MPIU_REAL, first, comm));
+  PetscCall(
+      PetscPrintf(comm, "%s %-72s got %.10g want %.10g\n", first == size ? "ok  " : "FAIL", what, (double)values[0], (double)values[1]));
+  if (first < size) nfail++;
+  PetscFunctionReturn(0);
+}
+
+/* CheckAll() of a yes/no property: printed as got 0 or 1, want 1. Collective on comm. */
+static inline PetscErrorCode CheckTrue(MPI_Comm comm, PetscBool ok, const char *what) { return CheckAll(comm, ok, what, ok ? 1 : 0, 1); }
+
+/* Check() with a printf-style description. */
+static inline PetscErrorCode Checkf(PetscBool ok, PetscReal got, PetscReal want, const char *fmt, ...)
+{
+  char    what[1024];
+  size_t  len;
+  va_list ap;
+
+  PetscFunctionBeginUser;
+  va_start(ap, fmt);
+  PetscCall(PetscVSNPrintf(what, sizeof(what), fmt, &len, ap));
+  va_end(ap);
+  PetscCall(Check(ok, what, got, want));
   PetscFunctionReturn(0);
 }
 
@@ -28,10 +80,7 @@ static inline PetscErrorCode MakeStepperOn(MPI_Comm comm, const char *opts, Kerg
   PetscFunctionReturn(0);
 }
 
-static inline PetscErrorCode MakeStepper(const char *opts, KergsStepper *st)
-{
-  return MakeStepperOn(PETSC_COMM_WORLD, opts, st);
-}
+static inline PetscErrorCode MakeStepper(const char *opts, KergsStepper *st) { return MakeStepperOn(PETSC_COMM_WORLD, opts, st); }
 
 /* The statistic `name` recorded for step row `row` (-1: the last step). */
 static inline PetscErrorCode StatAt(KergsResults res, const char *name, PetscInt row, PetscReal *value)
@@ -48,6 +97,98 @@ static inline PetscErrorCode StatAt(KergsResults res, const char *name, PetscInt
   PetscFunctionReturn(0);
 }
 
+/* The Coulomb cone K = {(r_n, r_t): |r_t| <= mu r_n} (a half-line r_t = 0, r_n >= 0 when nc = 1): the Euclidean
+   projection of z, written here from the geometry of the cone and its polar cone {mu |y_t| <= -y_n}, not taken
+   from the library. */
+static inline void TestProjectCone(PetscInt nc, const PetscReal z[], PetscReal mu, PetscReal p[])
+{
+  const PetscReal zt = nc > 1 ? z[1] : 0.0, azt = PetscAbsReal(zt);
+
+  if (nc == 1 || mu == 0.0) { /* the half-line */
+    p[0] = PetscMax(z[0], 0.0);
+    if (nc > 1) p[1] = 0.0;
+  } else if (azt <= mu * z[0]) { /* inside K */
+    p[0] = z[0];
+    p[1] = zt;
+  } else if (mu * azt <= -z[0]) { /* inside the polar cone */
+    p[0] = p[1] = 0.0;
+  } else { /* onto the boundary ray (1, mu sign z_t) / sqrt(1 + mu^2) */
+    const PetscReal s = (z[0] + mu * azt) / (1.0 + mu * mu);
+    p[0]              = s;
+    p[1]              = zt > 0 ? mu * s : -mu * s;
+  }
+}
+
+/* The natural-map residual of the problem a step just solved, recomputed by the test from what the step left
+   (docs/solver.md): v = W r + v^d with W assembled whole from the stored W (KergsOperatorsGetFullW), and per contact
+   e = r - proj_K(r - rho (v + mu |v_t| e_n)) (De Saxce's modified velocity), rho = 1 / W_nn, e = r for an inactive
+   contact; residual = |e|_2 / |r|_2 (|e|_2 when r = 0). Independent of the library's residual routines
+   (KergsSweepNaturalResidual, KergsLawNaturalResidual2). W must still exist after the step: run with -keep_H (the
+   kernel-regularised types keep it anyway); a released W is a set-up error of the test. Collective. */
+static inline PetscErrorCode IndependentNaturalResidual(KergsStepper st, PetscReal *residual)
+{
+  KergsOperators     ops;
+  KergsContacts      ct;
+  KergsSolver        solver;
+  KergsContact      *c;
+  KergsDofLayout     L;
+  const PetscBool   *active;
+  Mat                W, Wfull;
+  Vec                r, vd, v, diag;
+  const PetscScalar *ra, *va, *da;
+  PetscReal          sums[2] = {0, 0};
+  PetscInt           n, nc, nloc;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsStepperGetOperators(st, &ops));
+  PetscCall(KergsStepperGetContacts(st, &ct));
+  PetscCall(KergsStepperGetSolver(st, &solver));
+  PetscCall(KergsOperatorsGetW(ops, &W, NULL));
+  PetscCheck(W, PETSC_COMM_WORLD, PETSC_ERR_ORDER, "IndependentNaturalResidual: W was released after the step; run the scene with -keep_H");
+  PetscCall(KergsOperatorsGetLayout(ops, &L));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, &vd));
+  PetscCall(KergsContactsGetLocal(ct, &n, &c));
+  PetscCall(KergsSolverGetActive(solver, &active));
+  nc = L.ncomp;
+  PetscCall(VecGetLocalSize(r, &nloc));
+  PetscCheck(nloc == n * nc, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "IndependentNaturalResidual: %" PetscInt_FMT " impulse entries for %" PetscInt_FMT " contacts", nloc, n);
+  PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
+  PetscCall(VecDuplicate(r, &v));
+  PetscCall(VecDuplicate(r, &diag));
+  PetscCall(MatMult(Wfull, r, v));
+  PetscCall(VecAXPY(v, 1.0, vd));
+  PetscCall(MatGetDiagonal(Wfull, diag));
+  PetscCall(VecGetArrayRead(r, &ra));
+  PetscCall(VecGetArrayRead(v, &va));
+  PetscCall(VecGetArrayRead(diag, &da));
+  for (PetscInt k = 0; k < n; k++) {
+    const PetscReal *rk = &ra[k * nc], *vk = &va[k * nc];
+    PetscReal        e[KERGS_MAXCOMP], z[KERGS_MAXCOMP], p[KERGS_MAXCOMP];
+    if (!active || active[k]) {
+      const PetscReal rho = 1.0 / da[k * nc], mu = c[k].mu;
+      z[0] = rk[0] - rho * (vk[0] + (nc > 1 ? mu * PetscAbsReal(vk[1]) : 0.0));
+      if (nc > 1) z[1] = rk[1] - rho * vk[1];
+      TestProjectCone(nc, z, mu, p);
+      for (PetscInt d = 0; d < nc; d++) e[d] = rk[d] - p[d];
+    } else
+      for (PetscInt d = 0; d < nc; d++) e[d] = rk[d];
+    for (PetscInt d = 0; d < nc; d++) {
+      sums[0] += e[d] * e[d];
+      sums[1] += rk[d] * rk[d];
+    }
+  }
+  PetscCall(VecRestoreArrayRead(r, &ra));
+  PetscCall(VecRestoreArrayRead(v, &va));
+  PetscCall(VecRestoreArrayRead(diag, &da));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
+  *residual = sums[1] > 0 ? PetscSqrtReal(sums[0] / sums[1]) : PetscSqrtReal(sums[0]);
+  PetscCall(VecDestroy(&v));
+  PetscCall(VecDestroy(&diag));
+  PetscCall(MatDestroy(&Wfull));
+  PetscFunctionReturn(0);
+}
+
 /* A per-disk field of the owned disks (bs values per disk) gathered over the ranks into grain-id order on every
    rank (out: bs * ndisks values; the grain ids must be 0 .. ndisks-1). Independent of the partition, so that runs
    on different numbers of ranks compare grain by grain. */
@@ -61,7 +202,8 @@ static inline PetscErrorCode GatherById(KergsScene sc, const PetscReal *owned, P
   PetscCall(KergsSceneAllGatherReal(sc, owned, bs, all));
   PetscCall(KergsSceneAllGatherInt(sc, sc->id, 1, ids));
   for (PetscInt g = 0; g < sc->ndisks; g++) {
-    PetscCheck(ids[g] >= 0 && ids[g] < sc->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "GatherById: grain id %" PetscInt_FMT " outside [0, %" PetscInt_FMT ")", ids[g], sc->ndisks);
+    PetscCheck(ids[g] >= 0 && ids[g] < sc->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+               "GatherById: grain id %" PetscInt_FMT " outside [0, %" PetscInt_FMT ")", ids[g], sc->ndisks);
     for (PetscInt d = 0; d < bs; d++) out[bs * ids[g] + d] = all[bs * g + d];
   }
   PetscCall(PetscFree2(all, ids));
@@ -71,7 +213,8 @@ static inline PetscErrorCode GatherById(KergsScene sc, const PetscReal *owned, P
 /* The closing line and the exit code of a test program. */
 static inline int Finish(void)
 {
-  PetscCallAbort(PETSC_COMM_WORLD, PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
+  PetscCallAbort(PETSC_COMM_WORLD,
+                 PetscPrintf(PETSC_COMM_WORLD, "%s: %" PetscInt_FMT " failed checks\n", nfail ? "FAILED" : "PASSED", nfail));
   return nfail ? 1 : 0;
 }
 

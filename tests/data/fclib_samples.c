@@ -24,7 +24,7 @@
 #include <string.h>
 
 #define NC 6
-#define M  (2 * NC)
+#define M (2 * NC)
 
 typedef struct {
   double W[M][M], q[M], mu[NC], r[M], u[M];
@@ -84,11 +84,11 @@ static void KnownSample(Sample *s)
   SetBlock(s, 0, 2, 0.3, -0.1, 0.2, 0.4);
   SetBlock(s, 0, 4, 0.1, 0, 0, 0);
   SetBlock(s, 0, 5, 0, 0, 0.1, 0);
-  SetContact(s, 0, 0.3, 0, 0, 1.0, 0.5);   /* open: r = 0, u_n > 0 */
-  SetContact(s, 1, 0.3, 1, -0.1, 0, 0);    /* stick: u = 0, |r_t| < mu r_n */
-  SetContact(s, 2, 0.3, 1, -0.3, 0, 0.7);  /* slip: u_n = 0, u_t > 0, r_t = -mu r_n */
-  SetContact(s, 3, 0.0, 1, 0, 0, 0.7);     /* frictionless: r_t = 0, u_t free */
-  SetContact(s, 4, 0.3, 1, 0, 0, 0);       /* 4 and 5: same features, told apart only by W_04, W_05 */
+  SetContact(s, 0, 0.3, 0, 0, 1.0, 0.5);  /* open: r = 0, u_n > 0 */
+  SetContact(s, 1, 0.3, 1, -0.1, 0, 0);   /* stick: u = 0, |r_t| < mu r_n */
+  SetContact(s, 2, 0.3, 1, -0.3, 0, 0.7); /* slip: u_n = 0, u_t > 0, r_t = -mu r_n */
+  SetContact(s, 3, 0.0, 1, 0, 0, 0.7);    /* frictionless: r_t = 0, u_t free */
+  SetContact(s, 4, 0.3, 1, 0, 0, 0);      /* 4 and 5: same features, told apart only by W_04, W_05 */
   SetContact(s, 5, 0.3, 1, 0, 0, 0);
   ComputeQ(s);
 }
@@ -111,9 +111,9 @@ static void Permute(const Sample *in, const int perm[NC], Sample *out)
 /* Compressed columns (FCLib nz = -1) of the nonzero entries, rows increasing inside each column. */
 static int WriteSample(const char *dir, const char *name, const Sample *s, const char *title)
 {
-  int                   colptr[M + 1], rowind[M * M], nnz = 0;
-  double                val[M * M], q[M], mu[NC], r[M], u[M];
-  char                  path[4096], description[] = "scripts/siconos_solve.py test problem", math[] = "W symmetric positive definite; exact solution stored";
+  int    colptr[M + 1], rowind[M * M], nnz = 0;
+  double val[M * M], q[M], mu[NC], r[M], u[M];
+  char path[4096], description[] = "scripts/siconos_solve.py test problem", math[] = "W symmetric positive definite; exact solution stored";
   struct fclib_matrix   W;
   struct fclib_info     info;
   struct fclib_local    problem;
@@ -162,7 +162,8 @@ static int Damage(const char *dir, const char *name, const char *dataset, int ke
     err |= H5LTread_dataset_int(file, dataset, buf) < 0;
     err |= H5Ldelete(file, dataset, H5P_DEFAULT) < 0;
     err |= H5LTmake_dataset_int(file, dataset, 1, dims, buf) < 0;
-  } else err |= H5Ldelete(file, dataset, H5P_DEFAULT) < 0;
+  } else
+    err |= H5Ldelete(file, dataset, H5P_DEFAULT) < 0;
   err |= H5Fclose(file) < 0;
   if (err) fprintf(stderr, "fclib_samples: could not change %s in %s\n", dataset, path);
   return err;
@@ -181,9 +182,9 @@ int main(int argc, char **argv)
   KnownSample(&known);
   err |= WriteSample(argv[1], "known.fclib.h5", &known, "known solution");
 
-  other         = known;
-  other.r[2]    = 1.0; /* contact 1: r = (1, -0.5), outside the cone |r_t| <= 0.3 r_n */
-  other.r[3]    = -0.5;
+  other      = known;
+  other.r[2] = 1.0; /* contact 1: r = (1, -0.5), outside the cone |r_t| <= 0.3 r_n */
+  other.r[3] = -0.5;
   ComputeU(&other);
   err |= WriteSample(argv[1], "wrong.fclib.h5", &other, "solution violating Coulomb's law");
 
