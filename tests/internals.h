@@ -1,6 +1,6 @@
 /* The tests look inside the objects they test, as PETSc's own tests do: the public API of every component, and its
    private fields (include/kergs/private/). The library's components themselves never include another's private
-   header (tests/check_includes.sh). */
+   header (tests/check_layout.sh). */
 #ifndef KERGS_TESTS_INTERNALS_H
 #define KERGS_TESTS_INTERNALS_H
 

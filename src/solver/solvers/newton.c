@@ -27,29 +27,29 @@ typedef struct {
   KSP        ksp;      /* J d = -F; prefix solver_ */
   Mat        Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
   Vec        F, d, Wd, rtry, utry, Ftry;
-  Vec        rc, ueff;  /* the proximal centre, and the proximal problem's velocity */
-  PetscReal *A, *B;     /* per local contact, ncomp x ncomp row-major: J = A + B W */
+  Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
+  PetscReal *A, *B;         /* per local contact, ncomp x ncomp row-major: J = A + B W */
   PetscReal *Aused, *Bused; /* the blocks of the Jacobian last assembled (and factored) */
-  PetscReal *rho;       /* per local contact: rho_n = rho_t = rho_factor / W_aa,nn */
-  PetscReal *rho_nat;   /* per local contact: 1 / W_aa,nn, the natural residual's */
-  PetscInt  *diagblock; /* per local block row: position of its own block in J's diagonal part */
+  PetscReal *rho;           /* per local contact: rho_n = rho_t = rho_factor / W_aa,nn */
+  PetscReal *rho_nat;       /* per local contact: 1 / W_aa,nn, the natural residual's */
+  PetscInt  *diagblock;     /* per local block row: position of its own block in J's diagonal part */
   PetscInt   nalloc;
   /* options */
-  PetscReal  rho_factor;     /* -solver_newton_rho */
-  PetscReal  shift;          /* -solver_newton_shift */
-  PetscReal  armijo;         /* -solver_newton_armijo: sufficient decrease of the merit */
-  PetscInt   max_backtracks; /* -solver_newton_max_backtracks */
-  PetscReal  switch_tol;     /* -solver_newton_switch_tol: natural residual at which sweeps hand over to Newton */
-  PetscInt   sweep_batch;    /* -solver_newton_sweeps: sweeps of the first batch */
-  PetscInt   max_sweeps;     /* -solver_newton_max_sweeps: sweeps over the whole solve */
-  PetscInt   sweep_check;    /* residual checked every this many sweeps */
-  NewtonProx prox;           /* -solver_prox */
-  PetscReal  alpha;          /* -solver_prox_alpha: sigma / mean W_nn = alpha * natural residual */
+  PetscReal  rho_factor;           /* -solver_newton_rho */
+  PetscReal  shift;                /* -solver_newton_shift */
+  PetscReal  armijo;               /* -solver_newton_armijo: sufficient decrease of the merit */
+  PetscInt   max_backtracks;       /* -solver_newton_max_backtracks */
+  PetscReal  switch_tol;           /* -solver_newton_switch_tol: natural residual at which sweeps hand over to Newton */
+  PetscInt   sweep_batch;          /* -solver_newton_sweeps: sweeps of the first batch */
+  PetscInt   max_sweeps;           /* -solver_newton_max_sweeps: sweeps over the whole solve */
+  PetscInt   sweep_check;          /* residual checked every this many sweeps */
+  NewtonProx prox;                 /* -solver_prox */
+  PetscReal  alpha;                /* -solver_prox_alpha: sigma / mean W_nn = alpha * natural residual */
   PetscReal  sigma_min, sigma_max; /* -solver_prox_sigma_min, _max: its bounds */
-  PetscInt   inner_max;      /* -solver_prox_inner_max: Newton steps per outer iteration */
-  PetscReal  inner_rtol;     /* inner tolerance on |F|, relative to the natural residual times |r| */
-  PetscReal  sigma;          /* this outer iteration's sigma (0 without the proximal term) */
-  PetscReal  sigma_used;     /* sigma of the Jacobian last assembled (-1: none this step) */
+  PetscInt   inner_max;            /* -solver_prox_inner_max: Newton steps per outer iteration */
+  PetscReal  inner_rtol;           /* inner tolerance on |F|, relative to the natural residual times |r| */
+  PetscReal  sigma;                /* this outer iteration's sigma (0 without the proximal term) */
+  PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
   /* figures of the last solve */
   PetscInt  linear_its, backtracks, failed_searches, sweeps, outer, jacobians;
   PetscReal linear_seconds, last_shift, merit;
@@ -242,9 +242,9 @@ static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt n, Petsc
    costs one solve). */
 static PetscErrorCode AssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
 {
-  Mat       Ad, Ao;
-  PetscInt  changed = (PetscInt)(sigma != nt->sigma_used);
-  size_t    bytes   = (size_t)n * nc * nc * sizeof(PetscReal);
+  Mat      Ad, Ao;
+  PetscInt changed = (PetscInt)(sigma != nt->sigma_used);
+  size_t   bytes   = (size_t)n * nc * nc * sizeof(PetscReal);
 
   PetscFunctionBeginUser;
   if (!changed) changed = (PetscInt)(memcmp(nt->A, nt->Aused, bytes) || memcmp(nt->B, nt->Bused, bytes));
@@ -469,9 +469,12 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
     PetscCall(AssembleJacobian(s, nt, n, nc, nt->shift, nt->sigma));
     PetscCall(NewtonDirection(s, nt));
     {
-      PetscReal m0 = merit; PetscInt b0 = nt->backtracks;
+      PetscReal m0 = merit;
+      PetscInt  b0 = nt->backtracks;
       PetscCall(LineSearch(s, nt, n, nc, r, u, &merit, &decreased));
-      if (getenv("KERGS_DEBUG_NEWTON")) PetscCall(PetscPrintf(s->comm, "   inner %d merit %.3e -> %.3e  halvings %d ok %d sigma %.2e\n", (int)k, (double)m0, (double)merit, (int)(nt->backtracks - b0), (int)decreased, (double)nt->sigma));
+      if (getenv("KERGS_DEBUG_NEWTON"))
+        PetscCall(PetscPrintf(s->comm, "   inner %d merit %.3e -> %.3e  halvings %d ok %d sigma %.2e\n", (int)k, (double)m0, (double)merit,
+                              (int)(nt->backtracks - b0), (int)decreased, (double)nt->sigma));
     }
     (*steps)++;
     failures = decreased ? 0 : failures + 1;
@@ -552,7 +555,9 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     PetscCall(InnerNewton(s, nt, n, nc, r, u, PetscMin(nt->inner_max, s->max_it - steps), nt->inner_rtol * res * rnorm, &steps, &ok));
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
     nt->outer++;
-    if (getenv("KERGS_DEBUG_NEWTON")) PetscCall(PetscPrintf(s->comm, "outer %d res %.3e -> %.3e ok %d sweeps %d\n", (int)nt->outer, (double)before, (double)res, (int)ok, (int)nt->sweeps));
+    if (getenv("KERGS_DEBUG_NEWTON"))
+      PetscCall(PetscPrintf(s->comm, "outer %d res %.3e -> %.3e ok %d sweeps %d\n", (int)nt->outer, (double)before, (double)res, (int)ok,
+                            (int)nt->sweeps));
     if (!ok || res > 0.5 * before) { /* Newton stalled (wrong contact states): a batch of sweeps, twice as long each time */
       if (nt->sweeps >= nt->max_sweeps) break;
       PetscCall(Sweeps(s, nt, n, nc, r, u, vd, PetscMin(batch, nt->max_sweeps - nt->sweeps), s->tol, &res));
@@ -605,7 +610,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                             nt->sweep_batch, &nt->sweep_batch, NULL));
   PetscCall(PetscOptionsEnum("-solver_prox", "Proximal term of the outer iterations: identity (W + sigma I), none (plain Newton)", "",
                              NewtonProxes, (PetscEnum)nt->prox, (PetscEnum *)&nt->prox, NULL));
-  PetscCall(PetscOptionsReal("-solver_prox_alpha", "sigma of the proximal term W + sigma I: alpha * natural residual * mean W_nn", "", nt->alpha, &nt->alpha, NULL));
+  PetscCall(PetscOptionsReal("-solver_prox_alpha", "sigma of the proximal term W + sigma I: alpha * natural residual * mean W_nn", "",
+                             nt->alpha, &nt->alpha, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_max", "Largest sigma / mean W_nn", "", nt->sigma_max, &nt->sigma_max, NULL));
   PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
