@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """Compare two kergs results files bit for bit: every dataset under /snapshots (positions, orientations,
-velocities, contact lists, gaps, impulses) and the physical statistics under /stats (everything but wall times,
-memory and bytes sent, which differ between any two runs).
+velocities, contact lists, gaps, impulses) and the physical statistics under /stats that both files record
+(everything but wall times, memory and bytes sent, which differ between any two runs). A statistic recorded by one
+file only is listed, not counted as a difference (a newer kergs records more).
 
-  compare_results.py OLD.h5 NEW.h5
+  compare_results.py OLD.h5 NEW.h5 [--ignore name,name]   (--ignore: statistics whose meaning changed on purpose)
 
 Exit status 0 when they are identical, 1 otherwise (the first differences are printed), 2 on unreadable input.
 Used by scripts/compare_revisions to show that a refactoring leaves trajectories unchanged."""
@@ -32,9 +33,15 @@ def physical(path):
 
 
 def main():
-    if len(sys.argv) != 3:
+    args = sys.argv[1:]
+    ignore = set()
+    if len(args) == 4 and args[2] == "--ignore":
+        ignore = {f"/stats/{n}" for n in args[3].split(",")}
+        args = args[:2]
+    if len(args) != 2:
         print(__doc__, file=sys.stderr)
         return 2
+    sys.argv[1:] = args
     try:
         with h5py.File(sys.argv[1], "r") as f, h5py.File(sys.argv[2], "r") as g:
             old, new = datasets(f), datasets(g)
@@ -43,8 +50,14 @@ def main():
         return 2
     old = {k: v for k, v in old.items() if physical(k)}
     new = {k: v for k, v in new.items() if physical(k)}
-    problems = [f"only in {sys.argv[1]}: {k}" for k in sorted(set(old) - set(new))]
-    problems += [f"only in {sys.argv[2]}: {k}" for k in sorted(set(new) - set(old))]
+    for k in sorted(set(old) ^ set(new)):
+        if k.startswith("/stats/"):
+            print(f"compare_results: note: {k} is recorded by {'the old' if k in old else 'the new'} file only")
+    problems = [f"only in {sys.argv[1]}: {k}" for k in sorted(set(old) - set(new)) if not k.startswith("/stats/")]
+    problems += [f"only in {sys.argv[2]}: {k}" for k in sorted(set(new) - set(old)) if not k.startswith("/stats/")]
+    for k in ignore:
+        old.pop(k, None)
+        new.pop(k, None)
     compared = 0
     for k in sorted(set(old) & set(new)):
         a, b = old[k], new[k]
