@@ -46,10 +46,12 @@ typedef struct {
   NewtonProx prox;                 /* -solver_prox */
   PetscReal  alpha;                /* -solver_prox_alpha: sigma / mean W_nn = alpha * natural residual */
   PetscReal  sigma_min, sigma_max; /* -solver_prox_sigma_min, _max: its bounds */
+  PetscReal  alpha_min;            /* smallest alpha */
   PetscInt   inner_max;            /* -solver_prox_inner_max: Newton steps per outer iteration */
   PetscReal  inner_rtol;           /* inner tolerance on |F|, relative to the natural residual times |r| */
   PetscReal  sigma;                /* this outer iteration's sigma (0 without the proximal term) */
   PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
+  PetscBool  project;              /* -solver_newton_project: line search along the path projected on the cones */
   /* figures of the last solve */
   PetscInt  linear_its, backtracks, failed_searches, sweeps, outer, jacobians;
   PetscReal linear_seconds, last_shift, merit;
@@ -405,16 +407,53 @@ static PetscErrorCode ProximalVelocity(Newton *nt, Vec r, Vec u, Vec ueff)
    kink of F (a grazing contact with r = 0 and u_n = 0, plenty after NLGS sweeps), the Newton direction need not
    decrease the merit, but a tiny step moves the contact off the kink and the next Jacobian is right. On exit r, u
    hold the new point. */
-static PetscErrorCode LineSearch(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *merit, PetscBool *ok)
+/* r <- its projection on the Coulomb cones of the active contacts (r_n >= 0, |r_t| <= mu r_n); inactive ones to 0. */
+static PetscErrorCode ProjectOnCones(KergsSolver s, PetscInt n, PetscInt nc, Vec r)
+{
+  PetscScalar *rl;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArray(r, &rl));
+  for (PetscInt a = 0; a < n; a++) {
+    PetscScalar *ra = rl + a * nc;
+    if (!s->active[a]) {
+      for (PetscInt c = 0; c < nc; c++) ra[c] = 0.0;
+      continue;
+    }
+    if (nc == 1) {
+      ra[0] = PetscMax(PetscRealPart(ra[0]), 0.0);
+      continue;
+    }
+    {
+      const PetscReal mu = s->mu[a], rn = PetscRealPart(ra[0]), rt = PetscRealPart(ra[1]), at = PetscAbsReal(rt);
+      if (rn >= 0 && at <= mu * rn) continue;
+      if (mu * at <= -rn)
+        ra[0] = ra[1] = 0.0;
+      else {
+        const PetscReal pn = (rn + mu * at) / (1.0 + mu * mu);
+        ra[0]              = pn;
+        ra[1]              = rt >= 0 ? mu * pn : -mu * pn;
+      }
+    }
+  }
+  PetscCall(VecRestoreArray(r, &rl));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode LineSearch(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *merit, PetscBool *ok)
 {
   PetscReal t = 1.0, trial = 0.0;
   PetscInt  k;
 
   PetscFunctionBeginUser;
-  PetscCall(MatMult(nt->Wfull, nt->d, nt->Wd));
+  if (!nt->project) PetscCall(MatMult(nt->Wfull, nt->d, nt->Wd));
   for (k = 0;; k++) {
     PetscCall(VecWAXPY(nt->rtry, t, nt->d, r));
-    PetscCall(VecWAXPY(nt->utry, t, nt->Wd, u));
+    if (nt->project) { /* along the projected path r(t) = P_K(r + t d) */
+      PetscCall(ProjectOnCones(s, n, nc, nt->rtry));
+      PetscCall(MatMultAdd(nt->Wfull, nt->rtry, vd, nt->utry));
+    } else
+      PetscCall(VecWAXPY(nt->utry, t, nt->Wd, u));
     PetscCall(ProximalVelocity(nt, nt->rtry, nt->utry, nt->ueff));
     PetscCall(EvaluateFunction(s, nt, n, nc, nt->rtry, nt->ueff, nt->Ftry, PETSC_FALSE, &trial));
     if (trial <= (1.0 - 2.0 * nt->armijo * t) * *merit || k == nt->max_backtracks) break;
@@ -451,14 +490,12 @@ static PetscErrorCode Sweeps(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc,
   PetscFunctionReturn(0);
 }
 
-/* Newton on the current (proximal) problem, from r: at most `count` steps, until |F| is at most `ftol`, or until
-   `NEWTON_MAX_FAILURES` line searches in a row failed (*ok false). */
-#define NEWTON_MAX_FAILURES 3
-static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscInt count, PetscReal ftol,
+/* Newton on the current (proximal) problem, from r: at most `count` steps, until |F| is at most `ftol`; *ok is false
+   when some line search failed. */
+static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscInt count, PetscReal ftol,
                                   PetscInt *steps, PetscBool *ok)
 {
   PetscReal merit;
-  PetscInt  failures  = 0;
   PetscBool decreased = PETSC_TRUE;
 
   PetscFunctionBeginUser;
@@ -471,30 +508,18 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
     {
       PetscReal m0 = merit;
       PetscInt  b0 = nt->backtracks;
-      PetscCall(LineSearch(s, nt, n, nc, r, u, &merit, &decreased));
+      PetscCall(LineSearch(s, nt, n, nc, r, u, vd, &merit, &decreased));
       if (getenv("KERGS_DEBUG_NEWTON"))
         PetscCall(PetscPrintf(s->comm, "   inner %d merit %.3e -> %.3e  halvings %d ok %d sigma %.2e\n", (int)k, (double)m0, (double)merit,
                               (int)(nt->backtracks - b0), (int)decreased, (double)nt->sigma));
     }
     (*steps)++;
-    failures = decreased ? 0 : failures + 1;
-    if (failures == NEWTON_MAX_FAILURES) {
-      *ok = PETSC_FALSE;
-      break;
-    }
+    if (!decreased) *ok = PETSC_FALSE;
     PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
     PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit)); /* the Jacobian blocks at the new point */
   }
   nt->merit = merit;
   PetscFunctionReturn(0);
-}
-
-/* sigma / mean W_nn: alpha * residual within [sigma_min, sigma_max], rounded down to a power of 10 so that it changes
-   (and the Jacobian with it) only when the residual crosses a decade. */
-static PetscReal ProximalSigma(Newton *nt, PetscReal res)
-{
-  PetscReal sig = PetscClipInterval(nt->alpha * res, nt->sigma_min, nt->sigma_max);
-  return PetscPowReal(10.0, PetscFloorReal(PetscLog10Real(sig)));
 }
 
 /* Mean W_nn over the active contacts: the scale of the proximal term. */
@@ -526,8 +551,8 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
 {
   Newton        *nt = (Newton *)s->data;
   KergsDofLayout layout;
-  PetscInt       n, nglobal, nc, steps = 0, batch = nt->sweep_batch;
-  PetscReal      res = 0.0, rmax, rnorm, wmean = 1.0;
+  PetscInt       n, nglobal, nc, steps = 0;
+  PetscReal      res = 0.0, rmax, rnorm, wmean = 1.0, alpha = nt->alpha;
   PetscLogDouble t0, t1;
   PetscBool      ok;
   Vec            r, u, vd;
@@ -545,24 +570,32 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
-  if (res > nt->switch_tol || rmax == 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
+  if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
   while (res > s->tol && nglobal > 0 && steps < s->max_it) {
-    PetscReal before = res;
+    PetscReal before = res, inner_tol;
     PetscCall(VecCopy(r, nt->rc));
-    nt->sigma = nt->prox == NEWTON_PROX_IDENTITY ? ProximalSigma(nt, res) * wmean : 0.0;
-    /* inner tolerance: the proximal problem's |F| a fraction of the original residual's scale */
     PetscCall(VecNorm(r, NORM_2, &rnorm));
-    PetscCall(InnerNewton(s, nt, n, nc, r, u, PetscMin(nt->inner_max, s->max_it - steps), nt->inner_rtol * res * rnorm, &steps, &ok));
+    nt->sigma = nt->prox == NEWTON_PROX_IDENTITY ? PetscClipInterval(alpha * res, nt->sigma_min, nt->sigma_max) * wmean : 0.0;
+    inner_tol = nt->inner_rtol * res * (rnorm > 0 ? rnorm : 1.0);
+    PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
     nt->outer++;
-    if (getenv("KERGS_DEBUG_NEWTON"))
-      PetscCall(PetscPrintf(s->comm, "outer %d res %.3e -> %.3e ok %d sweeps %d\n", (int)nt->outer, (double)before, (double)res, (int)ok,
-                            (int)nt->sweeps));
-    if (!ok || res > 0.5 * before) { /* Newton stalled (wrong contact states): a batch of sweeps, twice as long each time */
-      if (nt->sweeps >= nt->max_sweeps) break;
-      PetscCall(Sweeps(s, nt, n, nc, r, u, vd, PetscMin(batch, nt->max_sweeps - nt->sweeps), s->tol, &res));
-      batch *= 2;
+    ok = (PetscBool)(ok && PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */
+    if (ok)
+      alpha = res < before ? PetscMax(alpha / 3.0, nt->alpha_min) : alpha; /* a proximal step: always taken */
+    else if (res < 0.9 * before)
+      alpha *= 10.0; /* progress, but the proximal problem was not solved: more damping */
+    else {           /* no progress: more damping, from the centre */
+      alpha *= 10.0;
+      if (res >= before) {
+        PetscCall(VecCopy(nt->rc, r));
+        PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+        res = before;
+      }
     }
+    if (getenv("KERGS_DEBUG_NEWTON"))
+      PetscCall(PetscPrintf(s->comm, "outer %d res %.3e -> %.3e ok %d alpha %.1e\n", (int)nt->outer, (double)before, (double)res, (int)ok,
+                            (double)alpha));
   }
   stats->iterations    = steps;
   stats->criterion     = res;
@@ -604,6 +637,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              &nt->armijo, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_max_backtracks", "Halvings of a Newton step before the smallest one is taken anyway", "",
                             nt->max_backtracks, &nt->max_backtracks, NULL));
+  PetscCall(PetscOptionsBool("-solver_newton_project", "Line search along the path projected on the Coulomb cones", "", nt->project,
+                             &nt->project, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_switch_tol", "NLGS sweeps first, until the natural residual is at most this, then Newton", "",
                              nt->switch_tol, &nt->switch_tol, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_sweeps", "Sweeps after the first stalled Newton phase (doubled after each)", "",
@@ -686,17 +721,18 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->rho_factor     = 1.0;
   nt->shift          = 1e-8;
   nt->armijo         = 1e-4;
-  nt->max_backtracks = 30;
-  nt->switch_tol     = 1e-4;
+  nt->max_backtracks = 33;
+  nt->switch_tol     = 1e-2;
   nt->sweep_batch    = 100;
   nt->max_sweeps     = 10000;
   nt->sweep_check    = 10;
   nt->prox           = NEWTON_PROX_IDENTITY;
-  nt->alpha          = 1.0;
-  nt->sigma_min      = 1e-6;
-  nt->sigma_max      = 1e-2;
-  nt->inner_max      = 10;
-  nt->inner_rtol     = 1e-2;
+  nt->alpha          = 10.0;
+  nt->alpha_min      = 1e-3;
+  nt->sigma_min      = 1e-8;
+  nt->sigma_max      = 1.0;
+  nt->inner_max      = 20;
+  nt->inner_rtol     = 0.1;
   PetscCall(CreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 100;
