@@ -30,4 +30,11 @@ PETSC_EXTERN void      KergsLawNaturalMap(PetscInt ncomp, const PetscReal r[], c
 PETSC_EXTERN PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho,
                                                 PetscBool active);
 
+/* The Alart-Curnier function of one contact (for Newton methods), with u = W r + b the local velocity, rho > 0:
+     xi = r_n - rho u_n,  F_n = r_n - max(0, xi),  tau = mu max(0, xi),  F_t = r_t - proj_[-tau, tau](r_t - rho u_t)
+   (F = r when inactive). F = 0 exactly when (r, u) satisfy the law. When A is not NULL, A and B (ncomp x ncomp,
+   row-major) receive an element of the generalized Jacobian: dF = A dr + B du (so J = A + B W). */
+PETSC_EXTERN void KergsLawAlartCurnier(PetscInt ncomp, const PetscScalar r[], const PetscScalar u[], PetscReal mu, PetscReal rho,
+                                       PetscBool active, PetscReal F[], PetscReal A[], PetscReal B[]);
+
 #endif

@@ -165,3 +165,48 @@ KergsLawStatus KergsLawSolve(PetscInt ncomp, const PetscReal Waa[], const PetscR
   }
   return SolveCoulomb2(Waa, b, mu, r);
 }
+
+/* Alart-Curnier function of one contact and an element of its generalized Jacobian (law.h). Each branch is a piece
+   where F is linear in (r, u): open (F = r_n), closed (F_n = rho u_n), stick (F_t = rho u_t), slip (F_t = r_t - sign(z)
+   mu (r_n - rho u_n)). On a boundary between pieces (xi = 0: open; |z| = tau: slip) the row chosen stays
+   nonsingular. */
+void KergsLawAlartCurnier(PetscInt nc, const PetscScalar r[], const PetscScalar u[], PetscReal mu, PetscReal rho, PetscBool active,
+                          PetscReal F[], PetscReal A[], PetscReal B[])
+{
+  PetscReal xi, tau, z;
+
+  if (A)
+    for (PetscInt i = 0; i < nc * nc; i++) A[i] = B[i] = 0.0;
+  if (!active) { /* r = 0 */
+    for (PetscInt c = 0; c < nc; c++) {
+      F[c] = PetscRealPart(r[c]);
+      if (A) A[c * nc + c] = 1.0;
+    }
+    return;
+  }
+  xi = PetscRealPart(r[0]) - rho * PetscRealPart(u[0]);
+  if (xi > 0) { /* closed: F_n = rho u_n */
+    F[0] = rho * PetscRealPart(u[0]);
+    if (A) B[0] = rho;
+  } else { /* open: F_n = r_n */
+    F[0] = PetscRealPart(r[0]);
+    if (A) A[0] = 1.0;
+  }
+  if (nc == 1) return;
+  tau = mu * PetscMax(xi, 0.0);
+  z   = PetscRealPart(r[1]) - rho * PetscRealPart(u[1]);
+  if (PetscAbsReal(z) < tau) { /* stick: F_t = rho u_t (ties go to slip, whose row stays nonsingular) */
+    F[1] = rho * PetscRealPart(u[1]);
+    if (A) B[3] = rho;
+  } else { /* slip, or open: F_t = r_t - sign(z) tau, tau depending on r_n - rho u_n while closed */
+    const PetscReal s = z >= 0 ? 1.0 : -1.0;
+    F[1]              = PetscRealPart(r[1]) - s * tau;
+    if (A) {
+      A[3] = 1.0;
+      if (xi > 0) {
+        A[2] = -s * mu;
+        B[2] = s * mu * rho;
+      }
+    }
+  }
+}

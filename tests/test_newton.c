@@ -1,0 +1,329 @@
+/* Solver type "newton" (src/solver/solvers/newton.c): the Alart-Curnier function's generalized Jacobian against
+   finite differences away from the kinks, one-contact cases solved in at most 3 Newton steps, the wedged pair whose W
+   is singular, the frictionless confine500 against the unilateral predictor's exact solution, 1 against n ranks, and a
+   case where the line search is needed (a full Newton step increases the merit) and is taken. */
+static const char help[] = "kergs newton solver tests.\n";
+
+#include "testing.h"
+
+/* ------------------------------------------------------------------------------------------------ */
+/* The Alart-Curnier function and its Jacobian (KergsLawAlartCurnier)                               */
+
+/* The piece of F a point (r, u) lies on, and how far from its boundaries (xi = 0, |z| = tau). */
+static void Piece(PetscInt nc, const PetscScalar r[], const PetscScalar u[], PetscReal mu, PetscReal rho, PetscInt *piece,
+                  PetscReal *margin)
+{
+  const PetscReal xi = PetscRealPart(r[0]) - rho * PetscRealPart(u[0]), tau = mu * PetscMax(xi, 0.0);
+  const PetscReal z = nc > 1 ? PetscRealPart(r[1]) - rho * PetscRealPart(u[1]) : 0.0;
+
+  *margin = PetscAbsReal(xi);
+  if (xi <= 0)
+    *piece = 0; /* open */
+  else if (nc == 1)
+    *piece = 1;
+  else if (PetscAbsReal(z) < tau)
+    *piece = 1; /* stick */
+  else
+    *piece = z > 0 ? 2 : 3; /* slip */
+  if (nc > 1 && xi > 0) *margin = PetscMin(*margin, PetscAbsReal(PetscAbsReal(z) - tau));
+}
+
+/* Random points of each piece, for a random symmetric positive definite W_aa: the Jacobian J = A + B W_aa times a
+   random direction against the difference quotient of F, with a step small enough not to leave the piece. */
+static PetscErrorCode TestJacobian(void)
+{
+  PetscRandom rnd;
+  PetscInt    seen[2][4] = {{0}}, bad = 0, tried = 0;
+  PetscReal   worst = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscRandomCreate(PETSC_COMM_SELF, &rnd));
+  PetscCall(PetscRandomSetInterval(rnd, -1.0, 1.0));
+  for (PetscInt k = 0; k < 4000; k++) {
+    const PetscInt nc = k % 2 ? 2 : 1;
+    PetscReal      mu = 0, rho, W[4], L[3], b[2], F0[2], F1[2], A[4], B[4], Jd[2], margin, h, err = 0, scale = 0;
+    PetscScalar    r[2] = {0, 0}, u[2] = {0, 0}, rh[2], uh[2], d[2] = {0, 0};
+    PetscInt       piece;
+    for (PetscInt i = 0; i < 3; i++) PetscCall(PetscRandomGetValueReal(rnd, &L[i]));
+    W[0] = L[0] * L[0] + 0.1; /* W = L L^T + 0.1 I, L lower triangular */
+    W[1] = W[2] = L[0] * L[1];
+    W[3]        = L[1] * L[1] + L[2] * L[2] + 0.1;
+    if (nc == 1) W[0] = PetscAbsReal(L[0]) + 0.1;
+    if (nc > 1) PetscCall(PetscRandomGetValueReal(rnd, &mu));
+    mu  = PetscAbsReal(mu);
+    rho = 1.0 / W[0];
+    for (PetscInt c = 0; c < nc; c++) {
+      PetscReal x;
+      PetscCall(PetscRandomGetValueReal(rnd, &x));
+      r[c] = x;
+      PetscCall(PetscRandomGetValueReal(rnd, &b[c]));
+      PetscCall(PetscRandomGetValueReal(rnd, &x));
+      d[c] = x;
+    }
+    for (PetscInt c = 0; c < nc; c++) {
+      u[c] = b[c];
+      for (PetscInt e = 0; e < nc; e++) u[c] += W[c * nc + e] * PetscRealPart(r[e]);
+    }
+    Piece(nc, r, u, mu, rho, &piece, &margin);
+    if (margin < 1e-3) continue; /* too close to a kink for a difference quotient */
+    tried++;
+    seen[nc - 1][piece]++;
+    KergsLawAlartCurnier(nc, r, u, mu, rho, PETSC_TRUE, F0, A, B);
+    h = 1e-2 * margin / (1.0 + PetscAbsReal(W[0]) + PetscAbsReal(W[3])); /* F is linear on the piece: no truncation error */
+    for (PetscInt c = 0; c < nc; c++) rh[c] = r[c] + h * d[c];
+    for (PetscInt c = 0; c < nc; c++) {
+      uh[c] = b[c];
+      for (PetscInt e = 0; e < nc; e++) uh[c] += W[c * nc + e] * PetscRealPart(rh[e]);
+    }
+    KergsLawAlartCurnier(nc, rh, uh, mu, rho, PETSC_TRUE, F1, NULL, NULL);
+    for (PetscInt c = 0; c < nc; c++) { /* J d = A d + B W d */
+      Jd[c] = 0;
+      for (PetscInt e = 0; e < nc; e++) {
+        PetscReal Wd = 0;
+        for (PetscInt f = 0; f < nc; f++) Wd += W[e * nc + f] * PetscRealPart(d[f]);
+        Jd[c] += A[c * nc + e] * PetscRealPart(d[e]) + B[c * nc + e] * Wd;
+      }
+      err += PetscSqr((F1[c] - F0[c]) / h - Jd[c]);
+      scale += PetscSqr(Jd[c]) + PetscSqr(PetscRealPart(d[c]));
+    }
+    err   = PetscSqrtReal(err / scale);
+    worst = PetscMax(worst, err);
+    if (err > 1e-6) bad++;
+  }
+  PetscCall(PetscRandomDestroy(&rnd));
+  PetscCall(
+      Check((PetscBool)(bad == 0), "Alart-Curnier Jacobian = difference quotient away from the kinks (worst relative error)", worst, 1e-6));
+  PetscCall(Check((PetscBool)(seen[0][0] > 100 && seen[0][1] > 100), "... frictionless: open and closed points both tried",
+                  PetscMin(seen[0][0], seen[0][1]), 100));
+  PetscCall(Check((PetscBool)(seen[1][0] > 50 && seen[1][1] > 50 && seen[1][2] > 50 && seen[1][3] > 50),
+                  "... frictional: open, stick, slip+ and slip- points all tried",
+                  PetscMin(PetscMin(seen[1][0], seen[1][1]), PetscMin(seen[1][2], seen[1][3])), 50));
+  {
+    PetscScalar r[2] = {0.3, -0.1}, u[2] = {1, 2};
+    PetscReal   F[2], A[4], B[4];
+    KergsLawAlartCurnier(2, r, u, 0.5, 1.0, PETSC_FALSE, F, A, B);
+    PetscCall(Check((PetscBool)(F[0] == 0.3 && F[1] == -0.1 && A[0] == 1 && A[3] == 1 && A[1] == 0 && B[0] == 0 && B[3] == 0),
+                    "inactive contact: F = r, J = I", F[0], 0.3));
+  }
+  (void)tried;
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Whole steps                                                                                      */
+
+/* Run nsteps of a scene; the largest Newton steps and the largest natural residual over the steps, and how many steps
+   converged. */
+static PetscErrorCode Run(const char *opts, PetscInt nsteps, KergsStepper *keep, PetscInt *maxits, PetscReal *maxres, PetscInt *nconverged)
+{
+  KergsStepper st;
+  PetscReal    its, res, conv;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper(opts, &st));
+  *maxits = *nconverged = 0;
+  *maxres               = 0;
+  for (PetscInt s = 0; s < nsteps; s++) {
+    PetscCall(KergsStepperStep(st));
+    PetscCall(StatAt(st->results, "iterations", s, &its));
+    PetscCall(StatAt(st->results, "residual", s, &res));
+    PetscCall(StatAt(st->results, "converged", s, &conv));
+    *maxits = PetscMax(*maxits, (PetscInt)its);
+    *maxres = PetscMax(*maxres, res);
+    *nconverged += conv > 0.5;
+  }
+  if (keep)
+    *keep = st;
+  else
+    PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+#define ONE_DISK "-gravity 0,-10 -dt 1e-3 -disks_source list -disks_radius 0.1 -alert 0.01 -solver_type newton -solver_tol 1e-12 "
+
+/* One disk and one wall: open (moving away), resting (closing, stick), on a slope below and above tan = mu (stick,
+   slip). Each step solved in at most 3 Newton steps, and the physics right. */
+static PetscErrorCode TestOneContact(void)
+{
+  struct {
+    const char *what, *opts;
+  } cases[] = {
+      {"one contact, open (the disk leaves the floor)",
+       ONE_DISK "-friction 0.5 -disks_x 0,0.1 -disks_v 0,5 -walls floor -wall_floor_a -5,0 -wall_floor_b 5,0"},
+      {"one contact, stick (the disk rests on the floor)",
+       ONE_DISK "-friction 0.5 -disks_x 0,0.0999999 -walls floor -wall_floor_a -5,0 -wall_floor_b 5,0"},
+      {"one contact, frictionless (the disk rests on the floor)",
+       ONE_DISK "-friction 0 -disks_x 0,0.0999999 -walls floor -wall_floor_a -5,0 -wall_floor_b 5,0"},
+      /* slopes through the origin at 0.3 and 0.7 rad (tan 0.31 and 0.84) with mu = 0.5, rotation locked: stick, slip */
+      {"one contact, stick on a slope (tan 0.31 < mu 0.5)",
+       ONE_DISK "-friction 0.5 -disks_lock_rotation -disks_x -0.029552,0.095534 -walls slope -wall_slope_a -9.553365,-2.955202 "
+                "-wall_slope_b 9.553365,2.955202 -wall_slope_infinite"},
+      {"one contact, slip on a slope (tan 0.84 > mu 0.5)",
+       ONE_DISK "-friction 0.5 -disks_lock_rotation -disks_x -0.064422,0.076484 -walls slope -wall_slope_a -7.648422,-6.442177 "
+                "-wall_slope_b 7.648422,6.442177 -wall_slope_infinite"},
+  };
+
+  PetscFunctionBeginUser;
+  for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+    PetscInt     maxits, nconv;
+    PetscReal    maxres, v[KERGS_DIM];
+    KergsStepper st;
+    char         opts[1024];
+    PetscCall(PetscSNPrintf(opts, sizeof(opts), "%s -steps 5", cases[i].opts));
+    PetscCall(Run(opts, 5, &st, &maxits, &maxres, &nconv));
+    PetscCall(Checkf((PetscBool)(maxits <= 3 && nconv == 5), maxits, 3, "%s: Newton steps per time step (all converged)", cases[i].what));
+    PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->v, KERGS_DIM, v));
+    if (i == 1 || i == 2)
+      PetscCall(
+          Checkf((PetscBool)(PetscAbsReal(v[1]) < 1e-9 && PetscAbsReal(v[0]) < 1e-9), PetscAbsReal(v[1]), 0, "%s: at rest", cases[i].what));
+    if (i == 3)
+      PetscCall(Checkf((PetscBool)(PetscAbsReal(v[0]) + PetscAbsReal(v[1]) < 1e-9), PetscAbsReal(v[0]) + PetscAbsReal(v[1]), 0,
+                       "%s: at rest", cases[i].what));
+    if (i == 4) { /* slides down at g (sin - mu cos), 5 steps */
+      const PetscReal a = 0.7, want = 10 * (PetscSinReal(a) - 0.5 * PetscCosReal(a)) * 5e-3,
+                      got = -(v[0] * PetscCosReal(a) + v[1] * PetscSinReal(a));
+      PetscCall(Checkf((PetscBool)(PetscAbsReal(got - want) < 1e-6 * want), got, want, "%s: slides at g(sin - mu cos)", cases[i].what));
+    }
+    PetscCall(KergsStepperDestroy(&st));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The wedged pair between static walls (a feasible problem, unlike cases/two_disks_wedged.opts whose squeezing wall
+   makes it infeasible): 4 contacts, 6 DOFs, W singular. Every step converges. */
+static PetscErrorCode TestWedged(void)
+{
+  PetscInt  maxits, nconv;
+  PetscReal maxres;
+
+  PetscFunctionBeginUser;
+  PetscCall(Run("-options_file cases/two_disks_wedged.opts -wall_right_velocity 0,0 -steps 20 -solver_type newton -solver_tol 1e-12", 20,
+                NULL, &maxits, &maxres, &nconv));
+  PetscCall(Check((PetscBool)(nconv == 20 && maxres <= 1e-12), "wedged pair, singular W: every step converges to 1e-12 (largest residual)",
+                  maxres, 1e-12));
+  PetscFunctionReturn(0);
+}
+
+/* Frictionless confine500, one step: the velocities (unique without friction, whatever the kernel part of r) of
+   newton's impulses against those of the unilateral predictor, which solves the frictionless problem exactly by NLGS
+   on the normal components (to -predictor_unilateral_tol). */
+static PetscErrorCode TestFrictionless(void)
+{
+  KergsStepper   st;
+  KergsPredictor p;
+  PetscInt       maxits, nconv;
+  PetscReal      maxres, diff, scale;
+  Vec            rt, v1, v2, vd;
+  Mat            W;
+
+  PetscFunctionBeginUser;
+  PetscCall(Run("-options_file cases/confine500.opts -friction 0 -steps 1 -keep_H -solver_type newton -solver_tol 1e-12", 1, &st, &maxits,
+                &maxres, &nconv));
+  PetscCall(Check((PetscBool)(nconv == 1), "frictionless confine500: newton converged to 1e-12", maxres, 1e-12));
+  PetscCall(KergsOperatorsGetContactVectors(st->ops, NULL, NULL, &vd));
+  PetscCall(KergsOperatorsGetW(st->ops, &W, NULL));
+  PetscCall(VecDuplicate(vd, &rt));
+  PetscCall(VecDuplicate(vd, &v1));
+  PetscCall(VecDuplicate(vd, &v2));
+  PetscCall(MatMultAdd(W, st->ops->r, vd, v1));
+  PetscCall(PetscOptionsSetValue(NULL, "-predictor_unilateral_tol", "1e-14"));
+  PetscCall(PetscOptionsSetValue(NULL, "-predictor_unilateral_max_it", "200000"));
+  PetscCall(KergsPredictorCreate(PETSC_COMM_WORLD, &p));
+  PetscCall(KergsPredictorSetType(p, KERGS_PREDICTOR_UNILATERAL));
+  PetscCall(KergsPredictorSetFromOptions(p));
+  PetscCall(KergsPredictorPredict(p, st->scene, st->contacts, st->ops, st->solver->active, rt));
+  PetscCall(MatMultAdd(W, rt, vd, v2));
+  PetscCall(VecNorm(v1, NORM_INFINITY, &scale));
+  PetscCall(VecAXPY(v2, -1.0, v1));
+  PetscCall(VecNorm(v2, NORM_INFINITY, &diff));
+  PetscCall(Check((PetscBool)(diff <= 1e-8 * scale),
+                  "frictionless confine500: velocities of newton = those of the unilateral predictor (relative)", diff / scale, 1e-8));
+  PetscCall(KergsPredictorDestroy(&p));
+  PetscCall(VecDestroy(&rt));
+  PetscCall(VecDestroy(&v1));
+  PetscCall(VecDestroy(&v2));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+/* Frictionless confine500, 3 steps, on every rank of the world and on one rank: the disks' velocities agree grain by
+   grain to the solver's tolerance. */
+static PetscErrorCode TestRanks(void)
+{
+  const char  *opts = "-options_file cases/confine500.opts -friction 0 -steps 3 -solver_type newton -solver_tol 1e-12";
+  KergsStepper all, one;
+  PetscReal   *va, *vo, diff = 0, scale = 0;
+  PetscInt     n;
+  PetscMPIInt  size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  PetscCall(MakeStepper(opts, &all));
+  for (PetscInt s = 0; s < 3; s++) PetscCall(KergsStepperStep(all));
+  PetscCall(MakeStepperOn(PETSC_COMM_SELF, opts, &one));
+  for (PetscInt s = 0; s < 3; s++) PetscCall(KergsStepperStep(one));
+  n = all->scene->ndisks;
+  PetscCall(PetscMalloc2(KERGS_DIM * n, &va, KERGS_DIM * n, &vo));
+  PetscCall(GatherById(all->scene, all->scene->v, KERGS_DIM, va));
+  PetscCall(GatherById(one->scene, one->scene->v, KERGS_DIM, vo));
+  for (PetscInt i = 0; i < KERGS_DIM * n; i++) {
+    diff  = PetscMax(diff, PetscAbsReal(va[i] - vo[i]));
+    scale = PetscMax(scale, PetscAbsReal(vo[i]));
+  }
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-8 * scale),
+                     "frictionless confine500: velocities on every rank = on one rank (relative)", diff / scale, 1e-8));
+  (void)size;
+  PetscCall(PetscFree2(va, vo));
+  PetscCall(KergsStepperDestroy(&all));
+  PetscCall(KergsStepperDestroy(&one));
+  PetscFunctionReturn(0);
+}
+
+/* confine5 with friction: some full Newton steps increase the merit and are cut by the line search (statistic
+   backtracks > 0), and every step converges; without the line search (-solver_newton_max_backtracks 0, every full step
+   taken) the same steps need more Newton steps or fail. */
+static PetscErrorCode TestLineSearch(void)
+{
+  KergsStepper st;
+  PetscInt     maxits, nconv, maxits0, nconv0;
+  PetscReal    maxres, bt = 0, b, maxres0;
+
+  PetscFunctionBeginUser;
+  PetscCall(Run("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_max_it 500", 2, &st, &maxits,
+                &maxres, &nconv));
+  for (PetscInt s = 0; s < 2; s++) {
+    PetscCall(StatAt(st->results, "backtracks", s, &b));
+    bt += b;
+  }
+  PetscCall(KergsStepperDestroy(&st));
+  PetscCall(Check((PetscBool)(bt > 0 && nconv == 2),
+                  "confine500 (cold start): the line search cut some Newton steps (halvings), every step converged", bt, 1));
+  PetscCall(Run("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_max_it 500 "
+                "-solver_newton_max_backtracks 0",
+                2, NULL, &maxits0, &maxres0, &nconv0));
+  PetscCall(Check((PetscBool)(nconv0 < 2 || maxits0 > maxits),
+                  "... without it (full steps), fewer steps converge or they take more Newton steps", maxits0, maxits));
+  PetscFunctionReturn(0);
+}
+
+int main(int argc, char **argv)
+{
+  PetscMPIInt size;
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(KergsInitializePackage());
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  if (size == 1) {
+    PetscCall(TestJacobian());
+    PetscCall(TestOneContact());
+    PetscCall(TestWedged());
+    PetscCall(TestFrictionless());
+    PetscCall(TestLineSearch());
+  } else
+    PetscCall(TestRanks());
+  {
+    int code = Finish();
+    PetscCall(PetscFinalize());
+    return code;
+  }
+}
