@@ -1,21 +1,26 @@
-/* kergs solver type "newton": a semismooth Newton method on the Alart-Curnier form of the exact 2D law, globalised
-   by a line search, solving the original per-step problem (not a regularised one) to tight tolerances.
+/* kergs solver type "newton": a semismooth Newton method on the Alart-Curnier function of the exact 2D law, inside
+   proximal point iterations, solving the original per-step problem (not a regularised one) to tight tolerances
+   (docs/solver.md, "Newton").
 
-   Alart-Curnier function (docs/solver.md, "Newton"): per active contact, with u = W r + v^d, rho_n, rho_t > 0,
-     xi  = r_n - rho_n u_n,          F_n = r_n - max(0, xi)
-     tau = mu max(0, xi), z = r_t - rho_t u_t,   F_t = r_t - proj_[-tau, tau](z)
-   F(r) = 0 exactly when r and u satisfy Signorini-Coulomb; an inactive contact has F = r. F is piecewise linear in
-   (r, u), so an element of its generalized Jacobian is J = A + B W with A, B block diagonal (ncomp x ncomp per
-   contact), constant on each piece (open, stick, slip+, slip-). Newton solves J d = -F, with W over the active
-   contacts stored whole (both triangles) and J on its pattern, by a sparse direct LU (MUMPS by default) or any KSP
-   (-solver_ksp_type, -solver_pc_type). The step is damped by backtracking until the merit 1/2 |F|^2 decreases enough
-   (Armijo); warm-started from the previous step's impulses like every type.
+   Alart-Curnier function (KergsLawAlartCurnier, src/solver/law.c): per active contact, with u = W r + v^d and
+   rho = -solver_newton_rho / W_aa,nn, F_n = r_n - max(0, xi), F_t = r_t - proj_[-tau, tau](r_t - rho u_t), xi = r_n - rho
+   u_n, tau = mu max(0, xi); F = r for an inactive contact. F = 0 exactly when r solves the step's problem. F is
+   piecewise linear, and an element of its generalized Jacobian is J = A + B W with A, B block diagonal (one ncomp x
+   ncomp block per contact). W over the active contacts is stored whole (both triangles) and J is built on its pattern;
+   J d = -F is solved through a KSP (prefix solver_): a direct LU by default (PETSc's on one rank, MUMPS on several),
+   any Krylov method and preconditioner by options.
 
-   W is singular in a confined packing (its kernel: self-equilibrated force networks), and so is J where the stick
-   contacts carry a hyperstatic network. -solver_newton_shift eps replaces W by W + eps_k I in J only (never in F):
-   eps_k = eps |F| / |r| times the mean W_nn, a Levenberg-Marquardt regularisation that vanishes at the solution, so
-   the fixed point and the fast local convergence stay those of the original problem. MUMPS's null-pivot detection
-   (ICNTL(24)) handles what is left. Convergence is the natural residual of the original problem (-solver_tol). */
+   W is singular in a confined packing (its kernel: the self-equilibrated force networks), and so is J where stick
+   contacts carry a hyperstatic network: plain Newton then stalls. The outer iterations solve, by Newton, the proximal
+   problem with W + sigma I and v^d - sigma r_c around the current point r_c (-solver_prox identity), whose Jacobian
+   J = A + B (W + sigma I) is nonsingular; at the fixed point the proximal term vanishes, so the answer solves the
+   original problem. sigma = alpha * natural residual * mean W_nn (within [sigma_min, sigma_max]) follows the residual
+   down, so that the convergence is fast near the solution; alpha shrinks after a solved proximal problem and grows
+   tenfold after a failed one (which restarts from the centre when it made things worse). The inner Newton steps are
+   damped by an Armijo line search on 1/2 |F|^2. J is assembled and factored again only when the contact states or
+   sigma changed. The type is warm-started from the previous step's impulses like every type; optional NLGS sweeps
+   first (-solver_newton_max_sweeps, -solver_newton_switch_tol). Convergence is the natural residual of the original
+   problem (-solver_tol, default 1e-10). */
 #include <kergs/private/solverimpl.h>
 #include <petscksp.h>
 #include <string.h>
@@ -40,7 +45,6 @@ typedef struct {
   PetscReal  armijo;               /* -solver_newton_armijo: sufficient decrease of the merit */
   PetscInt   max_backtracks;       /* -solver_newton_max_backtracks */
   PetscReal  switch_tol;           /* -solver_newton_switch_tol: natural residual at which sweeps hand over to Newton */
-  PetscInt   sweep_batch;          /* -solver_newton_sweeps: sweeps of the first batch */
   PetscInt   max_sweeps;           /* -solver_newton_max_sweeps: sweeps over the whole solve */
   PetscInt   sweep_check;          /* residual checked every this many sweeps */
   NewtonProx prox;                 /* -solver_prox */
@@ -53,7 +57,7 @@ typedef struct {
   PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
   PetscBool  project;              /* -solver_newton_project: line search along the path projected on the cones */
   /* figures of the last solve */
-  PetscInt  linear_its, backtracks, failed_searches, sweeps, outer, jacobians;
+  PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians;
   PetscReal linear_seconds, last_shift, merit;
 } Newton;
 
@@ -323,8 +327,9 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscFunctionReturn(0);
 }
 
-/* Solve J d = -F; a failed factorization or solve is an error naming the option to change. */
-static PetscErrorCode NewtonDirection(KergsSolver s, Newton *nt)
+/* Solve J d = -F. A failed solve (a Krylov method on an ill-conditioned J, a singular factorization) is not an error:
+   the inner Newton stops and the outer iteration retries with a larger proximal term, which conditions J better. */
+static PetscErrorCode NewtonDirection(Newton *nt, PetscBool *solved)
 {
   KSPConvergedReason reason;
   PetscInt           its;
@@ -340,10 +345,12 @@ static PetscErrorCode NewtonDirection(KergsSolver s, Newton *nt)
   PetscCall(PetscTime(&t1));
   nt->linear_its += its;
   nt->linear_seconds += t1 - t0;
-  PetscCheck(reason >= 0, s->comm, PETSC_ERR_NOT_CONVERGED,
-             "newton: the linear solve of a Newton step failed (%s); try -solver_prox identity, a larger -solver_newton_shift, or another "
-             "-solver_ksp_type/-solver_pc_type",
-             KSPConvergedReasons[reason]);
+  *solved = (PetscBool)(reason >= 0);
+  if (!*solved) {
+    nt->failed_linear++;
+    PetscCall(PetscInfo(NULL, "newton: the linear solve of a Newton step failed (%s): a larger proximal term next\n",
+                        KSPConvergedReasons[reason]));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -454,7 +461,7 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
                                   PetscInt *steps, PetscBool *ok)
 {
   PetscReal merit;
-  PetscBool decreased = PETSC_TRUE;
+  PetscBool decreased = PETSC_TRUE, solved;
 
   PetscFunctionBeginUser;
   *ok = PETSC_TRUE;
@@ -462,7 +469,12 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit));
   for (PetscInt k = 0; k < count && PetscSqrtReal(2.0 * merit) > ftol; k++) {
     PetscCall(AssembleJacobian(s, nt, n, nc, nt->shift, nt->sigma));
-    PetscCall(NewtonDirection(s, nt));
+    PetscCall(NewtonDirection(nt, &solved));
+    if (!solved) {
+      *ok   = PETSC_FALSE;
+      merit = PETSC_MAX_REAL; /* not solved */
+      break;
+    }
     {
       PetscReal m0 = merit;
       PetscInt  b0 = nt->backtracks;
@@ -523,7 +535,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, &u, &vd));
   PetscCall(VecGetSize(r, &nglobal));
   nc             = layout.ncomp;
-  nt->linear_its = nt->backtracks = nt->failed_searches = nt->sweeps = nt->outer = nt->jacobians = 0;
+  nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = nt->sweeps = nt->outer = nt->jacobians = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
@@ -542,7 +554,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
     nt->outer++;
-    ok = (PetscBool)(ok && PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */
+    ok = (PetscBool)(PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */
     if (ok)
       alpha = res < before ? PetscMax(alpha / 3.0, nt->alpha_min) : alpha; /* a proximal step: always taken */
     else if (res < 0.9 * before)
@@ -576,6 +588,7 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "linear_seconds", nt->linear_seconds));
   PetscCall(KergsSolveStatsAdd(st, "backtracks", (PetscReal)nt->backtracks));
   PetscCall(KergsSolveStatsAdd(st, "failed_line_searches", (PetscReal)nt->failed_searches));
+  PetscCall(KergsSolveStatsAdd(st, "failed_linear_solves", (PetscReal)nt->failed_linear));
   PetscCall(KergsSolveStatsAdd(st, "newton_merit", nt->merit));
   PetscCall(KergsSolveStatsAdd(st, "sweeps", (PetscReal)nt->sweeps));
   PetscCall(KergsSolveStatsAdd(st, "outer_iterations", (PetscReal)nt->outer));
@@ -603,8 +616,6 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              &nt->project, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_switch_tol", "NLGS sweeps first, until the natural residual is at most this, then Newton", "",
                              nt->switch_tol, &nt->switch_tol, NULL));
-  PetscCall(PetscOptionsInt("-solver_newton_sweeps", "Sweeps after the first stalled Newton phase (doubled after each)", "",
-                            nt->sweep_batch, &nt->sweep_batch, NULL));
   PetscCall(PetscOptionsEnum("-solver_prox", "Proximal term of the outer iterations: identity (W + sigma I), none (plain Newton)", "",
                              NewtonProxes, (PetscEnum)nt->prox, (PetscEnum *)&nt->prox, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_alpha", "sigma of the proximal term W + sigma I: alpha * natural residual * mean W_nn", "",
@@ -612,8 +623,18 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_max", "Largest sigma / mean W_nn", "", nt->sigma_max, &nt->sigma_max, NULL));
   PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
-  PetscCall(PetscOptionsInt("-solver_newton_max_sweeps", "Most sweeps in one solve", "", nt->max_sweeps, &nt->max_sweeps, NULL));
+  PetscCall(PetscOptionsInt("-solver_newton_max_sweeps", "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol",
+                            "", nt->max_sweeps, &nt->max_sweeps, NULL));
   PetscOptionsHeadEnd();
+  PetscCheck(nt->alpha > 0 && PetscIsNormalReal(nt->alpha), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_prox_alpha %g must be positive",
+             (double)nt->alpha);
+  PetscCheck(nt->sigma_min > 0 && nt->sigma_min <= nt->sigma_max && PetscIsNormalReal(nt->sigma_max), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_prox_sigma_min %g and -solver_prox_sigma_max %g must satisfy 0 < min <= max", (double)nt->sigma_min,
+             (double)nt->sigma_max);
+  PetscCheck(nt->inner_max >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_prox_inner_max %" PetscInt_FMT " must be at least 1",
+             nt->inner_max);
+  PetscCheck(nt->max_sweeps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_max_sweeps %" PetscInt_FMT " must be non-negative",
+             nt->max_sweeps);
   PetscCheck(nt->rho_factor > 0 && PetscIsNormalReal(nt->rho_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_rho %g must be positive", (double)nt->rho_factor);
   PetscCheck(nt->shift >= 0 && !PetscIsInfOrNanReal(nt->shift), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -685,8 +706,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->armijo         = 1e-4;
   nt->max_backtracks = 33;
   nt->switch_tol     = 1e-2;
-  nt->sweep_batch    = 100;
-  nt->max_sweeps     = 10000;
+  nt->max_sweeps     = 0;
   nt->sweep_check    = 10;
   nt->prox           = NEWTON_PROX_IDENTITY;
   nt->alpha          = 10.0;
