@@ -545,10 +545,10 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     PetscReal before = res, inner_tol;
     PetscCall(VecCopy(r, nt->rc));
     PetscCall(VecNorm(r, NORM_2, &rnorm));
-    /* from r = 0 the residual is absolute (docs/solver.md): no measure of the distance to the solution, so the first
-       attempt is plain Newton (the smallest sigma) */
+    /* the first attempt is plain Newton (the smallest sigma): enough when the warm start lies on the solution's piece
+       of F, and the residual (absolute at r = 0) says little about the distance to the solution */
     nt->sigma = nt->prox == NEWTON_PROX_IDENTITY
-                    ? (rnorm == 0 && nt->outer == 0 ? nt->sigma_min : PetscClipInterval(alpha * res, nt->sigma_min, nt->sigma_max)) * wmean
+                    ? (nt->outer == 0 ? nt->sigma_min : PetscClipInterval(alpha * res, nt->sigma_min, nt->sigma_max)) * wmean
                     : 0.0;
     inner_tol = nt->inner_rtol * res * (rnorm > 0 ? rnorm : 1.0);
     PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
