@@ -7,7 +7,8 @@ kergs_test(NAME regularised_2 SOURCE test_regularised.c NPROCS 2)
 
 # The infeasible straight row (cases/confine5_straight.opts) is flagged by every solver type: none of its first steps,
 # while the row is straight and the problem has no solution, counts as converged (docs/solver.md, "When a step counts
-# as converged": the natural residual alone is fooled there, the velocity error is not).
+# as converged": the natural residual alone is fooled there, the velocity error is not), nor any later step that begins
+# with the chain closed (newton: from step 3 its row may have been pushed off a wall, a feasible problem).
 foreach(case "nlgsjac;linear" "nlgsjac;none" "nlgsjac;elastic" "nlgsjac;unilateral" "nlkergs;linear" "newton;")
   list(GET case 0 solver)
   list(LENGTH case len)
@@ -19,6 +20,6 @@ foreach(case "nlgsjac;linear" "nlgsjac;none" "nlgsjac;elastic" "nlgsjac;unilater
     kergs_test(NAME regularised_straight_row_${solver}_${predictor} SOURCE test_regularised.c NPROCS 1
                ARGS -straight_row_solver ${solver} -straight_row_predictor ${predictor})
   else()
-    kergs_test(NAME straight_row_${solver} SOURCE test_regularised.c NPROCS 1 ARGS -straight_row_solver ${solver} -straight_row_steps 10)
+    kergs_test(NAME straight_row_${solver} SOURCE test_regularised.c NPROCS 1 ARGS -straight_row_solver ${solver} -straight_row_steps 2)
   endif()
 endforeach()

@@ -66,8 +66,10 @@ PetscErrorCode KergsSolverSetType(KergsSolver s, KergsSolverType type)
   PetscCheck(create, s->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "Unknown -solver_type %s (see -help for the registered types)", type);
   if (s->ops.destroy) PetscCall((*s->ops.destroy)(s));
   PetscCall(PetscMemzero(&s->ops, sizeof(s->ops)));
-  s->data    = NULL;
-  s->needs_H = PETSC_FALSE;
+  s->data            = NULL;
+  s->needs_H         = PETSC_FALSE;
+  s->fixed_criterion = PETSC_FALSE;
+  s->iteration_name  = "sweeps";
   PetscCall(PetscStrncpy(s->type, type, sizeof(s->type)));
   PetscCall((*create)(s));
   PetscFunctionReturn(0);
@@ -102,6 +104,7 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
                              "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
   if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
   PetscOptionsEnd();
+  if (s->fixed_criterion) s->criterion = KERGS_CRITERION_NATURAL; /* -solver_criterion does not apply (docs/solver.md) */
   PetscCheck(s->max_it >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_max_it %" PetscInt_FMT " must be at least 1", s->max_it);
   PetscCheck(s->tol > 0 && PetscIsNormalReal(s->tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_tol %g must be a positive number",
              (double)s->tol);
@@ -240,8 +243,8 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
 PetscErrorCode KergsSolverView(KergsSolver s, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact solver: %s, at most %" PetscInt_FMT " sweeps, criterion %s < %g\n", s->type, s->max_it,
-                                   KergsCriteria[s->criterion], (double)s->tol));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact solver: %s, at most %" PetscInt_FMT " %s, criterion %s < %g\n", s->type, s->max_it,
+                                   s->iteration_name, KergsCriteria[s->criterion], (double)s->tol));
   if (s->ops.view) {
     PetscCall(PetscViewerASCIIPushTab(viewer));
     PetscCall((*s->ops.view)(s, viewer));

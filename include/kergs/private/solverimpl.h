@@ -28,13 +28,15 @@ struct _p_KergsSolver {
   PetscReal      residual_tol; /* -solver_residual_tol: largest natural residual of the original problem of a converged step */
   PetscReal      velocity_tol; /* -solver_velocity_tol: largest relative velocity error of a converged step */
   KergsCriterion criterion;
-  KergsSweep     sweep;         /* Gauss-Seidel on W; also computes the physical residual */
-  KergsSweep     iterate_sweep; /* when set, the sweeps run on this one instead (nlkergs: on W~) */
-  PetscBool      needs_H;       /* the type reads H_f, H_g during its solve (kernel projector, predictors), and W over all
-                                   pairs of contacts: the time step keeps H alive from assembly to the velocity update and
-                                   assembles the whole W (otherwise W couples the active contacts only) */
-  PetscReal *mu;                /* per local contact */
-  PetscBool *active;            /* per local contact */
+  PetscBool      fixed_criterion; /* the type decides convergence by the natural residual whatever -solver_criterion */
+  const char    *iteration_name;  /* what -solver_max_it counts: "sweeps" or "Newton steps" */
+  KergsSweep     sweep;           /* Gauss-Seidel on W; also computes the physical residual */
+  KergsSweep     iterate_sweep;   /* when set, the sweeps run on this one instead (nlkergs: on W~) */
+  PetscBool      needs_H;         /* the type reads H_f, H_g during its solve (kernel projector, predictors), and W over all
+                                     pairs of contacts: the time step keeps H alive from assembly to the velocity update and
+                                     assembles the whole W (otherwise W couples the active contacts only) */
+  PetscReal *mu;                  /* per local contact */
+  PetscBool *active;              /* per local contact */
   PetscInt   nalloc;
 };
 

@@ -52,12 +52,14 @@ typedef struct {
   PetscReal  sigma_min, sigma_max; /* -solver_prox_sigma_min, _max: its bounds */
   PetscReal  alpha_min;            /* smallest alpha */
   PetscInt   inner_max;            /* -solver_prox_inner_max: Newton steps per outer iteration */
+  PetscInt   stall_steps;          /* -solver_newton_stall_steps: crawling steps that end an inner Newton */
+  PetscReal  extrapolate;          /* -solver_prox_extrapolate: largest factor of a proximal step's extrapolation */
   PetscReal  inner_rtol;           /* inner tolerance on |F|, relative to the natural residual times |r| */
   PetscReal  sigma;                /* this outer iteration's sigma (0 without the proximal term) */
   PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
   PetscBool  project;              /* -solver_newton_project: line search along the path projected on the cones */
   /* figures of the last solve */
-  PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians;
+  PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians, stalls, extrapolations;
   PetscReal linear_seconds, last_shift, merit;
 } Newton;
 
@@ -367,11 +369,6 @@ static PetscErrorCode ProximalVelocity(Newton *nt, Vec r, Vec u, Vec ueff)
   PetscFunctionReturn(0);
 }
 
-/* Backtracking: the largest t = 2^-k (k <= -solver_newton_max_backtracks) with merit(r + t d) <= (1 - 2 armijo t)
-   merit(r). Without such a t the smallest step is taken anyway and *ok is false: where a contact sits exactly on a
-   kink of F (a grazing contact with r = 0 and u_n = 0, plenty after NLGS sweeps), the Newton direction need not
-   decrease the merit, but a tiny step moves the contact off the kink and the next Jacobian is right. On exit r, u
-   hold the new point. */
 /* r <- its projection on the Coulomb cones of the active contacts (r_n >= 0, |r_t| <= mu r_n); inactive ones to 0. */
 static PetscErrorCode ProjectOnCones(KergsSolver s, PetscInt n, PetscInt nc, Vec r)
 {
@@ -405,6 +402,11 @@ static PetscErrorCode ProjectOnCones(KergsSolver s, PetscInt n, PetscInt nc, Vec
   PetscFunctionReturn(0);
 }
 
+/* Backtracking: the largest t = 2^-k (k <= -solver_newton_max_backtracks) with merit(r + t d) <= (1 - 2 armijo t)
+   merit(r). Without such a t the smallest step is taken anyway and *ok is false: where a contact sits exactly on a
+   kink of F (a grazing contact with r = 0 and u_n = 0, plenty after NLGS sweeps), the Newton direction need not
+   decrease the merit, but a tiny step moves the contact off the kink and the next Jacobian is right. On exit r, u
+   hold the new point. */
 static PetscErrorCode LineSearch(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *merit, PetscBool *ok)
 {
   PetscReal t = 1.0, trial = 0.0;
@@ -456,12 +458,15 @@ static PetscErrorCode Sweeps(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc,
 }
 
 /* Newton on the current (proximal) problem, from r: at most `count` steps, until |F| is at most `ftol`; *ok is false
-   when some line search failed. */
+   when some line search failed. Newton stops early when it crawls: -solver_newton_stall_steps steps in a row that
+   each cut the merit by less than a tenth (many contacts change piece at every step, and the line search keeps
+   them short); a larger proximal term is then cheaper than more steps. */
 static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscInt count, PetscReal ftol,
                                   PetscInt *steps, PetscBool *ok)
 {
   PetscReal merit;
   PetscBool decreased = PETSC_TRUE, solved;
+  PetscInt  crawling  = 0;
 
   PetscFunctionBeginUser;
   *ok = PETSC_TRUE;
@@ -479,16 +484,45 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
       PetscReal m0 = merit;
       PetscInt  b0 = nt->backtracks;
       PetscCall(LineSearch(s, nt, n, nc, r, u, vd, &merit, &decreased));
-      if (getenv("KERGS_DEBUG_NEWTON"))
-        PetscCall(PetscPrintf(s->comm, "   inner %d merit %.3e -> %.3e  halvings %d ok %d sigma %.2e\n", (int)k, (double)m0, (double)merit,
-                              (int)(nt->backtracks - b0), (int)decreased, (double)nt->sigma));
+      PetscCall(PetscInfo(NULL, "inner %" PetscInt_FMT ": merit %g -> %g, %" PetscInt_FMT " halvings, decreased %d, sigma %g\n", k,
+                          (double)m0, (double)merit, nt->backtracks - b0, (int)decreased, (double)nt->sigma));
+      crawling = merit > 0.81 * m0 ? crawling + 1 : 0; /* |F| down by less than a tenth */
     }
     (*steps)++;
     if (!decreased) *ok = PETSC_FALSE;
+    if (nt->stall_steps > 0 && crawling >= nt->stall_steps) {
+      *ok = PETSC_FALSE;
+      nt->stalls++;
+      PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
+      PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_FALSE, &merit));
+      break;
+    }
     PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
     PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit)); /* the Jacobian blocks at the new point */
   }
   nt->merit = merit;
+  PetscFunctionReturn(0);
+}
+
+/* Extrapolation of a proximal step: r = r_c + beta (r - r_c) for beta = 2, 4, ... up to -solver_prox_extrapolate,
+   kept while the natural residual falls. Where the solution lies far along W's near-kernel (a force network to
+   rearrange), each proximal step moves the same way by a few percent of the distance; the extrapolation covers that
+   distance at the cost of a product by W per trial instead of a Newton solve per outer iteration. */
+static PetscErrorCode Extrapolate(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *res)
+{
+  PetscFunctionBeginUser;
+  PetscCall(VecWAXPY(nt->d, -1.0, nt->rc, r)); /* the proximal step */
+  for (PetscReal beta = 2.0; beta <= nt->extrapolate; beta *= 2.0) {
+    PetscReal trial;
+    PetscCall(VecWAXPY(nt->rtry, beta, nt->d, nt->rc));
+    PetscCall(MatMultAdd(nt->Wfull, nt->rtry, vd, nt->utry));
+    PetscCall(NaturalResidual(s, nt, n, nc, nt->rtry, nt->utry, &trial));
+    if (!(trial < *res)) break;
+    PetscCall(VecCopy(nt->rtry, r));
+    PetscCall(VecCopy(nt->utry, u));
+    *res = trial;
+    nt->extrapolations++;
+  }
   PetscFunctionReturn(0);
 }
 
@@ -508,14 +542,13 @@ static PetscErrorCode MeanCompliance(KergsSolver s, Newton *nt, PetscInt n, Pets
   PetscFunctionReturn(0);
 }
 
-/* NLGS sweeps first, until the natural residual is at most -solver_newton_switch_tol (the contact states settle; a cold
-   start always sweeps, its residual being absolute). Then outer iterations: each solves, by at most
-   -solver_prox_inner_max Newton steps, the proximal problem with W + sigma I and v^d - sigma r_c around the current
-   r_c = r, and moves r_c to its solution. The proximal term makes every inner Jacobian nonsingular (without it,
-   -solver_prox none, J is singular where stick contacts carry a hyperstatic network); at the fixed point it vanishes,
-   so r solves the original problem. An outer iteration that does not halve the natural residual (Newton stalls where the
-   contact states are still wrong) is followed by a batch of NLGS sweeps, twice as long each time. -solver_max_it caps
-   the Newton steps, -solver_newton_max_sweeps the sweeps. */
+/* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
+   -solver_newton_switch_tol. Then outer iterations: each solves, by at most -solver_prox_inner_max Newton steps, the
+   proximal problem with W + sigma I and v^d - sigma r_c around the current r_c = r, and moves r_c to its solution. The
+   proximal term makes every inner Jacobian nonsingular (without it, -solver_prox none, J is singular where stick
+   contacts carry a hyperstatic network); at the fixed point it vanishes, so r solves the original problem. The first
+   outer iteration is plain Newton (sigma_min), kept only if it lowered the natural residual. -solver_max_it caps the
+   Newton steps. */
 static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
                                          KergsSolveStats *stats)
 {
@@ -535,7 +568,8 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, &u, &vd));
   PetscCall(VecGetSize(r, &nglobal));
   nc             = layout.ncomp;
-  nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = nt->sweeps = nt->outer = nt->jacobians = 0;
+  nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = nt->sweeps = nt->outer = nt->jacobians = nt->stalls =
+      nt->extrapolations                                                                                             = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
@@ -555,9 +589,17 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
     nt->outer++;
     ok = (PetscBool)(PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */
-    if (ok)
-      alpha = res < before ? PetscMax(alpha / 3.0, nt->alpha_min) : alpha; /* a proximal step: always taken */
-    else if (res < 0.9 * before)
+    if (nt->outer == 1 && nt->prox == NEWTON_PROX_IDENTITY && res >= before) {
+      /* plain Newton from the warm start went elsewhere (along W's near-kernel, where sigma_min barely holds it): back */
+      PetscCall(VecCopy(nt->rc, r));
+      PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+      res = before;
+    } else if (ok) { /* a proximal step: always taken */
+      if (res < before) {
+        alpha = PetscMax(alpha / 3.0, nt->alpha_min);
+        if (nt->extrapolate >= 2.0) PetscCall(Extrapolate(s, nt, n, nc, r, u, vd, &res));
+      }
+    } else if (res < 0.9 * before)
       alpha *= 10.0; /* progress, but the proximal problem was not solved: more damping */
     else {           /* no progress: more damping, from the centre */
       alpha *= 10.0;
@@ -567,9 +609,8 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
         res = before;
       }
     }
-    if (getenv("KERGS_DEBUG_NEWTON"))
-      PetscCall(PetscPrintf(s->comm, "outer %d res %.3e -> %.3e ok %d alpha %.1e\n", (int)nt->outer, (double)before, (double)res, (int)ok,
-                            (double)alpha));
+    PetscCall(PetscInfo(NULL, "outer %" PetscInt_FMT ": natural residual %g -> %g, inner solved %d, alpha %g\n", nt->outer, (double)before,
+                        (double)res, (int)ok, (double)alpha));
   }
   stats->iterations    = steps;
   stats->criterion     = res;
@@ -593,6 +634,8 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "sweeps", (PetscReal)nt->sweeps));
   PetscCall(KergsSolveStatsAdd(st, "outer_iterations", (PetscReal)nt->outer));
   PetscCall(KergsSolveStatsAdd(st, "jacobians", (PetscReal)nt->jacobians));
+  PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
+  PetscCall(KergsSolveStatsAdd(st, "extrapolations", (PetscReal)nt->extrapolations));
   PetscFunctionReturn(0);
 }
 
@@ -623,6 +666,13 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_max", "Largest sigma / mean W_nn", "", nt->sigma_max, &nt->sigma_max, NULL));
   PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
+  PetscCall(
+      PetscOptionsReal("-solver_prox_extrapolate",
+                       "Extrapolate a solved proximal step by factors 2, 4, ... up to this while the natural residual falls (< 2: off)", "",
+                       nt->extrapolate, &nt->extrapolate, NULL));
+  PetscCall(PetscOptionsInt("-solver_newton_stall_steps",
+                            "Newton steps in a row that each cut |F| by less than a tenth and end an outer iteration's Newton (0: never)",
+                            "", nt->stall_steps, &nt->stall_steps, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_max_sweeps", "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol",
                             "", nt->max_sweeps, &nt->max_sweeps, NULL));
   PetscOptionsHeadEnd();
@@ -633,6 +683,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              (double)nt->sigma_max);
   PetscCheck(nt->inner_max >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_prox_inner_max %" PetscInt_FMT " must be at least 1",
              nt->inner_max);
+  PetscCheck(nt->stall_steps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_stall_steps %" PetscInt_FMT " must be non-negative",
+             nt->stall_steps);
   PetscCheck(nt->max_sweeps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_max_sweeps %" PetscInt_FMT " must be non-negative",
              nt->max_sweeps);
   PetscCheck(nt->rho_factor > 0 && PetscIsNormalReal(nt->rho_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -675,9 +727,10 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Direct LU by default: PETSc's own on one rank (the fastest here on the Jacobians of confine500 and biaxial 20k),
-   MUMPS on several (with its null-pivot detection on, EnableNullPivots). -solver_ksp_type, -solver_pc_type and
-   -solver_pc_factor_mat_solver_type choose otherwise. */
+/* Direct LU by default: PETSc's own with an AMD ordering on one rank (the fastest measured on the Jacobians of
+   confine500 and biaxial 20k), MUMPS on several (with its null-pivot detection on, EnableNullPivots).
+   -solver_ksp_type, -solver_pc_type, -solver_pc_factor_mat_solver_type and -solver_pc_factor_mat_ordering_type choose
+   otherwise. */
 static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
 {
   PC          pc;
@@ -691,6 +744,7 @@ static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(PCSetType(pc, PCLU));
   PetscCall(PCFactorSetMatSolverType(pc, size > 1 ? MATSOLVERMUMPS : MATSOLVERPETSC));
+  if (size == 1) PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD)); /* 1.6-2.5 times faster than nd here */
   PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
@@ -714,11 +768,16 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->sigma_min      = 1e-8;
   nt->sigma_max      = 1.0;
   nt->inner_max      = 20;
+  nt->stall_steps    = 3;
+  nt->extrapolate    = 64.0;
   nt->inner_rtol     = 0.1;
   PetscCall(CreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 100;
   s->tol                = 1e-10;
+  s->criterion          = KERGS_CRITERION_NATURAL;
+  s->fixed_criterion    = PETSC_TRUE;
+  s->iteration_name     = "Newton steps";
   s->ops.setfromoptions = SolverSetFromOptions_Newton;
   s->ops.setup          = SolverSetUp_Newton;
   s->ops.solve          = SolverSolve_Newton;
