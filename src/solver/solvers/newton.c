@@ -53,13 +53,12 @@ typedef struct {
   PetscReal  alpha_min;            /* smallest alpha */
   PetscInt   inner_max;            /* -solver_prox_inner_max: Newton steps per outer iteration */
   PetscInt   stall_steps;          /* -solver_newton_stall_steps: crawling steps that end an inner Newton */
-  PetscReal  extrapolate;          /* -solver_prox_extrapolate: largest factor of a proximal step's extrapolation */
   PetscReal  inner_rtol;           /* inner tolerance on |F|, relative to the natural residual times |r| */
   PetscReal  sigma;                /* this outer iteration's sigma (0 without the proximal term) */
   PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
   PetscBool  project;              /* -solver_newton_project: line search along the path projected on the cones */
   /* figures of the last solve */
-  PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians, stalls, extrapolations;
+  PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians, stalls;
   PetscReal linear_seconds, last_shift, merit;
 } Newton;
 
@@ -504,28 +503,6 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   PetscFunctionReturn(0);
 }
 
-/* Extrapolation of a proximal step: r = r_c + beta (r - r_c) for beta = 2, 4, ... up to -solver_prox_extrapolate,
-   kept while the natural residual falls. Where the solution lies far along W's near-kernel (a force network to
-   rearrange), each proximal step moves the same way by a few percent of the distance; the extrapolation covers that
-   distance at the cost of a product by W per trial instead of a Newton solve per outer iteration. */
-static PetscErrorCode Extrapolate(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *res)
-{
-  PetscFunctionBeginUser;
-  PetscCall(VecWAXPY(nt->d, -1.0, nt->rc, r)); /* the proximal step */
-  for (PetscReal beta = 2.0; beta <= nt->extrapolate; beta *= 2.0) {
-    PetscReal trial;
-    PetscCall(VecWAXPY(nt->rtry, beta, nt->d, nt->rc));
-    PetscCall(MatMultAdd(nt->Wfull, nt->rtry, vd, nt->utry));
-    PetscCall(NaturalResidual(s, nt, n, nc, nt->rtry, nt->utry, &trial));
-    if (!(trial < *res)) break;
-    PetscCall(VecCopy(nt->rtry, r));
-    PetscCall(VecCopy(nt->utry, u));
-    *res = trial;
-    nt->extrapolations++;
-  }
-  PetscFunctionReturn(0);
-}
-
 /* Mean W_nn over the active contacts: the scale of the proximal term. */
 static PetscErrorCode MeanCompliance(KergsSolver s, Newton *nt, PetscInt n, PetscReal *mean)
 {
@@ -568,8 +545,8 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, &u, &vd));
   PetscCall(VecGetSize(r, &nglobal));
   nc             = layout.ncomp;
-  nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = nt->sweeps = nt->outer = nt->jacobians = nt->stalls =
-      nt->extrapolations                                                                                             = 0;
+  nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = 0;
+  nt->sweeps = nt->outer = nt->jacobians = nt->stalls = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
@@ -594,12 +571,9 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
       PetscCall(VecCopy(nt->rc, r));
       PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
       res = before;
-    } else if (ok) { /* a proximal step: always taken */
-      if (res < before) {
-        alpha = PetscMax(alpha / 3.0, nt->alpha_min);
-        if (nt->extrapolate >= 2.0) PetscCall(Extrapolate(s, nt, n, nc, r, u, vd, &res));
-      }
-    } else if (res < 0.9 * before)
+    } else if (ok)
+      alpha = res < before ? PetscMax(alpha / 3.0, nt->alpha_min) : alpha; /* a proximal step: always taken */
+    else if (res < 0.9 * before)
       alpha *= 10.0; /* progress, but the proximal problem was not solved: more damping */
     else {           /* no progress: more damping, from the centre */
       alpha *= 10.0;
@@ -635,7 +609,6 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "outer_iterations", (PetscReal)nt->outer));
   PetscCall(KergsSolveStatsAdd(st, "jacobians", (PetscReal)nt->jacobians));
   PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
-  PetscCall(KergsSolveStatsAdd(st, "extrapolations", (PetscReal)nt->extrapolations));
   PetscFunctionReturn(0);
 }
 
@@ -666,10 +639,6 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_max", "Largest sigma / mean W_nn", "", nt->sigma_max, &nt->sigma_max, NULL));
   PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
-  PetscCall(
-      PetscOptionsReal("-solver_prox_extrapolate",
-                       "Extrapolate a solved proximal step by factors 2, 4, ... up to this while the natural residual falls (< 2: off)", "",
-                       nt->extrapolate, &nt->extrapolate, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_stall_steps",
                             "Newton steps in a row that each cut |F| by less than a tenth and end an outer iteration's Newton (0: never)",
                             "", nt->stall_steps, &nt->stall_steps, NULL));
@@ -769,7 +738,6 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->sigma_max      = 1.0;
   nt->inner_max      = 20;
   nt->stall_steps    = 3;
-  nt->extrapolate    = 64.0;
   nt->inner_rtol     = 0.1;
   PetscCall(CreateLinearSolver(s, nt));
   s->data               = nt;
