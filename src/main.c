@@ -37,10 +37,15 @@ static PetscBool IsPetscOption(const char *name)
                                    "use_gpu",
                                    "device",
                                    NULL};
+  /* a factorization package's options under any prefix (-solver_mat_mumps_icntl_7): read when the first matrix is
+     factored, inside the time loop, after the check */
+  static const char *packages[] = {"mat_mumps_", "mat_cholmod_", "mat_umfpack_", "mat_klu_", "mat_superlu_", NULL};
   for (PetscInt i = 0; prefixes[i]; i++) {
     size_t n = strlen(prefixes[i]);
     if (!strncmp(name, prefixes[i], n) && (prefixes[i][n - 1] == '_' || name[n] == '\0' || name[n] == '_')) return PETSC_TRUE;
   }
+  for (PetscInt i = 0; packages[i]; i++)
+    if (strstr(name, packages[i])) return PETSC_TRUE;
   return PETSC_FALSE;
 }
 
