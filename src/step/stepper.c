@@ -42,8 +42,10 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                              st->rest_speed, &st->rest_speed, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
-  PetscCall(PetscOptionsInt("-fclib_step", "Export the local problem of this step in FCLib format (-1: none)", "", st->fclib_step,
-                            &st->fclib_step, NULL));
+  PetscCall(PetscOptionsInt("-fclib_step",
+                            "Export in FCLib format the local problem solved in this step, numbered as the step lines (1: the first step; "
+                            "-1: none)",
+                            "", st->fclib_step, &st->fclib_step, NULL));
   PetscCall(
       PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path), NULL));
   PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair",
@@ -57,6 +59,9 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscOptionsEnd();
   PetscCheck(st->rest_speed >= 0 && !PetscIsInfOrNanReal(st->rest_speed), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-stop_at_rest %g must be a non-negative speed", (double)st->rest_speed);
+  PetscCheck(st->fclib_step == -1 || st->fclib_step >= 1, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-fclib_step %" PetscInt_FMT " must be a step number (1 is the first step, as in the step lines) or -1 for none",
+             st->fclib_step);
   PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative",
              (double)st->overlap_tol);
   if (st->fclib_step >= 0 && !st->fclib_path[0])
@@ -145,7 +150,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(PetscTime(&t2));
   PetscCall(KergsSolverSolve(st->solver, sc, st->contacts, st->ops, &ss));
   PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
-  if (step == st->fclib_step) {
+  if (step + 1 == st->fclib_step) { /* the step that the line "step N" reports: N = step + 1 */
     const PetscBool *active;
     PetscCall(KergsSolverGetActive(st->solver, &active));
     PetscCall(KergsFCLibExport(sc, st->contacts, st->ops, active, st->fclib_path));
@@ -213,7 +218,7 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   PetscCall(KergsResultsGetPath(st->results, &path, &enabled));
   if (enabled) PetscCall(PetscPrintf(st->comm, "kergs: results in %s\n", path));
   if (st->sample_out[0]) PetscCall(PetscPrintf(st->comm, "kergs: sample in %s\n", st->sample_out));
-  if (st->fclib_step >= 0 && st->fclib_step < step)
+  if (st->fclib_step >= 1 && st->fclib_step <= step)
     PetscCall(PetscPrintf(st->comm, "kergs: FCLib problem of step %" PetscInt_FMT " in %s\n", st->fclib_step, st->fclib_path));
   PetscFunctionReturn(0);
 }
