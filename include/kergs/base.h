@@ -26,6 +26,13 @@ PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
    share one binary representation. */
 PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const PetscMPIInt sendcount[], const void *send,
                                                  PetscMPIInt recvcount[], void *recv, PetscInt *nrecv);
+/* Counts and indices are PetscInt, 32-bit in this build: PETSc's options parser wraps a larger value silently
+   (-steps 10000000000 becomes 1410065408). Call after the option was read: every comma-separated number given to
+   option `name` (under prefix, may be NULL) must fit in PetscInt, otherwise an error on comm names the option and the
+   largest value allowed. Options that are not given, and values that are not numbers, pass. */
+PETSC_EXTERN PetscErrorCode KergsOptionsCheckInt(MPI_Comm, const char prefix[], const char name[]);
+/* The largest number of disks this build can hold: KERGS_DIM values per disk must be indexable by PetscInt. */
+#define KERGS_MAX_DISKS (PETSC_MAX_INT / KERGS_DIM)
 /* Let the C library return freed blocks to the system (glibc: large blocks mapped on their own, heap tops trimmed),
    undoing a process-wide setting of a library PETSc loads; no-op elsewhere. Call it once, first thing in main. */
 PETSC_EXTERN void KergsReturnFreedMemory(void);

@@ -133,6 +133,7 @@ PetscErrorCode KergsResultsSetFromOptions(KergsResults res)
                             res->snapshot_every, &res->snapshot_every, NULL));
   PetscCall(PetscOptionsBool("-output_none", "Write no results file", "KergsResultsSetFromOptions", none, &none, NULL));
   PetscOptionsEnd();
+  PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_every"));
   PetscCheck(res->snapshot_every >= 0, res->comm, PETSC_ERR_ARG_OUTOFRANGE, "Option -output_every must be >= 0, got %" PetscInt_FMT,
              res->snapshot_every);
   PetscCheck(!set || path[0], res->comm, PETSC_ERR_ARG_WRONG, "Option -output needs a file name (use -output_none for no results file)");

@@ -80,6 +80,8 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
   PetscCall(PetscOptionsInt("-partition_metis_seed", "Seed of METIS's random choices (fixed: reproducible partitions)", "", p->metis_seed,
                             &p->metis_seed, NULL));
   PetscOptionsEnd();
+  PetscCall(KergsOptionsCheckInt(p->comm, NULL, "-partition_check_every"));
+  PetscCall(KergsOptionsCheckInt(p->comm, NULL, "-partition_metis_seed"));
   PetscCheck(p->imbalance_tol >= 1.0 && !PetscIsInfOrNanReal(p->imbalance_tol), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-partition_imbalance_tol %g must be at least 1 (max work / mean work)", (double)p->imbalance_tol);
   PetscCheck(p->edgecut_growth > 0.0 && !PetscIsInfOrNanReal(p->edgecut_growth), p->comm, PETSC_ERR_ARG_OUTOFRANGE,

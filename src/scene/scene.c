@@ -477,6 +477,7 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-gravity", "Gravity acceleration gx,gy (m/s^2)", scene->gravity, NULL));
   PetscCall(PetscOptionsReal("-dt", "Time step (s)", NULL, scene->dt, &scene->dt, NULL));
   PetscCall(PetscOptionsInt("-steps", "Number of time steps", NULL, scene->nsteps, &scene->nsteps, NULL));
+  PetscCall(KergsOptionsCheckInt(scene->comm, NULL, "-steps"));
   PetscCall(PetscOptionsReal("-theta", "Theta of the theta-method, in (0,1] (Algorithm 1)", NULL, scene->theta, &scene->theta, NULL));
   PetscCall(PetscOptionsBool("-disks_lock_rotation", "Disks translate only: no rotational DOFs even with friction (sliding blocks)", NULL,
                              scene->lock_rotation, &scene->lock_rotation, NULL));
@@ -501,6 +502,7 @@ static PetscErrorCode SceneMaterialOptions(PetscOptionItems *PetscOptionsObject,
 
   PetscFunctionBeginUser;
   PetscCall(PetscOptionsInt("-materials", "Number of materials", NULL, nm, &nm, &set));
+  PetscCall(KergsOptionsCheckInt(PetscOptionsObject->comm, NULL, "-materials"));
   PetscCheck(nm >= 1, PetscOptionsObject->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s: -materials %" PetscInt_FMT " must be at least 1", pre, nm);
   PetscCall(KergsOptionsRealList(PetscOptionsObject, "-material_density",
                                  "Density of each material, d0,d1,... (mass per unit area, default 1)", &nd, &dens, NULL));
@@ -622,6 +624,7 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
   PetscCall(
       PetscOptionsBool("-infinite", "Infinite line through a and b instead of the segment [a,b]", NULL, w->infinite, &w->infinite, NULL));
   PetscCall(PetscOptionsInt("-material", "Material index of the wall", NULL, w->material, &w->material, NULL));
+  PetscCall(KergsOptionsCheckInt(scene->comm, prefix, "-material"));
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-velocity",
                                "Constant velocity vx,vy of a driven wall, or initial velocity of a free wall", vel, &vset));
   PetscCall(KergsOptionsRealList(PetscOptionsObject, "-program",

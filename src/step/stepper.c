@@ -25,12 +25,33 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   PetscFunctionReturn(0);
 }
 
+/* The integer options of the solver types (read in src/solver/), checked for 32-bit overflow here, next to the time
+   loop's own; the other components check theirs where they read them (KergsOptionsCheckInt). */
+static PetscErrorCode CheckSolverIntegerOptions(MPI_Comm comm)
+{
+  static const char *names[] = {"-solver_max_it",
+                                "-predictor_unilateral_max_it",
+                                "-kernel_diag_batch",
+                                "-solver_omega_power_its",
+                                "-solver_nlkergs_max_size",
+                                "-solver_newton_max_backtracks",
+                                "-solver_newton_sweeps",
+                                "-solver_prox_inner_max",
+                                "-solver_newton_max_sweeps",
+                                NULL};
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; names[i]; i++) PetscCall(KergsOptionsCheckInt(comm, NULL, names[i]));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
 {
   const char *name;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneSetFromOptions(st->scene));
+  PetscCall(CheckSolverIntegerOptions(st->comm)); /* before the solver reads them: a wrapped count is never used */
   PetscCall(KergsSolverSetFromOptions(st->solver));
   PetscCall(KergsSceneGetName(st->scene, &name));
   PetscCall(KergsResultsSetSceneName(st->results, name)); /* default -output: results/<scene>.h5 */
@@ -57,6 +78,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
       "update, so that the peak memory is the larger of H and W, not their sum; solvers that use H keep it anyway)",
       "", st->keep_H, &st->keep_H, NULL));
   PetscOptionsEnd();
+  PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-fclib_step"));
   PetscCheck(st->rest_speed >= 0 && !PetscIsInfOrNanReal(st->rest_speed), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-stop_at_rest %g must be a non-negative speed", (double)st->rest_speed);
   PetscCheck(st->fclib_step == -1 || st->fclib_step >= 1, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
