@@ -1,8 +1,10 @@
 /* kergs: log events of the phases of a step, registered once, the personalised exchange of records, and the
    allocator's policy. */
 #include <kergs/base.h>
+#include <kergs/version.h> /* generated at build time (cmake/version.cmake) */
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -102,5 +104,38 @@ PetscErrorCode KergsOptionsCheckInt(MPI_Comm comm, const char prefix[], const ch
                "Option -%s%s: %s is out of the range of this build's integers (PetscInt is %d-bit: at most %" PetscInt_FMT ")",
                prefix ? prefix : "", name + 1, token, (int)(8 * sizeof(PetscInt)), (PetscInt)PETSC_MAX_INT);
   }
+  PetscFunctionReturn(0);
+}
+
+const char *KergsGetVersion(void) { return KERGS_VERSION; }
+
+PetscErrorCode KergsProvenanceGet(MPI_Comm comm, KergsProvenance *p)
+{
+  PetscMPIInt rank;
+  int         len = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMemzero(p, sizeof(*p)));
+  p->version = KERGS_VERSION;
+  PetscCallMPI(MPI_Comm_size(comm, &p->ranks));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    const time_t now = time(NULL);
+    struct tm    utc;
+    if (!gmtime_r(&now, &utc) || !strftime(p->date, sizeof(p->date), "%Y-%m-%dT%H:%M:%SZ", &utc)) PetscCall(PetscStrcpy(p->date, "unknown"));
+    PetscCall(PetscOptionsGetAll(NULL, &p->options));
+    len = (int)strlen(p->options) + 1;
+  }
+  PetscCallMPI(MPI_Bcast(p->date, (int)sizeof(p->date), MPI_CHAR, 0, comm));
+  PetscCallMPI(MPI_Bcast(&len, 1, MPI_INT, 0, comm));
+  if (rank != 0) PetscCall(PetscMalloc1(len, &p->options));
+  PetscCallMPI(MPI_Bcast(p->options, len, MPI_CHAR, 0, comm));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsProvenanceDestroy(KergsProvenance *p)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(p->options));
   PetscFunctionReturn(0);
 }

@@ -33,6 +33,18 @@ PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const Pe
 PETSC_EXTERN PetscErrorCode KergsOptionsCheckInt(MPI_Comm, const char prefix[], const char name[]);
 /* The largest number of disks this build can hold: KERGS_DIM values per disk must be indexable by PetscInt. */
 #define KERGS_MAX_DISKS (PETSC_MAX_INT / KERGS_DIM)
+/* Provenance of a run, as the output files record it (docs/results.md): the version of the sources, captured at build
+   time (git describe; "unknown" outside a git checkout), the date (UTC, ISO 8601), the number of ranks and the whole
+   options database as text. Collective: the date and the options are rank 0's, the same on every rank. */
+typedef struct {
+  const char *version;
+  char        date[32];
+  PetscMPIInt ranks;
+  char       *options; /* PetscOptionsGetAll's text; freed by KergsProvenanceDestroy */
+} KergsProvenance;
+PETSC_EXTERN PetscErrorCode KergsProvenanceGet(MPI_Comm, KergsProvenance *);
+PETSC_EXTERN PetscErrorCode KergsProvenanceDestroy(KergsProvenance *);
+PETSC_EXTERN const char    *KergsGetVersion(void);
 /* Let the C library return freed blocks to the system (glibc: large blocks mapped on their own, heap tops trimmed),
    undoing a process-wide setting of a library PETSc loads; no-op elsewhere. Call it once, first thing in main. */
 PETSC_EXTERN void KergsReturnFreedMemory(void);
