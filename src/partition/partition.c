@@ -99,6 +99,50 @@ PetscErrorCode KergsPartitionDestroy(KergsPartition *p)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsPartitionGetState(KergsPartition p, KergsPartitionState *s)
+{
+  PetscFunctionBeginUser;
+  s->initialized     = p->initialized;
+  s->provisional     = p->provisional;
+  s->edgecut_base    = p->edgecut_base;
+  s->nrepartitions   = p->nrepartitions;
+  s->nmoved          = p->nmoved;
+  s->last_method     = p->last_method;
+  s->imbalance_base  = p->imbalance_base;
+  s->compute_seconds = p->compute_seconds;
+  s->work_scale      = p->work_scale;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionSetState(KergsPartition p, const KergsPartitionState *s)
+{
+  PetscFunctionBeginUser;
+  if (!s) { /* as KergsPartitionCreate leaves it */
+    p->initialized     = PETSC_FALSE;
+    p->provisional     = PETSC_FALSE;
+    p->edgecut_base    = -1;
+    p->nrepartitions   = 0;
+    p->nmoved          = 0;
+    p->last_method     = KERGS_PARTITION_CONTIGUOUS;
+    p->imbalance_base  = 1.0;
+    p->compute_seconds = 0.0;
+    p->work_scale      = 1.0;
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(s->last_method >= KERGS_PARTITION_CONTIGUOUS && s->last_method <= KERGS_PARTITION_METIS, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Partition state: unknown method %" PetscInt_FMT, s->last_method);
+  p->initialized     = s->initialized;
+  p->provisional     = s->provisional;
+  p->edgecut_base    = s->edgecut_base;
+  p->nrepartitions   = s->nrepartitions;
+  p->nmoved          = s->nmoved;
+  p->last_method     = s->last_method;
+  p->imbalance_base  = s->imbalance_base;
+  p->compute_seconds = s->compute_seconds;
+  p->work_scale      = s->work_scale;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsPartitionView(KergsPartition p, PetscViewer viewer)
 {
   PetscFunctionBeginUser;

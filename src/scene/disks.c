@@ -243,6 +243,7 @@ PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
   o.lattice_type = LATTICE_SQUARE;
   o.random_seed  = 1;
   PetscCall(DiskOptionsRead(scene->comm, &o));
+  if (scene->restoring) o.source = -1; /* read (for -help and the unused-option check), but the checkpoint holds the disks */
   switch ((DiskSource)o.source) {
   case DISKS_LIST:
     PetscCall(DisksFromList(scene, &o));
@@ -255,6 +256,8 @@ PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
     break;
   case DISKS_FILE:
     PetscCall(DisksFromFile(scene, &o));
+    break;
+  default:
     break;
   }
   PetscCall(DiskOptionsDestroy(&o));

@@ -434,6 +434,73 @@ PetscErrorCode KergsSceneGetModel(KergsScene scene, PetscBool *frictional, Petsc
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsSceneSetRestoring(KergsScene scene, PetscBool restoring)
+{
+  PetscFunctionBeginUser;
+  scene->restoring = restoring;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneRestoreDisks(KergsScene scene, PetscInt ndisks, PetscInt nowned, const PetscInt id[], const PetscInt material[],
+                                      const PetscReal x[], const PetscReal rot[], const PetscReal v[], const PetscReal omega[],
+                                      const PetscReal radius[])
+{
+  PetscInt end, total;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Scan(&nowned, &end, 1, MPIU_INT, MPI_SUM, scene->comm));
+  PetscCall(MPIU_Allreduce(&nowned, &total, 1, MPIU_INT, MPI_SUM, scene->comm));
+  PetscCheck(total == ndisks, scene->comm, PETSC_ERR_ARG_SIZ, "Scene %s: the ranks restore %" PetscInt_FMT " disks, not %" PetscInt_FMT,
+             scene->name, total, ndisks);
+  PetscCall(SceneFreeDisks(scene));
+  scene->ndisks = ndisks;
+  scene->dstart = end - nowned;
+  scene->dend   = end;
+  scene->nowned = scene->nlocal = nowned;
+  PetscCall(KergsSceneReserve(scene, PetscMax(nowned, 1)));
+  for (PetscInt i = 0; i < nowned; i++) {
+    scene->gidx[i]     = scene->dstart + i;
+    scene->id[i]       = id[i];
+    scene->material[i] = material[i];
+    scene->radius[i]   = radius[i];
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      scene->x[KERGS_DIM * i + d] = x[KERGS_DIM * i + d];
+      scene->v[KERGS_DIM * i + d] = v[KERGS_DIM * i + d];
+    }
+    for (PetscInt d = 0; d < KERGS_NROT; d++) {
+      scene->rot[KERGS_NROT * i + d]   = rot[KERGS_NROT * i + d];
+      scene->omega[KERGS_NROT * i + d] = omega[KERGS_NROT * i + d];
+    }
+  }
+  PetscCall(SceneComputeMasses(scene)); /* the formula of KergsSceneSetDisks: the same bits as the checkpointed run's */
+  PetscCall(SceneUpdateFrictional(scene));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneRestoreState(KergsScene scene, PetscInt step, PetscReal time, PetscReal alert)
+{
+  PetscFunctionBeginUser;
+  scene->step  = step;
+  scene->time  = time;
+  scene->alert = alert;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneRestoreWall(KergsScene scene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
+                                     const PetscReal disp[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(w >= 0 && w < scene->nwalls, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    scene->walls[w].a[d]    = a[d];
+    scene->walls[w].b[d]    = b[d];
+    scene->walls[w].v[d]    = v[d];
+    scene->walls[w].disp[d] = disp[d];
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSceneSetWallVelocity(KergsScene scene, PetscInt w, const PetscReal v[])
 {
   PetscFunctionBeginUser;
@@ -726,7 +793,8 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
   }
   PetscCall(SceneUpdateFrictional(scene));
   PetscCall(PetscOptionsHasHelp(NULL, &help));
-  if (!help) PetscCall(KergsSceneCheck(scene)); /* -help alone lists the options of an empty scene */
+  /* -help alone lists the options of an empty scene; a restored scene is checked once its state is in place */
+  if (!help && !scene->restoring) PetscCall(KergsSceneCheck(scene));
   PetscFunctionReturn(0);
 }
 
