@@ -13,6 +13,7 @@ PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Upda
 PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
 
 static PetscBool PackageInitialized = PETSC_FALSE;
+static char     *RunOptions         = NULL; /* KergsProvenanceSetOptions: the options of the run as given (rank 0) */
 
 /* At PetscFinalize: PETSc may be initialized again in the same process (the tests do), and the events then need
    registering again. */
@@ -20,6 +21,7 @@ static PetscErrorCode FinalizePackage(void)
 {
   PetscFunctionBeginUser;
   PackageInitialized = PETSC_FALSE;
+  PetscCall(PetscFree(RunOptions));
   PetscFunctionReturn(0);
 }
 
@@ -122,8 +124,12 @@ PetscErrorCode KergsProvenanceGet(MPI_Comm comm, KergsProvenance *p)
   if (rank == 0) {
     const time_t now = time(NULL);
     struct tm    utc;
-    if (!gmtime_r(&now, &utc) || !strftime(p->date, sizeof(p->date), "%Y-%m-%dT%H:%M:%SZ", &utc)) PetscCall(PetscStrcpy(p->date, "unknown"));
-    PetscCall(PetscOptionsGetAll(NULL, &p->options));
+    if (!gmtime_r(&now, &utc) || !strftime(p->date, sizeof(p->date), "%Y-%m-%dT%H:%M:%SZ", &utc))
+      PetscCall(PetscStrcpy(p->date, "unknown"));
+    if (RunOptions)
+      PetscCall(PetscStrallocpy(RunOptions, &p->options));
+    else
+      PetscCall(PetscOptionsGetAll(NULL, &p->options));
     len = (int)strlen(p->options) + 1;
   }
   PetscCallMPI(MPI_Bcast(p->date, (int)sizeof(p->date), MPI_CHAR, 0, comm));
@@ -137,5 +143,17 @@ PetscErrorCode KergsProvenanceDestroy(KergsProvenance *p)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscFree(p->options));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsProvenanceSetOptions(MPI_Comm comm)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsInitializePackage()); /* its finalizer frees the copy */
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCall(PetscFree(RunOptions));
+  if (rank == 0) PetscCall(PetscOptionsGetAll(NULL, &RunOptions));
   PetscFunctionReturn(0);
 }

@@ -43,6 +43,10 @@ typedef struct {
   char       *options; /* PetscOptionsGetAll's text; freed by KergsProvenanceDestroy */
 } KergsProvenance;
 PETSC_EXTERN PetscErrorCode KergsProvenanceGet(MPI_Comm, KergsProvenance *);
+/* Collective: the options of the run as they stand now (rank 0's), reported by every later KergsProvenanceGet instead of
+   the database's current state, into which components add their own settings as they set up (the stepper calls it
+   once all options are known, before the run). */
+PETSC_EXTERN PetscErrorCode KergsProvenanceSetOptions(MPI_Comm);
 PETSC_EXTERN PetscErrorCode KergsProvenanceDestroy(KergsProvenance *);
 PETSC_EXTERN const char    *KergsGetVersion(void);
 /* Let the C library return freed blocks to the system (glibc: large blocks mapped on their own, heap tops trimmed),
