@@ -126,8 +126,8 @@ int main(int argc, char **argv)
   if (ierr) return KERGS_EXIT_ERROR;
   ierr = Run(argc, args, &status);
   if (ierr) {
-    /* the error was printed where it arose; every rank ends with the documented status, whatever rank failed */
-    (void)PetscError(PETSC_COMM_SELF, __LINE__, "main", __FILE__, ierr, PETSC_ERROR_REPEAT, " ");
+    /* the error was printed where it arose; every rank ends with the documented status, whatever rank failed (a rank
+       waiting in a collective call is ended too) */
     MPI_Abort(PETSC_COMM_WORLD, KERGS_EXIT_ERROR);
     return KERGS_EXIT_ERROR;
   }

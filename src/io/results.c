@@ -79,8 +79,8 @@ PetscErrorCode KergsResultsSetFromOptions(KergsResults res)
                             "Write the statistics to the results file and flush it to disk every N steps (0: not by steps); a killed "
                             "run's <path>.tmp holds every flushed step",
                             "KergsResultsFlush", res->flush_every, &res->flush_every, NULL));
-  PetscCall(PetscOptionsReal("-output_flush_seconds", "... and at least every T seconds of wall time (0: not by time)", "KergsResultsFlush",
-                             res->flush_seconds, &res->flush_seconds, NULL));
+  PetscCall(PetscOptionsReal("-output_flush_seconds", "Also flush the results file to disk every T seconds of wall time (0: not by time)",
+                             "KergsResultsFlush", res->flush_seconds, &res->flush_seconds, NULL));
   PetscOptionsEnd();
   PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_every"));
   PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_flush_every"));
