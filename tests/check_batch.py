@@ -109,6 +109,11 @@ def test_restart(k):
     p2 = k.run(2, "-restart", k.path("B.checkpoint.h5"), "-steps", 20, "-malloc_debug", "-malloc_dump", log="B2.log")
     leaks = [line for line in (p2.stdout + p2.stderr).splitlines() if " bytes " in line and "]" in line]
     check(p2.returncode == 0 and not leaks, "restart: -restart FILE -steps 20 continues to step 20 (exit status 0, nothing leaked) " + " ".join(leaks[:2]))
+    _, a_attrs, _ = stats(k.path("A.h5"))
+    date = a_attrs.get("date", b"").decode()
+    check(a_attrs.get("kergs_version", b"") not in (b"",) and a_attrs.get("ranks") == 2 and b"-steps 20" in a_attrs.get("options", b"")
+          and len(date) == 20 and date[4] == "-" and date.endswith("Z"),
+          f"provenance: root attributes kergs_version ({a_attrs.get('kergs_version')}), options, ranks (2), date ({date})")
     rc, out = compare(k.path("A.h5"), k.path("B.h5"))
     check(rc == 0, "restart: 10 + 10 steps on 2 ranks give the 20-step run bit for bit (snapshots, statistics) " + out[:300])
     s, attrs, snaps = stats(k.path("B.h5"))
