@@ -3,6 +3,9 @@ kergs_bad_input(steps_overflow "Option .steps: 10000000000 is out of the range" 
 kergs_bad_input(lattice_overflow "lattice_n 65536,65537 asks for 4295032832 disks"
                 -options_file cases/confine5.opts -disks_source lattice -lattice_n 65536,65537 -lattice_radius 0.1)
 kergs_bad_input(solver_count_overflow "Option .solver_max_it: 3000000000 is out of the range" -options_file cases/confine5.opts -solver_max_it 3000000000)
+# the solver types' integer options are checked from the stepper (src/solver/ stays untouched): none may be missing
+add_test(NAME int_options COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/check_int_options.sh WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(int_options PROPERTIES LABELS layout TIMEOUT 60)
 
 # tests/check_batch.py drives the kergs executable through mpiexec and reads the files with h5py (Debian's python3):
 # restart (bit for bit on 2 ranks, 2 -> 1 and 1 -> 2 to the solver's tolerance), signals (SIGTERM, SIGINT to the ranks,
