@@ -16,6 +16,7 @@ TEST is one of:
   enospc    a full file system (a 200 KB tmpfs; skipped when it cannot be mounted): "No space left on device", the
             file named, the partial .tmp removed
   fclib     -fclib_step N exports the problem solved in the step whose line says "step N"
+  statuses  exit statuses 0, 2 (blow-up), 3 (-error_on_nonconvergence on the infeasible straight row); progress lines
 Exit status 0 when every check holds, 1 otherwise, 77 when the test cannot run here (skipped)."""
 import argparse
 import hashlib
@@ -274,6 +275,27 @@ def test_enospc(k):
     return 0
 
 
+def test_statuses(k):
+    straight = os.path.join(ROOT, "cases", "confine5_straight.opts")
+    p = k.run(1, "-options_file", straight, "-steps", 3, "-quiet", "-output_none", log="straight.log")
+    check(p.returncode == 0 and " 0 not converged" not in p.stdout,
+          f"statuses: the infeasible straight row has steps that do not converge, exit status 0 by default (got {p.returncode})")
+    p = k.run(1, "-options_file", straight, "-steps", 3, "-quiet", "-output_none", "-error_on_nonconvergence", log="straight-error.log")
+    check(p.returncode == 3 and "exit status 3" in p.stdout, f"statuses: ... and 3 with -error_on_nonconvergence (got {p.returncode})")
+    p = k.run(1, "-options_file", CONFINE5, "-steps", 3, "-quiet", "-output_none", "-error_on_nonconvergence", log="done.log")
+    check(p.returncode == 0 and " 0 not converged" in p.stdout, f"statuses: a converged run with -error_on_nonconvergence exits 0 (got {p.returncode})")
+    out = k.path("blowup.h5")
+    p = k.run(2, "-options_file", CONFINE5, "-gravity", "0,1e308", "-dt", 10, "-steps", 5, "-quiet", "-output", out, log="blowup.log")
+    _, attrs, snaps = stats(out)
+    check(p.returncode == 2 and "blow-up after step 1: grain" in p.stdout and attrs.get("end") == b"blow-up: non-finite state" and len(snaps) == 2,
+          f"statuses: a blow-up (gravity 1e308) stops after step 1 naming the grain, exit status 2, the results file closed (got {p.returncode})")
+    p = k.run(2, "-options_file", CONFINE5, "-steps", "2", "-quiet", "-output_none", "-progress_every", 1, log="progress.log")
+    lines = [line for line in p.stdout.splitlines() if line.startswith("progress: step")]
+    fields = ("step 2/2", " t ", " contacts ", " sweeps ", " residual ", " max interpenetration ", " s/step, ", " to the end")
+    check(len(lines) == 2 and all(f in lines[-1] for f in fields),
+          "statuses: -progress_every 1 prints step, time, contacts, sweeps, residual, interpenetration, s/step, time to the end")
+
+
 def test_fclib(k):
     out, fc = k.path("fc.h5"), k.path("fc.fclib.h5")
     p = k.run(1, "-options_file", CONFINE5, "-steps", 6, "-output", out, "-output_every", 1, "-fclib_step", 4, "-fclib_output", fc,
@@ -294,7 +316,7 @@ def test_fclib(k):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("test", choices=["restart", "signals", "kill", "paths", "enospc", "fclib"])
+    ap.add_argument("test", choices=["restart", "signals", "kill", "paths", "enospc", "fclib", "statuses"])
     ap.add_argument("--kergs", required=True)
     ap.add_argument("--mpiexec", default="mpiexec")
     ap.add_argument("--dir", required=True)
