@@ -36,7 +36,7 @@ PetscErrorCode KergsResultsCreate(MPI_Comm comm, KergsResults *res)
   (*res)->enabled            = PETSC_TRUE;
   (*res)->snapshot_every     = 0;
   (*res)->last_snapshot_step = -1;
-  (*res)->flush_every        = 100;
+  (*res)->flush_every        = 1000;
   (*res)->flush_seconds      = 5.0;
   PetscFunctionReturn(0);
 }
