@@ -234,6 +234,16 @@ static herr_t CollectName(hid_t group, const char *name, const LinkInfo *info, v
   return 0;
 }
 
+/* H5Literate callback: counts the links of a group. */
+static herr_t CountLinks(hid_t group, const char *name, const LinkInfo *info, void *ctx)
+{
+  (void)group;
+  (void)name;
+  (void)info;
+  (*(hsize_t *)ctx)++;
+  return 0;
+}
+
 /* The file continues: its /stats cut to the checkpoint's rows and adopted as the columns, later snapshots dropped. */
 static PetscErrorCode TrimToCheckpoint(KergsResults res)
 {
@@ -267,8 +277,19 @@ static PetscErrorCode TrimToCheckpoint(KergsResults res)
     }
     CallHDF5(H5Gclose(group));
   }
-  PetscCall(PetscViewerHDF5ReadAttribute(res->viewer, "/", "nsnapshots", PETSC_INT, NULL, &filesnap));
-  for (PetscInt k = st->nsnapshots; k < filesnap; k++) {
+  /* every group from the checkpoint's count on: later snapshots, and one a kill interrupted (beyond the attribute) */
+  has = H5Lexists(file, "/snapshots", H5P_DEFAULT);
+  CallHDF5(has);
+  if (has > 0) {
+    hsize_t count = 0;
+    idx           = 0;
+    group         = H5Gopen2(file, "/snapshots", H5P_DEFAULT);
+    CallHDF5(group);
+    CallHDF5(H5Literate(group, H5_INDEX_NAME, H5_ITER_INC, &idx, CountLinks, &count));
+    CallHDF5(H5Gclose(group));
+    filesnap = (PetscInt)count;
+  }
+  for (PetscInt k = st->nsnapshots; k < filesnap + 1; k++) { /* names are 0 .. count - 1 unless one is missing: one more */
     PetscCall(PetscSNPrintf(name, sizeof(name), "/snapshots/%06" PetscInt_FMT, k));
     has = H5Lexists(file, name, H5P_DEFAULT);
     if (has > 0) CallHDF5(H5Ldelete(file, name, H5P_DEFAULT));
