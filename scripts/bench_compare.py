@@ -20,7 +20,7 @@ a = ap.parse_args()
 
 with h5py.File(a.results, "r") as f:
     s = {k: np.asarray(f["stats"][k][()]).ravel() for k in f["stats"].keys()}
-row = a.step  # the stats row of a step: the solve of step K is recorded in row K
+row = a.step - 1  # -fclib_step K exports the solve of the step whose line says "step K", recorded in stats row K - 1
 kergs_sweeps = int(s["iterations"][row])
 kergs_sps = float(s["sweep_seconds"][row]) / max(kergs_sweeps, 1)
 sweeps = a.sweeps or max(kergs_sweeps, 20)

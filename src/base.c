@@ -1,6 +1,10 @@
 /* kergs: log events of the phases of a step, registered once, the personalised exchange of records, and the
    allocator's policy. */
 #include <kergs/base.h>
+#include <kergs/version.h> /* generated at build time (cmake/version.cmake) */
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -9,6 +13,7 @@ PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Upda
 PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
 
 static PetscBool PackageInitialized = PETSC_FALSE;
+static char     *RunOptions         = NULL; /* KergsProvenanceSetOptions: the options of the run as given (rank 0) */
 
 /* At PetscFinalize: PETSc may be initialized again in the same process (the tests do), and the events then need
    registering again. */
@@ -16,6 +21,7 @@ static PetscErrorCode FinalizePackage(void)
 {
   PetscFunctionBeginUser;
   PackageInitialized = PETSC_FALSE;
+  PetscCall(PetscFree(RunOptions));
   PetscFunctionReturn(0);
 }
 
@@ -82,4 +88,72 @@ void KergsReturnFreedMemory(void)
   (void)mallopt(M_MMAP_THRESHOLD, 128 * 1024);
   (void)mallopt(M_TRIM_THRESHOLD, 128 * 1024);
 #endif
+}
+
+PetscErrorCode KergsOptionsCheckInt(MPI_Comm comm, const char prefix[], const char name[])
+{
+  char      value[4096], *token, *save = NULL;
+  PetscBool set;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsGetString(NULL, prefix, name, value, sizeof(value), &set));
+  if (!set) PetscFunctionReturn(0);
+  for (token = strtok_r(value, ",", &save); token; token = strtok_r(NULL, ",", &save)) {
+    char  *end;
+    double v = strtod(token, &end);
+    if (end == token || *end) continue; /* not a number: PETSc's parser reports it */
+    PetscCheck(v <= (double)PETSC_MAX_INT && v >= (double)PETSC_MIN_INT, comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Option -%s%s: %s is out of the range of this build's integers (PetscInt is %d-bit: at most %" PetscInt_FMT ")",
+               prefix ? prefix : "", name + 1, token, (int)(8 * sizeof(PetscInt)), (PetscInt)PETSC_MAX_INT);
+  }
+  PetscFunctionReturn(0);
+}
+
+const char *KergsGetVersion(void) { return KERGS_VERSION; }
+
+PetscErrorCode KergsProvenanceGet(MPI_Comm comm, KergsProvenance *p)
+{
+  PetscMPIInt rank;
+  int         len = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMemzero(p, sizeof(*p)));
+  p->version = KERGS_VERSION;
+  PetscCallMPI(MPI_Comm_size(comm, &p->ranks));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    const time_t now = time(NULL);
+    struct tm    utc;
+    if (!gmtime_r(&now, &utc) || !strftime(p->date, sizeof(p->date), "%Y-%m-%dT%H:%M:%SZ", &utc))
+      PetscCall(PetscStrcpy(p->date, "unknown"));
+    if (RunOptions)
+      PetscCall(PetscStrallocpy(RunOptions, &p->options));
+    else
+      PetscCall(PetscOptionsGetAll(NULL, &p->options));
+    len = (int)strlen(p->options) + 1;
+  }
+  PetscCallMPI(MPI_Bcast(p->date, (int)sizeof(p->date), MPI_CHAR, 0, comm));
+  PetscCallMPI(MPI_Bcast(&len, 1, MPI_INT, 0, comm));
+  if (rank != 0) PetscCall(PetscMalloc1(len, &p->options));
+  PetscCallMPI(MPI_Bcast(p->options, len, MPI_CHAR, 0, comm));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsProvenanceDestroy(KergsProvenance *p)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(p->options));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsProvenanceSetOptions(MPI_Comm comm)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsInitializePackage()); /* its finalizer frees the copy */
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCall(PetscFree(RunOptions));
+  if (rank == 0) PetscCall(PetscOptionsGetAll(NULL, &RunOptions));
+  PetscFunctionReturn(0);
 }

@@ -70,18 +70,35 @@ static PetscErrorCode CheckUnusedOptions(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
-int main(int argc, char **argv)
+/* The -options_file arguments of the command line: PETSc reads those files into the options database and forgets their
+   names, which the checks of the run's paths need (no output may replace an input). */
+static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **argv)
+{
+  PetscFunctionBeginUser;
+  for (int i = 1; i + 1 < argc; i++) {
+    PetscBool same;
+    PetscCall(PetscStrcmp(argv[i], "-options_file", &same));
+    if (same) PetscCall(KergsStepperAddInput(stepper, "-options_file", argv[i + 1]));
+  }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
 {
   KergsStepper stepper;
   KergsScene   scene;
   KergsSolver  solver;
-  PetscBool    want_help = PETSC_FALSE;
+  PetscBool    want_help = PETSC_FALSE, restart;
+  char         checkpoint[PETSC_MAX_PATH_LEN];
 
-  KergsReturnFreedMemory(); /* peak resident memory = peak of live data (base.h) */
-  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
   PetscCall(PetscOptionsHasHelp(NULL, &want_help));
+  /* a restart: the checkpointed run's options enter the database before anything reads it (the command line wins) */
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-restart", checkpoint, sizeof(checkpoint), &restart));
+  if (restart && !want_help) PetscCall(KergsCheckpointLoadOptions(PETSC_COMM_WORLD, checkpoint));
   PetscCall(KergsStepperCreate(PETSC_COMM_WORLD, &stepper));
+  PetscCall(AddOptionsFiles(stepper, argc, argv));
   PetscCall(KergsStepperSetFromOptions(stepper));
   PetscCall(KergsStepperGetScene(stepper, &scene));
   PetscCall(KergsStepperGetSolver(stepper, &solver));
@@ -93,8 +110,32 @@ int main(int argc, char **argv)
     PetscCall(KergsSceneView(scene, PETSC_VIEWER_STDOUT_WORLD));
     PetscCall(KergsSolverView(solver, PETSC_VIEWER_STDOUT_WORLD));
     PetscCall(KergsStepperRun(stepper));
+    PetscCall(KergsStepperGetExitStatus(stepper, status));
   }
   PetscCall(KergsStepperDestroy(&stepper));
-  PetscCall(PetscFinalize());
-  return 0;
+  PetscFunctionReturn(0);
+}
+
+/* Exit status (docs/running.md, KergsExitStatus): 0 done; 1 an error (its message says what); 2 a blow-up; 3 done with
+   steps that did not converge under -error_on_nonconvergence; 4 stopped by SIGTERM, SIGINT or SIGUSR1 (checkpoint
+   written, files closed). */
+int main(int argc, char **argv)
+{
+  KergsExitStatus status = KERGS_EXIT_DONE;
+  PetscErrorCode  ierr;
+  char          **args = argv;
+
+  KergsReturnFreedMemory();      /* peak resident memory = peak of live data (base.h) */
+  KergsFileAvoidLongPathAbort(); /* before MPI_Init: Open MPI's MPI-IO and paths of 241 characters or more */
+  ierr = PetscInitialize(&argc, &argv, NULL, help);
+  if (ierr) return KERGS_EXIT_ERROR;
+  ierr = Run(argc, args, &status);
+  if (ierr) {
+    /* the error was printed where it arose; every rank ends with the documented status, whatever rank failed (a rank
+       waiting in a collective call is ended too) */
+    MPI_Abort(PETSC_COMM_WORLD, KERGS_EXIT_ERROR);
+    return KERGS_EXIT_ERROR;
+  }
+  ierr = PetscFinalize();
+  return ierr ? KERGS_EXIT_ERROR : (int)status;
 }

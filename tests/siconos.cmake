@@ -3,8 +3,8 @@
 # 1. Samples with known exact solutions, written through libfclib by tests/data/fclib_samples.c: the script
 #    must find Siconos's and the stored solution exact, detect a wrong solution, a changed W, a missing or
 #    short dataset, and match a problem whose contacts are reordered.
-# 2. The kergs pipeline: kergs exports step 3 of cases/confine5.opts (frictionless and with friction 0.3,
-#    on 1 and 2 ranks); Siconos solves it; both residuals must be below 1e-8, the (unique) velocities of the
+# 2. The kergs pipeline: kergs exports step 4 of cases/confine5.opts (the step whose line says "step 4"), frictionless
+#    and with friction 0.3, on 1 and 2 ranks; Siconos solves it; both residuals must be below 1e-8, the (unique) velocities of the
 #    frictionless problem must agree within 1e-6, and the 2-rank file must hold the same W, q, mu as the
 #    1-rank one up to the order of the contacts.
 # Siconos imports only in Debian's /usr/bin/python3 (Debian package python3-siconos): without it these tests are not registered.
@@ -75,7 +75,7 @@ endif()
 
 # ---- 2. the kergs pipeline --------------------------------------------------------------------------------
 set(E ${SICONOS_DIR}/export)
-set(KERGS_FCLIB_RUN -options_file cases/confine5.opts -steps 5 -fclib_step 3 -output_none -quiet
+set(KERGS_FCLIB_RUN -options_file cases/confine5.opts -steps 5 -fclib_step 4 -output_none -quiet
                     -solver_tol 1e-12 -solver_criterion natural -solver_max_it 10000)
 add_test(NAME siconos_fclib_clean COMMAND ${CMAKE_COMMAND} -E rm -f ${E}/c5.fclib.h5 ${E}/c5_friction.fclib.h5 ${E}/c5_2ranks.fclib.h5
                                           ${E}/c5_friction_2ranks.fclib.h5)

@@ -26,6 +26,29 @@ PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
    share one binary representation. */
 PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const PetscMPIInt sendcount[], const void *send,
                                                  PetscMPIInt recvcount[], void *recv, PetscInt *nrecv);
+/* Counts and indices are PetscInt, 32-bit in this build: PETSc's options parser wraps a larger value silently
+   (-steps 10000000000 becomes 1410065408). Call after the option was read: every comma-separated number given to
+   option `name` (under prefix, may be NULL) must fit in PetscInt, otherwise an error on comm names the option and the
+   largest value allowed. Options that are not given, and values that are not numbers, pass. */
+PETSC_EXTERN PetscErrorCode KergsOptionsCheckInt(MPI_Comm, const char prefix[], const char name[]);
+/* The largest number of disks this build can hold: KERGS_DIM values per disk must be indexable by PetscInt. */
+#define KERGS_MAX_DISKS (PETSC_MAX_INT / KERGS_DIM)
+/* Provenance of a run, as the output files record it (docs/results.md): the version of the sources, captured at build
+   time (git describe; "unknown" outside a git checkout), the date (UTC, ISO 8601), the number of ranks and the whole
+   options database as text. Collective: the date and the options are rank 0's, the same on every rank. */
+typedef struct {
+  const char *version;
+  char        date[32];
+  PetscMPIInt ranks;
+  char       *options; /* PetscOptionsGetAll's text; freed by KergsProvenanceDestroy */
+} KergsProvenance;
+PETSC_EXTERN PetscErrorCode KergsProvenanceGet(MPI_Comm, KergsProvenance *);
+/* Collective: the options of the run as they stand now (rank 0's), reported by every later KergsProvenanceGet instead of
+   the database's current state, into which components add their own settings as they set up (the stepper calls it
+   once all options are known, before the run). */
+PETSC_EXTERN PetscErrorCode KergsProvenanceSetOptions(MPI_Comm);
+PETSC_EXTERN PetscErrorCode KergsProvenanceDestroy(KergsProvenance *);
+PETSC_EXTERN const char    *KergsGetVersion(void);
 /* Let the C library return freed blocks to the system (glibc: large blocks mapped on their own, heap tops trimmed),
    undoing a process-wide setting of a library PETSc loads; no-op elsewhere. Call it once, first thing in main. */
 PETSC_EXTERN void KergsReturnFreedMemory(void);

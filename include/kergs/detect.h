@@ -64,6 +64,11 @@ PETSC_EXTERN PetscErrorCode KergsContactsGetGlobalRange(KergsContacts, PetscInt 
    read it before then. newidx[i]: new global index of owned disk i; newranges: the ranks' new index ranges (size + 1
    entries). Call before the disks move. */
 PETSC_EXTERN PetscErrorCode KergsContactsMigrate(KergsContacts, const PetscInt newidx[], const PetscInt newranges[]);
+/* Collective, for a restart from a checkpoint (src/io/checkpoint.c): the owned contacts become the n given, in that order
+   (sorted by key, as detection leaves them), with the global numbering; no foreign contacts until the next detection.
+   Contacts holding only their key and impulse (b = -1, as KergsContactsMigrate leaves them) warm-start the next
+   detection and may be read by nothing else before it. */
+PETSC_EXTERN PetscErrorCode KergsContactsRestore(KergsContacts, PetscInt n, const KergsContact c[]);
 /* Which contacts are active this step (eq. 2: the law applies when the predicted gap g~ <= 0, otherwise r = 0). The
    paper's rule: g~ = g^-; LMGC90's: g~ = g^- + (1 - theta) dt v_n^-, v_n^- = n.(V_a - V_b) from the velocities at the
    start of the step (a wall's: its velocity of the step, as the assembly sets it). Decided from the contact and its

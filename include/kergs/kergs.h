@@ -15,6 +15,8 @@
 #include <kergs/results.h>
 #include <kergs/sample.h>
 #include <kergs/fclib.h>
+#include <kergs/files.h>
+#include <kergs/checkpoint.h>
 #include <kergs/partition.h>
 #include <kergs/stepper.h>
 

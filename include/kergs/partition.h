@@ -97,6 +97,19 @@ PETSC_EXTERN PetscErrorCode KergsPartitionGetView(KergsPartition, PetscBool *);
 PETSC_EXTERN PetscErrorCode KergsPartitionView(KergsPartition, PetscViewer);
 PETSC_EXTERN PetscErrorCode KergsPartitionDestroy(KergsPartition *);
 
+/* What a checkpoint keeps of the partition, so that a run restarted on the same number of ranks repartitions at the
+   same steps and in the same way as if never stopped (the check counter is the scene's step). */
+typedef struct {
+  PetscBool initialized, provisional;
+  PetscInt  edgecut_base, nrepartitions, nmoved, last_method;
+  PetscReal imbalance_base;
+  PetscReal compute_seconds, work_scale; /* this rank's (-partition_work measured) */
+} KergsPartitionState;
+PETSC_EXTERN PetscErrorCode KergsPartitionGetState(KergsPartition, KergsPartitionState *);
+/* Restores a state of the same number of ranks; NULL: the state of a new run (the next KergsPartitionUpdate computes the
+   initial partition), for a restart on another number of ranks. */
+PETSC_EXTERN PetscErrorCode KergsPartitionSetState(KergsPartition, const KergsPartitionState *);
+
 /* Collective, the migration itself: renumber the disks so that new global index k holds old disk order[k]; rank p
    then owns counts[p] disks, after those of ranks 0 .. p-1. order (a permutation of 0 .. ndisks-1) and counts (one
    per rank, summing to ndisks) must be the same on every rank. The disks move to their new owners with their

@@ -116,6 +116,30 @@ PETSC_EXTERN PetscErrorCode KergsSceneAdvance(KergsScene, const PetscReal vold[]
    wall's new one (the velocity update). Disks' velocities are written through KergsDisks. */
 PETSC_EXTERN PetscErrorCode KergsSceneSetWallVelocity(KergsScene, PetscInt w, const PetscReal v[]);
 
+/* Restart from a checkpoint (src/io/checkpoint.c). KergsSceneSetRestoring, before KergsSceneSetFromOptions: the disk
+   options are read (so that -help lists them and none counts as unused) but no disks are built and KergsSceneCheck is
+   left to the caller, once the state is restored. */
+PETSC_EXTERN PetscErrorCode KergsSceneSetRestoring(KergsScene, PetscBool);
+/* Collective: this rank owns the nowned disks given (its global indices follow the previous ranks'), with all their
+   state; masses and inertias from the materials' densities; no ghost layer. */
+PETSC_EXTERN PetscErrorCode KergsSceneRestoreDisks(KergsScene, PetscInt ndisks, PetscInt nowned, const PetscInt id[],
+                                                   const PetscInt material[], const PetscReal x[], const PetscReal rot[],
+                                                   const PetscReal v[], const PetscReal omega[], const PetscReal radius[]);
+/* The clock and the alert distance (computed from the radii at the start of the run, kept as it was) */
+PETSC_EXTERN PetscErrorCode KergsSceneRestoreState(KergsScene, PetscInt step, PetscReal time, PetscReal alert);
+/* Wall w's endpoints, velocity and displacement since the start of the run (KERGS_DIM values each) */
+PETSC_EXTERN PetscErrorCode KergsSceneRestoreWall(KergsScene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
+                                                  const PetscReal disp[]);
+/* The ghost layer as a checkpoint keeps it (src/scene/ghosts.c): whether it exists, the owned disks' positions when it
+   was built (xref, KERGS_DIM per owned disk; they decide when it is rebuilt) and the number of layers built so far.
+   The ghosts themselves are the disks of global indices D.gidx[nowned..nlocal) (KergsSceneGetDisks). */
+PETSC_EXTERN PetscErrorCode KergsSceneGetGhostState(KergsScene, PetscBool *layer, const PetscReal **xref, PetscInt *rebuilds);
+/* Collective, after KergsSceneRestoreDisks on the same ranks as the checkpointed run: the ghost layer of the given
+   global indices (in that local order, fetched from their owners with their whole state), its xref and count, as if
+   never interrupted. With layer false no layer is built (the next detection builds one). */
+PETSC_EXTERN PetscErrorCode KergsSceneRestoreGhosts(KergsScene, PetscBool layer, PetscInt nghosts, const PetscInt gidx[],
+                                                    const PetscReal xref[], PetscInt rebuilds);
+
 /* Distributed state (src/scene/ghosts.c). */
 /* Collective. Rebuild the ghost layer when asked, when there is none, or when some disk moved more than
    ghost_skin / 2 since the last build; otherwise leave it (its state is current after KergsSceneRefreshGhosts).

@@ -10,10 +10,28 @@
 
 typedef struct _p_KergsStepper *KergsStepper;
 
+/* How a run ended: the exit status of the kergs executable (docs/running.md). An error (bad input, I/O, a full disk,
+   an internal error) ends the run through PETSc's error handling with status 1. */
+typedef enum {
+  KERGS_EXIT_DONE          = 0, /* every step of -steps, or at rest (-stop_at_rest) */
+  KERGS_EXIT_ERROR         = 1, /* an error: the message names its cause */
+  KERGS_EXIT_BLOWUP        = 2, /* a grain's position or velocity became infinite or NaN: the run stopped after that step */
+  KERGS_EXIT_NOT_CONVERGED = 3, /* done, but some step did not converge, with -error_on_nonconvergence */
+  KERGS_EXIT_SIGNAL        = 4  /* stopped by SIGTERM, SIGINT or SIGUSR1 after finishing the step: checkpoint written, files closed */
+} KergsExitStatus;
+
 PETSC_EXTERN PetscErrorCode KergsStepperCreate(MPI_Comm, KergsStepper *);
 PETSC_EXTERN PetscErrorCode KergsStepperSetFromOptions(KergsStepper);
 PETSC_EXTERN PetscErrorCode KergsStepperStep(KergsStepper);
+/* The whole run: the time loop with its snapshots, checkpoints (-checkpoint_*), progress lines (-progress_*) and signals
+   (SIGTERM, SIGINT, SIGUSR1: the loop finishes the step, writes a checkpoint and closes the files); the results file is
+   closed under its final name whatever the ending but an error. */
 PETSC_EXTERN PetscErrorCode KergsStepperRun(KergsStepper);
+/* After KergsStepperRun: how it ended (KERGS_EXIT_DONE before) */
+PETSC_EXTERN PetscErrorCode KergsStepperGetExitStatus(KergsStepper, KergsExitStatus *);
+/* An input file that the options database does not keep (-options_file), for the checks of the run's paths: no output
+   may replace it. Before KergsStepperSetFromOptions. */
+PETSC_EXTERN PetscErrorCode KergsStepperAddInput(KergsStepper, const char option[], const char path[]);
 PETSC_EXTERN PetscErrorCode KergsStepperDestroy(KergsStepper *);
 
 /* Accessors: the objects a time step works on (owned by the stepper). */

@@ -639,3 +639,17 @@ PetscErrorCode KergsContactsMigrate(KergsContacts ct, const PetscInt newidx[], c
   PetscCall(PetscFree2(dest, sendbuf));
   PetscFunctionReturn(0);
 }
+
+PetscErrorCode KergsContactsRestore(KergsContacts ct, PetscInt n, const KergsContact c[])
+{
+  PetscFunctionBeginUser;
+  for (PetscInt k = 1; k < n; k++)
+    PetscCheck(KERGS_COMPARE_KEYS(&c[k - 1], &c[k]) < 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+               "Restored contacts %" PetscInt_FMT " and %" PetscInt_FMT " are not in the order of their keys (a, kind, id of b)", k - 1, k);
+  PetscCall(ContactsReserve(ct, n));
+  if (n) PetscCall(PetscArraycpy(ct->c, c, n));
+  ct->n        = n;
+  ct->nforeign = 0;
+  PetscCall(SetGlobalNumbering(ct));
+  PetscFunctionReturn(0);
+}

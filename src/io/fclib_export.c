@@ -207,13 +207,14 @@ static PetscErrorCode FCLibWrite(KergsScene scene, FCLibProblem *p, const char p
   if (scene) {
     PetscCall(KergsSceneGetName(scene, &name));
     PetscCall(KergsSceneGetStep(scene, &step, &time, NULL));
+    step++; /* exported after the solve, before the clock advances: the step line of this step says step + 1 */
   }
   FCLibLoad(&write_local, &write_solution, msg, len);
   if (msg[0]) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
   PetscCall(PetscSNPrintf(title, sizeof(title), "kergs %s step %" PetscInt_FMT, name, step));
   PetscCall(PetscSNPrintf(description, sizeof(description),
-                          "2D disks, time %g, %" PetscInt_FMT " active contacts%s; unknowns per contact normal then tangential",
+                          "2D disks, step from time %g, %" PetscInt_FMT " active contacts%s; unknowns per contact normal then tangential",
                           (double)time, p->na,
                           p->padded ? ", frictionless (tangential components padded: W_tt = W_nn, q_t = 0, mu = 0)" : ""));
   PetscCall(PetscSNPrintf(

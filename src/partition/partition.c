@@ -80,6 +80,8 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
   PetscCall(PetscOptionsInt("-partition_metis_seed", "Seed of METIS's random choices (fixed: reproducible partitions)", "", p->metis_seed,
                             &p->metis_seed, NULL));
   PetscOptionsEnd();
+  PetscCall(KergsOptionsCheckInt(p->comm, NULL, "-partition_check_every"));
+  PetscCall(KergsOptionsCheckInt(p->comm, NULL, "-partition_metis_seed"));
   PetscCheck(p->imbalance_tol >= 1.0 && !PetscIsInfOrNanReal(p->imbalance_tol), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-partition_imbalance_tol %g must be at least 1 (max work / mean work)", (double)p->imbalance_tol);
   PetscCheck(p->edgecut_growth > 0.0 && !PetscIsInfOrNanReal(p->edgecut_growth), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -94,6 +96,50 @@ PetscErrorCode KergsPartitionDestroy(KergsPartition *p)
   PetscFunctionBeginUser;
   if (!p || !*p) PetscFunctionReturn(0);
   PetscCall(PetscFree(*p));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionGetState(KergsPartition p, KergsPartitionState *s)
+{
+  PetscFunctionBeginUser;
+  s->initialized     = p->initialized;
+  s->provisional     = p->provisional;
+  s->edgecut_base    = p->edgecut_base;
+  s->nrepartitions   = p->nrepartitions;
+  s->nmoved          = p->nmoved;
+  s->last_method     = p->last_method;
+  s->imbalance_base  = p->imbalance_base;
+  s->compute_seconds = p->compute_seconds;
+  s->work_scale      = p->work_scale;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPartitionSetState(KergsPartition p, const KergsPartitionState *s)
+{
+  PetscFunctionBeginUser;
+  if (!s) { /* as KergsPartitionCreate leaves it */
+    p->initialized     = PETSC_FALSE;
+    p->provisional     = PETSC_FALSE;
+    p->edgecut_base    = -1;
+    p->nrepartitions   = 0;
+    p->nmoved          = 0;
+    p->last_method     = KERGS_PARTITION_CONTIGUOUS;
+    p->imbalance_base  = 1.0;
+    p->compute_seconds = 0.0;
+    p->work_scale      = 1.0;
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(s->last_method >= KERGS_PARTITION_CONTIGUOUS && s->last_method <= KERGS_PARTITION_METIS, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Partition state: unknown method %" PetscInt_FMT, s->last_method);
+  p->initialized     = s->initialized;
+  p->provisional     = s->provisional;
+  p->edgecut_base    = s->edgecut_base;
+  p->nrepartitions   = s->nrepartitions;
+  p->nmoved          = s->nmoved;
+  p->last_method     = s->last_method;
+  p->imbalance_base  = s->imbalance_base;
+  p->compute_seconds = s->compute_seconds;
+  p->work_scale      = s->work_scale;
   PetscFunctionReturn(0);
 }
 

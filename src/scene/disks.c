@@ -62,6 +62,10 @@ static PetscErrorCode DiskOptionsRead(MPI_Comm comm, DiskOptions *o)
   PetscCall(PetscOptionsString("-sample_input", "file: sample file (HDF5) of an earlier run", NULL, o->sample, o->sample, sizeof(o->sample),
                                &o->sample_set));
   PetscOptionsEnd();
+  PetscCall(KergsOptionsCheckInt(comm, NULL, "-disks_material"));
+  PetscCall(KergsOptionsCheckInt(comm, NULL, "-lattice_n"));
+  PetscCall(KergsOptionsCheckInt(comm, NULL, "-random_n"));
+  PetscCall(KergsOptionsCheckInt(comm, NULL, "-random_seed"));
   PetscFunctionReturn(0);
 }
 
@@ -135,6 +139,10 @@ static PetscErrorCode DisksFromLattice(KergsScene scene, const DiskOptions *o)
              ny);
   PetscCheck(rad > 0.0 && !PetscIsInfOrNanReal(rad), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-disks_source lattice needs -lattice_radius > 0 (got %g)", (double)rad);
+  PetscCheck((PetscInt64)nx * (PetscInt64)ny <= KERGS_MAX_DISKS, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-lattice_n %" PetscInt_FMT ",%" PetscInt_FMT " asks for %" PetscInt64_FMT " disks; this build counts in %d-bit integers "
+             "(PetscInt) and holds at most %" PetscInt_FMT " disks",
+             nx, ny, (PetscInt64)nx * (PetscInt64)ny, (int)(8 * sizeof(PetscInt)), (PetscInt)KERGS_MAX_DISKS);
   s = o->lattice_spacing_set ? o->lattice_spacing : 2.0 * rad;
   PetscCheck(s >= 2.0 * rad, comm, PETSC_ERR_ARG_OUTOFRANGE, "-lattice_spacing %g is less than 2 * radius = %g: the disks would overlap",
              (double)s, (double)(2.0 * rad));
@@ -177,6 +185,9 @@ static PetscErrorCode DisksFromRandom(KergsScene scene, const DiskOptions *o)
 
   PetscFunctionBeginUser;
   PetscCheck(n >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-random_n %" PetscInt_FMT " must be >= 0", n);
+  PetscCheck(n <= KERGS_MAX_DISKS, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-random_n %" PetscInt_FMT ": this build counts in %d-bit integers (PetscInt) and holds at most %" PetscInt_FMT " disks", n,
+             (int)(8 * sizeof(PetscInt)), (PetscInt)KERGS_MAX_DISKS);
   PetscCheck(o->random_box_set, comm, PETSC_ERR_ARG_WRONGSTATE, "-disks_source random needs -random_box x0,y0,x1,y1");
   PetscCheck(box[2] > box[0] && box[3] > box[1], comm, PETSC_ERR_ARG_OUTOFRANGE, "-random_box %g,%g,%g,%g: need x0 < x1 and y0 < y1",
              (double)box[0], (double)box[1], (double)box[2], (double)box[3]);
@@ -232,6 +243,7 @@ PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
   o.lattice_type = LATTICE_SQUARE;
   o.random_seed  = 1;
   PetscCall(DiskOptionsRead(scene->comm, &o));
+  if (scene->restoring) o.source = -1; /* read (for -help and the unused-option check), but the checkpoint holds the disks */
   switch ((DiskSource)o.source) {
   case DISKS_LIST:
     PetscCall(DisksFromList(scene, &o));
@@ -244,6 +256,8 @@ PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
     break;
   case DISKS_FILE:
     PetscCall(DisksFromFile(scene, &o));
+    break;
+  default:
     break;
   }
   PetscCall(DiskOptionsDestroy(&o));

@@ -376,6 +376,70 @@ PetscErrorCode KergsSceneRefreshGhosts(KergsScene sc)
 }
 
 /* ------------------------------------------------------------------------------------------------ */
+/* Checkpoints                                                                                      */
+
+PetscErrorCode KergsSceneGetGhostState(KergsScene sc, PetscBool *layer, const PetscReal **xref, PetscInt *rebuilds)
+{
+  PetscFunctionBeginUser;
+  if (layer) *layer = sc->ghost_sf ? PETSC_TRUE : PETSC_FALSE;
+  if (xref) *xref = sc->ghost_sf ? sc->xref : NULL;
+  if (rebuilds) *rebuilds = sc->ghost_rebuilds;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneRestoreGhosts(KergsScene sc, PetscBool layer, PetscInt nghosts, const PetscInt gidx[], const PetscReal xref[],
+                                       PetscInt rebuilds)
+{
+  PetscMPIInt  size;
+  PetscInt    *ranges, mine[2] = {sc->dstart, sc->dend}, *all;
+  PetscSFNode *remote;
+  DiskRecord  *root, *leaf;
+  MPI_Datatype unit;
+
+  PetscFunctionBeginUser;
+  sc->ghost_rebuilds = rebuilds;
+  PetscCall(PetscSFDestroy(&sc->ghost_sf));
+  sc->nlocal = sc->nowned;
+  PetscCallMPI(MPI_Comm_size(sc->comm, &size));
+  if (size == 1 || !layer) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc2(size + 1, &ranges, 2 * size, &all));
+  PetscCallMPI(MPI_Allgather(mine, 2, MPIU_INT, all, 2, MPIU_INT, sc->comm));
+  for (PetscMPIInt q = 0; q < size; q++) ranges[q] = all[2 * q];
+  ranges[size] = sc->ndisks;
+  PetscCall(KergsSceneReserve(sc, sc->nowned + nghosts));
+  PetscCall(PetscFree(sc->ghost_owner));
+  PetscCall(PetscMalloc1(nghosts + 1, &sc->ghost_owner));
+  PetscCall(PetscMalloc1(nghosts + 1, &remote));
+  for (PetscInt k = 0; k < nghosts; k++) {
+    PetscCheck(gidx[k] >= 0 && gidx[k] < sc->ndisks && (gidx[k] < sc->dstart || gidx[k] >= sc->dend), PETSC_COMM_SELF,
+               PETSC_ERR_ARG_OUTOFRANGE,
+               "Scene %s: ghost %" PetscInt_FMT " of the checkpoint is disk %" PetscInt_FMT ", not another rank's", sc->name, k, gidx[k]);
+    sc->ghost_owner[k] = KergsRangeOwner(ranges, size, gidx[k]);
+    remote[k].rank     = sc->ghost_owner[k];
+    remote[k].index    = gidx[k] - ranges[sc->ghost_owner[k]];
+  }
+  PetscCall(PetscSFCreate(sc->comm, &sc->ghost_sf));
+  PetscCall(PetscSFSetGraph(sc->ghost_sf, sc->nowned, nghosts, NULL, PETSC_OWN_POINTER, remote, PETSC_OWN_POINTER));
+  PetscCall(PetscSFSetUp(sc->ghost_sf));
+  /* every field of the ghosts from their owners, as a rebuild of the layer copies them */
+  PetscCall(PetscMalloc2(sc->nowned + 1, &root, nghosts + 1, &leaf));
+  for (PetscInt i = 0; i < sc->nowned; i++) PackDisk(sc, i, &root[i]);
+  PetscCallMPI(MPI_Type_contiguous((PetscMPIInt)sizeof(DiskRecord), MPI_BYTE, &unit));
+  PetscCallMPI(MPI_Type_commit(&unit));
+  PetscCall(PetscSFBcastBegin(sc->ghost_sf, unit, root, leaf, MPI_REPLACE));
+  PetscCall(PetscSFBcastEnd(sc->ghost_sf, unit, root, leaf, MPI_REPLACE));
+  PetscCallMPI(MPI_Type_free(&unit));
+  for (PetscInt k = 0; k < nghosts; k++) UnpackDisk(sc, sc->nowned + k, &leaf[k]);
+  sc->nlocal = sc->nowned + nghosts;
+  PetscCall(PetscFree(sc->xref));
+  PetscCall(PetscMalloc1(KERGS_DIM * sc->nowned + 1, &sc->xref));
+  PetscCall(PetscArraycpy(sc->xref, xref, KERGS_DIM * sc->nowned));
+  PetscCall(PetscFree2(root, leaf));
+  PetscCall(PetscFree2(ranges, all));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
 /* Migration                                                                                        */
 
 PetscErrorCode KergsSceneMigrate(KergsScene sc, const PetscInt newidx[], const PetscInt counts[])

@@ -119,6 +119,9 @@ static PetscErrorCode SampleLoad(PetscViewer viewer, MPI_Comm comm, const char p
   PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute ndisks on %s", path, KERGS_SAMPLE_GROUP);
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "ndisks", PETSC_INT, NULL, &s->n));
   PetscCheck(s->n >= 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: ndisks = %" PetscInt_FMT " is negative", path, s->n);
+  PetscCheck(s->n <= KERGS_MAX_DISKS, comm, PETSC_ERR_FILE_UNEXPECTED,
+             "Sample file %s: ndisks = %" PetscInt_FMT " is more than this build holds (%" PetscInt_FMT ", 32-bit PetscInt)", path, s->n,
+             (PetscInt)KERGS_MAX_DISKS);
   PetscCall(PetscViewerHDF5HasAttribute(viewer, NULL, "time", &has));
   PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute time on %s", path, KERGS_SAMPLE_GROUP);
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "time", PETSC_REAL, NULL, &s->time));

@@ -434,6 +434,73 @@ PetscErrorCode KergsSceneGetModel(KergsScene scene, PetscBool *frictional, Petsc
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsSceneSetRestoring(KergsScene scene, PetscBool restoring)
+{
+  PetscFunctionBeginUser;
+  scene->restoring = restoring;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneRestoreDisks(KergsScene scene, PetscInt ndisks, PetscInt nowned, const PetscInt id[], const PetscInt material[],
+                                      const PetscReal x[], const PetscReal rot[], const PetscReal v[], const PetscReal omega[],
+                                      const PetscReal radius[])
+{
+  PetscInt end, total;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Scan(&nowned, &end, 1, MPIU_INT, MPI_SUM, scene->comm));
+  PetscCall(MPIU_Allreduce(&nowned, &total, 1, MPIU_INT, MPI_SUM, scene->comm));
+  PetscCheck(total == ndisks, scene->comm, PETSC_ERR_ARG_SIZ, "Scene %s: the ranks restore %" PetscInt_FMT " disks, not %" PetscInt_FMT,
+             scene->name, total, ndisks);
+  PetscCall(SceneFreeDisks(scene));
+  scene->ndisks = ndisks;
+  scene->dstart = end - nowned;
+  scene->dend   = end;
+  scene->nowned = scene->nlocal = nowned;
+  PetscCall(KergsSceneReserve(scene, PetscMax(nowned, 1)));
+  for (PetscInt i = 0; i < nowned; i++) {
+    scene->gidx[i]     = scene->dstart + i;
+    scene->id[i]       = id[i];
+    scene->material[i] = material[i];
+    scene->radius[i]   = radius[i];
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      scene->x[KERGS_DIM * i + d] = x[KERGS_DIM * i + d];
+      scene->v[KERGS_DIM * i + d] = v[KERGS_DIM * i + d];
+    }
+    for (PetscInt d = 0; d < KERGS_NROT; d++) {
+      scene->rot[KERGS_NROT * i + d]   = rot[KERGS_NROT * i + d];
+      scene->omega[KERGS_NROT * i + d] = omega[KERGS_NROT * i + d];
+    }
+  }
+  PetscCall(SceneComputeMasses(scene)); /* the formula of KergsSceneSetDisks: the same bits as the checkpointed run's */
+  PetscCall(SceneUpdateFrictional(scene));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneRestoreState(KergsScene scene, PetscInt step, PetscReal time, PetscReal alert)
+{
+  PetscFunctionBeginUser;
+  scene->step  = step;
+  scene->time  = time;
+  scene->alert = alert;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneRestoreWall(KergsScene scene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
+                                     const PetscReal disp[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(w >= 0 && w < scene->nwalls, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    scene->walls[w].a[d]    = a[d];
+    scene->walls[w].b[d]    = b[d];
+    scene->walls[w].v[d]    = v[d];
+    scene->walls[w].disp[d] = disp[d];
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSceneSetWallVelocity(KergsScene scene, PetscInt w, const PetscReal v[])
 {
   PetscFunctionBeginUser;
@@ -477,6 +544,7 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-gravity", "Gravity acceleration gx,gy (m/s^2)", scene->gravity, NULL));
   PetscCall(PetscOptionsReal("-dt", "Time step (s)", NULL, scene->dt, &scene->dt, NULL));
   PetscCall(PetscOptionsInt("-steps", "Number of time steps", NULL, scene->nsteps, &scene->nsteps, NULL));
+  PetscCall(KergsOptionsCheckInt(scene->comm, NULL, "-steps"));
   PetscCall(PetscOptionsReal("-theta", "Theta of the theta-method, in (0,1] (Algorithm 1)", NULL, scene->theta, &scene->theta, NULL));
   PetscCall(PetscOptionsBool("-disks_lock_rotation", "Disks translate only: no rotational DOFs even with friction (sliding blocks)", NULL,
                              scene->lock_rotation, &scene->lock_rotation, NULL));
@@ -501,6 +569,7 @@ static PetscErrorCode SceneMaterialOptions(PetscOptionItems *PetscOptionsObject,
 
   PetscFunctionBeginUser;
   PetscCall(PetscOptionsInt("-materials", "Number of materials", NULL, nm, &nm, &set));
+  PetscCall(KergsOptionsCheckInt(PetscOptionsObject->comm, NULL, "-materials"));
   PetscCheck(nm >= 1, PetscOptionsObject->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s: -materials %" PetscInt_FMT " must be at least 1", pre, nm);
   PetscCall(KergsOptionsRealList(PetscOptionsObject, "-material_density",
                                  "Density of each material, d0,d1,... (mass per unit area, default 1)", &nd, &dens, NULL));
@@ -622,6 +691,7 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
   PetscCall(
       PetscOptionsBool("-infinite", "Infinite line through a and b instead of the segment [a,b]", NULL, w->infinite, &w->infinite, NULL));
   PetscCall(PetscOptionsInt("-material", "Material index of the wall", NULL, w->material, &w->material, NULL));
+  PetscCall(KergsOptionsCheckInt(scene->comm, prefix, "-material"));
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-velocity",
                                "Constant velocity vx,vy of a driven wall, or initial velocity of a free wall", vel, &vset));
   PetscCall(KergsOptionsRealList(PetscOptionsObject, "-program",
@@ -723,7 +793,8 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
   }
   PetscCall(SceneUpdateFrictional(scene));
   PetscCall(PetscOptionsHasHelp(NULL, &help));
-  if (!help) PetscCall(KergsSceneCheck(scene)); /* -help alone lists the options of an empty scene */
+  /* -help alone lists the options of an empty scene; a restored scene is checked once its state is in place */
+  if (!help && !scene->restoring) PetscCall(KergsSceneCheck(scene));
   PetscFunctionReturn(0);
 }
 

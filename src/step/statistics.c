@@ -111,6 +111,10 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   PetscCall(KergsSolverGetType(st->solver, &type));
   st->max_violation = PetscMax(st->max_violation, max);
   if (!ss->converged) st->nonconverged++;
+  st->last_contacts      = ncontacts;
+  st->last_sweeps        = ss->iterations;
+  st->last_residual      = ss->residual;
+  st->last_max_violation = max;
   PetscCall(KergsResultsRecordText(res, "solver_type", type));
   PetscCall(KergsResultsRecord(res, "step", (PetscReal)step));
   PetscCall(KergsResultsRecord(res, "time", time));

@@ -11,9 +11,10 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
   PetscCall(PetscNew(&st));
-  st->comm        = comm;
-  st->fclib_step  = -1;
-  st->overlap_tol = 5e-2; /* a settled NSCD sample keeps interpenetrations of about 1% of a radius */
+  st->comm            = comm;
+  st->fclib_step      = -1;
+  st->checkpoint_step = -1;
+  st->overlap_tol     = 5e-2; /* a settled NSCD sample keeps interpenetrations of about 1% of a radius */
   PetscCall(KergsStepperPeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));
   PetscCall(KergsContactsCreate(comm, &st->contacts));
@@ -25,12 +26,30 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   PetscFunctionReturn(0);
 }
 
+/* The integer options of the solver types (read in src/solver/), checked for 32-bit overflow here, next to the time
+   loop's own; the other components check theirs where they read them (KergsOptionsCheckInt). */
+static PetscErrorCode CheckSolverIntegerOptions(MPI_Comm comm)
+{
+  static const char *names[] = {"-solver_max_it",          "-predictor_unilateral_max_it", "-kernel_diag_batch",
+                                "-solver_omega_power_its", "-solver_nlkergs_max_size",     "-solver_newton_max_backtracks",
+                                "-solver_prox_inner_max",  "-solver_newton_max_sweeps",    NULL};
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; names[i]; i++) PetscCall(KergsOptionsCheckInt(comm, NULL, names[i]));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
 {
   const char *name;
+  PetscBool   help;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscOptionsHasHelp(NULL, &help));
+  PetscCall(KergsStepperBatchOptions(st)); /* first: a restart changes how the scene reads its options */
+  if (st->restart_path[0] && !help) PetscCall(KergsSceneSetRestoring(st->scene, PETSC_TRUE));
   PetscCall(KergsSceneSetFromOptions(st->scene));
+  PetscCall(CheckSolverIntegerOptions(st->comm)); /* before the solver reads them: a wrapped count is never used */
   PetscCall(KergsSolverSetFromOptions(st->solver));
   PetscCall(KergsSceneGetName(st->scene, &name));
   PetscCall(KergsResultsSetSceneName(st->results, name)); /* default -output: results/<scene>.h5 */
@@ -42,8 +61,10 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                              st->rest_speed, &st->rest_speed, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
-  PetscCall(PetscOptionsInt("-fclib_step", "Export the local problem of this step in FCLib format (-1: none)", "", st->fclib_step,
-                            &st->fclib_step, NULL));
+  PetscCall(PetscOptionsInt("-fclib_step",
+                            "Export in FCLib format the local problem solved in this step, numbered as the step lines (1: the first step; "
+                            "-1: none)",
+                            "", st->fclib_step, &st->fclib_step, NULL));
   PetscCall(
       PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path), NULL));
   PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair",
@@ -55,13 +76,22 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
       "update, so that the peak memory is the larger of H and W, not their sum; solvers that use H keep it anyway)",
       "", st->keep_H, &st->keep_H, NULL));
   PetscOptionsEnd();
+  PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-fclib_step"));
   PetscCheck(st->rest_speed >= 0 && !PetscIsInfOrNanReal(st->rest_speed), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-stop_at_rest %g must be a non-negative speed", (double)st->rest_speed);
+  PetscCheck(st->fclib_step == -1 || st->fclib_step >= 1, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-fclib_step %" PetscInt_FMT " must be a step number (1 is the first step, as in the step lines) or -1 for none",
+             st->fclib_step);
   PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative",
              (double)st->overlap_tol);
   if (st->fclib_step >= 0 && !st->fclib_path[0])
     PetscCall(PetscSNPrintf(st->fclib_path, sizeof(st->fclib_path), "results/%s-step%" PetscInt_FMT ".fclib.h5", name[0] ? name : "kergs",
                             st->fclib_step));
+  PetscCall(KergsStepperDefaultCheckpointPath(st));
+  if (help) PetscFunctionReturn(0);
+  PetscCall(KergsProvenanceSetOptions(st->comm)); /* the options as given, before any object adds its own */
+  PetscCall(KergsStepperCheckPaths(st));          /* before the run writes anything */
+  if (st->restart_path[0]) PetscCall(KergsStepperRestore(st));
   PetscFunctionReturn(0);
 }
 
@@ -145,7 +175,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(PetscTime(&t2));
   PetscCall(KergsSolverSolve(st->solver, sc, st->contacts, st->ops, &ss));
   PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
-  if (step == st->fclib_step) {
+  if (step + 1 == st->fclib_step) { /* the step that the line "step N" reports: N = step + 1 */
     const PetscBool *active;
     PetscCall(KergsSolverGetActive(st->solver, &active));
     PetscCall(KergsFCLibExport(sc, st->contacts, st->ops, active, st->fclib_path));
@@ -177,33 +207,88 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscFunctionReturn(0);
 }
 
+/* The end of the run's summary: why it ended */
+static const char *EndText(KergsStepper st, PetscBool rest, char buf[], size_t len)
+{
+  switch (st->status) {
+  case KERGS_EXIT_BLOWUP:
+    return "blow-up: non-finite state";
+  case KERGS_EXIT_SIGNAL:
+    (void)PetscSNPrintf(buf, len, "stopped by %s", KergsSignalName(st->signal));
+    return buf;
+  default:
+    return rest ? "done (at rest)" : "done";
+  }
+}
+
 PetscErrorCode KergsStepperRun(KergsStepper st)
 {
-  KergsScene  sc = st->scene;
-  PetscReal   ek, vmax;
-  PetscBool   rest = PETSC_FALSE, moved = PETSC_FALSE, view, enabled;
-  PetscInt    step, nsteps, max_it;
-  const char *path;
+  KergsScene        sc = st->scene;
+  KergsResultsState rs;
+  KergsPoll         poll;
+  PetscReal         ek, vmax;
+  PetscBool         rest = PETSC_FALSE, view, enabled, stopped = PETSC_FALSE;
+  PetscInt          step, nsteps, max_it;
+  const char       *path;
+  char              end[64];
 
   PetscFunctionBeginUser;
+  st->status = KERGS_EXIT_DONE;
+  PetscCall(KergsStepperCatchSignals(PETSC_TRUE));
   PetscCall(KergsResultsOpen(st->results));
-  PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
+  PetscCall(KergsResultsGetState(st->results, &rs));
+  if (rs.nsnapshots == 0) PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts)); /* a continued file has its first one */
   PetscCall(KergsSceneGetStep(sc, &step, NULL, &nsteps));
-  while (step < nsteps && !rest) {
+  PetscCall(PetscTime(&st->loop_start));
+  st->last_progress = st->last_checkpoint = st->loop_start;
+  st->progress_step = st->loop_start_step = step;
+  for (;;) {
+    PetscBool due;
+    /* between two steps (and before the first): a signal, a blow-up, a checkpoint due, agreed by every rank */
+    PetscCall(KergsStepperPoll(st, &poll));
+    if (poll.blowup) {
+      st->status = KERGS_EXIT_BLOWUP;
+      if (poll.blowup_grain >= 0)
+        PetscCall(PetscPrintf(
+            st->comm, "kergs: blow-up after step %" PetscInt_FMT ": grain %" PetscInt_FMT " has a non-finite position or velocity\n", step,
+            poll.blowup_grain));
+      else
+        PetscCall(
+            PetscPrintf(st->comm, "kergs: blow-up after step %" PetscInt_FMT ": a wall has a non-finite position or velocity\n", step));
+      break; /* no checkpoint of a broken state: the last one stays */
+    }
+    due = (PetscBool)(poll.signal || poll.checkpoint_time || (st->checkpoint_every > 0 && step % st->checkpoint_every == 0 && step > 0));
+    if (due) PetscCall(KergsStepperCheckpoint(st));
+    if (poll.signal) {
+      st->status = KERGS_EXIT_SIGNAL;
+      st->signal = poll.signal;
+      PetscCall(PetscPrintf(st->comm, "kergs: %s received: stopped after step %" PetscInt_FMT "\n", KergsSignalName(poll.signal), step));
+      stopped = PETSC_TRUE;
+      break;
+    }
+    if (step >= nsteps || rest) break;
     PetscCall(KergsStepperStep(st));
     PetscCall(KergsSceneGetStep(sc, &step, NULL, NULL));
     if (st->rest_speed > 0) {
       /* at rest: every grain slower than the threshold, once the packing has been set in motion */
       PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
-      if (vmax >= st->rest_speed) moved = PETSC_TRUE;
-      rest = (PetscBool)(moved && vmax < st->rest_speed);
+      if (vmax >= st->rest_speed) st->moved = PETSC_TRUE;
+      rest = (PetscBool)(st->moved && vmax < st->rest_speed);
     }
+    PetscCall(KergsStepperProgress(st, PETSC_FALSE));
   }
+  /* a finished run leaves a checkpoint too when asked for them, to be continued with a larger -steps; taken before the
+     last snapshot, as a checkpoint inside the loop is, so that a continuation writes the snapshots of one long run */
+  if (st->status == KERGS_EXIT_DONE && st->checkpointing) PetscCall(KergsStepperCheckpoint(st));
   PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
+  PetscCall(KergsResultsSetEnd(st->results, EndText(st, rest, end, sizeof(end))));
   PetscCall(KergsResultsClose(st->results));
-  if (st->sample_out[0]) PetscCall(KergsSampleWrite(sc, st->sample_out));
+  PetscCall(KergsStepperCatchSignals(PETSC_FALSE));
+  if (st->sample_out[0] && st->status == KERGS_EXIT_DONE) PetscCall(KergsSampleWrite(sc, st->sample_out)); /* a finished packing only */
+  if (st->status == KERGS_EXIT_DONE && st->error_on_nonconvergence && st->nonconverged > 0) st->status = KERGS_EXIT_NOT_CONVERGED;
   PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
   PetscCall(KergsSolverGetTolerances(st->solver, NULL, &max_it));
+  if (stopped || st->progress_every || st->progress_seconds) PetscCall(KergsStepperProgress(st, PETSC_TRUE));
   PetscCall(PetscPrintf(st->comm,
                         "kergs: %" PetscInt_FMT " steps%s, %" PetscInt_FMT " not converged (cap %" PetscInt_FMT
                         " sweeps), largest interpenetration %.3g, kinetic energy %.3g, fastest grain %.3g\n",
@@ -212,9 +297,20 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   if (view) PetscCall(KergsPartitionView(st->partition, PETSC_VIEWER_STDOUT_(st->comm)));
   PetscCall(KergsResultsGetPath(st->results, &path, &enabled));
   if (enabled) PetscCall(PetscPrintf(st->comm, "kergs: results in %s\n", path));
-  if (st->sample_out[0]) PetscCall(PetscPrintf(st->comm, "kergs: sample in %s\n", st->sample_out));
-  if (st->fclib_step >= 0 && st->fclib_step < step)
+  if (st->sample_out[0] && st->status != KERGS_EXIT_SIGNAL && st->status != KERGS_EXIT_BLOWUP)
+    PetscCall(PetscPrintf(st->comm, "kergs: sample in %s\n", st->sample_out));
+  if (st->fclib_step >= 1 && st->fclib_step <= step)
     PetscCall(PetscPrintf(st->comm, "kergs: FCLib problem of step %" PetscInt_FMT " in %s\n", st->fclib_step, st->fclib_path));
+  if (st->checkpoint_step >= 0 && (st->checkpointing || stopped))
+    PetscCall(PetscPrintf(st->comm, "kergs: checkpoint of step %" PetscInt_FMT " in %s\n", st->checkpoint_step, st->checkpoint_path));
+  PetscCall(PetscPrintf(st->comm, "kergs: %s, exit status %d\n", EndText(st, rest, end, sizeof(end)), (int)st->status));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsStepperGetExitStatus(KergsStepper st, KergsExitStatus *status)
+{
+  PetscFunctionBeginUser;
+  *status = st->status;
   PetscFunctionReturn(0);
 }
 

@@ -45,6 +45,8 @@ struct _p_KergsScene {
   /* clock */
   PetscInt  step;
   PetscReal time;
+  /* restart (KergsSceneSetRestoring): the disks come from a checkpoint, not from the disk source options */
+  PetscBool restoring;
 };
 
 /* Shared by the scene's files. */

@@ -4,6 +4,8 @@
 
 #include <kergs/stepper.h>
 
+#define KERGS_STEPPER_MAXINPUTS 8
+
 struct _p_KergsStepper {
   MPI_Comm       comm;
   KergsScene     scene;
@@ -19,18 +21,62 @@ struct _p_KergsStepper {
   PetscBool      quiet;         /* -quiet: no per-step summary line */
   PetscBool      keep_H;        /* -keep_H: H_f, H_g live through the solve next to W (otherwise freed before W is built) */
   PetscReal      overlap_tol;   /* -initial_overlap_tol: initial interpenetration allowed, relative to the smaller radius */
-  PetscInt       nonconverged;  /* steps whose solve hit max_it */
+  PetscInt       nonconverged;  /* steps that did not converge (KergsSolveStats.converged) */
   PetscReal      max_violation; /* largest interpenetration seen over the run */
   PetscReal      io_seconds;    /* snapshot time of the current step */
   PetscLogDouble step_start;    /* wall clock at the start of the current step */
   PetscLogDouble sent_start;    /* bytes this rank had sent (PETSc's message log) at the start of the current step */
   PetscReal      baseline_rss;  /* resident memory (bytes, summed over ranks) before the scene was built */
+  /* batch use (docs/running.md) */
+  char            restart_path[PETSC_MAX_PATH_LEN];    /* -restart: the checkpoint this run continues */
+  char            checkpoint_path[PETSC_MAX_PATH_LEN]; /* -checkpoint_path */
+  PetscInt        checkpoint_every;                    /* -checkpoint_every: steps between checkpoints (0: not by steps) */
+  PetscReal       checkpoint_seconds;                  /* -checkpoint_seconds: wall time between checkpoints (0: not by time) */
+  PetscBool       checkpointing;                       /* a checkpoint option was given: checkpoints as they say and at the end */
+  PetscInt        checkpoint_step;                     /* step of the latest checkpoint this run wrote (-1: none) */
+  PetscLogDouble  last_checkpoint;                     /* wall clock of the latest checkpoint, or of the start (rank 0 decides) */
+  PetscInt        progress_every;                      /* -progress_every: a progress line every N steps (0: not by steps) */
+  PetscReal       progress_seconds;                    /* -progress_seconds: ... and every T seconds (0: not by time) */
+  PetscLogDouble  last_progress, loop_start;           /* wall clock of the latest progress line and of the start of the loop */
+  PetscInt        progress_step, loop_start_step;      /* steps at those times */
+  PetscBool       error_on_nonconvergence;             /* -error_on_nonconvergence: exit status 3 if a step did not converge */
+  PetscBool       moved;                               /* -stop_at_rest: the packing has moved faster than rest_speed */
+  KergsExitStatus status;                              /* how the run ended (KergsStepperGetExitStatus) */
+  int             signal;                              /* the signal that stopped it (0: none) */
+  PetscInt        ninputs;                             /* input files named outside the options database (-options_file) */
+  char            input_option[KERGS_STEPPER_MAXINPUTS][32], input_path[KERGS_STEPPER_MAXINPUTS][PETSC_MAX_PATH_LEN];
+  /* the latest step's figures, for the progress lines */
+  PetscInt  last_contacts, last_sweeps;
+  PetscReal last_residual, last_max_violation;
 };
 
 /* The statistics of the step just taken, from what each component measured, handed to the results file, and the
    step's summary line (src/step/statistics.c). */
 PETSC_INTERN PetscErrorCode KergsStepperRecordStep(KergsStepper, const KergsSolveStats *, PetscLogDouble detect_seconds,
                                                    PetscLogDouble assemble_seconds);
+/* Batch use (src/step/batch.c, docs/running.md). */
+/* What the time loop learns between two steps, the same on every rank (one reduction): a signal caught on some rank
+   (0: none), a non-finite state (and the smallest grain id at fault, -1: a wall), a checkpoint due by rank 0's clock. */
+typedef struct {
+  int       signal;
+  PetscBool blowup;
+  PetscInt  blowup_grain;
+  PetscBool checkpoint_time;
+} KergsPoll;
+PETSC_INTERN PetscErrorCode KergsStepperBatchOptions(KergsStepper);
+PETSC_INTERN PetscErrorCode KergsStepperDefaultCheckpointPath(KergsStepper);
+PETSC_INTERN PetscErrorCode KergsStepperCheckPaths(KergsStepper);
+/* Install (on) or remove the handlers of SIGTERM, SIGINT and SIGUSR1 */
+PETSC_INTERN PetscErrorCode KergsStepperCatchSignals(PetscBool on);
+PETSC_INTERN const char    *KergsSignalName(int);
+PETSC_INTERN PetscErrorCode KergsStepperPoll(KergsStepper, KergsPoll *);
+/* Flush the results file and write the checkpoint of the current step (once per step) */
+PETSC_INTERN PetscErrorCode KergsStepperCheckpoint(KergsStepper);
+/* The state of -restart's checkpoint, after every object's SetFromOptions */
+PETSC_INTERN PetscErrorCode KergsStepperRestore(KergsStepper);
+/* A progress line when -progress_every or -progress_seconds says so (force: now) */
+PETSC_INTERN PetscErrorCode KergsStepperProgress(KergsStepper, PetscBool force);
+
 /* Peak resident memory of the run so far, in bytes, summed over ranks */
 PETSC_INTERN PetscErrorCode KergsStepperPeakMemory(MPI_Comm, PetscReal *bytes);
 

@@ -1,0 +1,59 @@
+/* kergs files: what the output files of the io component share (src/io/files.c, docs/results.md "Atomic writing",
+   docs/running.md).
+
+   Every output is written under <path>.tmp and renamed to <path> once complete (KergsFileCommit). The paths of a run
+   are checked before any work (KergsFileCheckPaths), free space before each large write (KergsFileCheckSpace), and a
+   failed write removes its partial .tmp and says whether the disk was full (KergsFileWriteFailed: HDF5 itself reports
+   only "file write failed", never ENOSPC). Collective functions do the file system work on rank 0 and give every
+   rank the same error. */
+#ifndef KERGS_FILES_H
+#define KERGS_FILES_H
+
+#include <kergs/scene.h>
+#include <petscviewer.h>
+
+/* The directories leading to path, created like mkdir -p of its dirname. Collective. */
+PETSC_EXTERN PetscErrorCode KergsFileMakeParentDir(MPI_Comm, const char path[]);
+/* Waits for every rank (after the file was closed everywhere), then renames tmp to path. Collective. */
+PETSC_EXTERN PetscErrorCode KergsFileCommit(MPI_Comm, const char tmp[], const char path[]);
+/* Whether path exists (rank 0's view, collective). */
+PETSC_EXTERN PetscErrorCode KergsFileExists(MPI_Comm, const char path[], PetscBool *);
+/* Copies src to dst byte for byte (rank 0; dst is replaced). Collective. */
+PETSC_EXTERN PetscErrorCode KergsFileCopy(MPI_Comm, const char src[], const char dst[]);
+/* Before writing about `bytes` more into tmp (the temporary of path): when the file system of path has less room (statvfs
+   on rank 0), removes tmp (NULL: nothing to remove) and raises "No space left on device" naming path, on every rank.
+   `what` names the write ("snapshot of step 12") in the message. Collective. */
+PETSC_EXTERN PetscErrorCode KergsFileCheckSpace(MPI_Comm, const char path[], const char tmp[], const char what[], PetscReal bytes);
+/* After a write of tmp (the temporary of path) failed on this rank: removes tmp and returns an error (PETSC_COMM_SELF)
+   that says "No space left on device" when the file system of path is full, or else that the write failed. Not
+   collective: the other ranks may be inside the same collective write, so the run must end (the error goes up to
+   main). */
+PETSC_EXTERN PetscErrorCode KergsFileWriteFailed(const char path[], const char tmp[], const char what[]);
+
+/* A file of the run and the option that names it (KergsFileCheckPaths). */
+typedef struct {
+  const char *option; /* "-output" */
+  const char *path;   /* empty or NULL: not used in this run */
+} KergsFileRole;
+/* Before any work: every output must be writable (its directory exists or can be created, and files can be created
+   in it), must not be a directory (nor its .tmp), and must differ from every input and every other output, the
+   outputs' .tmp files included; paths are compared after resolving links (realpath of the parent directory plus
+   the base name, and for an existing input also the realpath of the file itself). An input that is also allowed as
+   an output of the same run is listed in `same` pairs (output option, input option) (e.g. -checkpoint_path may be
+   the -restart file: read whole before the run starts, replaced atomically). Errors name the options and paths.
+   Collective. */
+PETSC_EXTERN PetscErrorCode KergsFileCheckPaths(MPI_Comm, PetscInt nout, const KergsFileRole outputs[], PetscInt nin,
+                                                const KergsFileRole inputs[], PetscInt nsame, const char *const same[][2]);
+
+/* Open MPI's MPI-IO (ompio) aborts with glibc's "buffer overflow detected" on file paths of 241 characters or more, in
+   its sharedfp/lockedfile component (which HDF5 never uses). Unless the user set OMPI_MCA_sharedfp, exclude that
+   component (setenv, before MPI_Init: call it first thing in main). */
+PETSC_EXTERN void KergsFileAvoidLongPathAbort(void);
+
+/* Shared by the HDF5 writers (results, samples, checkpoints): one dataset from the nlocal blocks of bs values this rank
+   holds, stacked in rank order; integers are stored as reals (exact up to 2^53). Collective. */
+PETSC_EXTERN PetscErrorCode KergsViewBlocks(PetscViewer, MPI_Comm, const char name[], PetscInt nlocal, PetscInt bs,
+                                            const PetscReal *values);
+PETSC_EXTERN PetscErrorCode KergsViewIntegers(PetscViewer, MPI_Comm, const char name[], PetscInt nlocal, const PetscInt *values);
+
+#endif

@@ -1,0 +1,824 @@
+/* kergs checkpoint: write and restore the whole state of a run (include/kergs/checkpoint.h; layout in docs/results.md,
+   "Checkpoint file"). Written through PetscViewerHDF5 like the results file: datasets in global order, each rank
+   writing its own part, integers stored as reals (exact up to 2^53); the per-rank counts let a restart on the same
+   number of ranks give every rank back exactly its disks, ghosts and contacts. */
+#include <kergs/checkpoint.h>
+#include <petscviewerhdf5.h>
+#include <petsclayouthdf5.h> /* PetscViewerHDF5ReadSizes */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define KERGS_CHECKPOINT_FORMAT "kergs checkpoint 1"
+
+/* What one rank writes or reads of the per-rank table /ranks. */
+enum { RANK_DSTART, RANK_NOWNED, RANK_NCONTACTS, RANK_NGHOSTS, RANK_COMPUTE_SECONDS, RANK_WORK_SCALE, RANK_FIELDS };
+static const char *const RankFields[RANK_FIELDS] = {"dstart", "nowned", "ncontacts", "nghosts", "compute_seconds", "work_scale"};
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Writing                                                                                          */
+
+typedef struct {
+  const char          *path;
+  KergsScene           scene;
+  KergsContacts        contacts;
+  KergsPartition       partition;
+  KergsResults         results;
+  const KergsRunState *run;
+} WriteWork;
+
+static PetscErrorCode WriteInt(PetscViewer v, const char group[], const char name[], PetscInt value)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5WriteAttribute(v, group, name, PETSC_INT, &value));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode WriteReal(PetscViewer v, const char group[], const char name[], PetscReal value)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5WriteAttribute(v, group, name, PETSC_REAL, &value));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode WriteRoot(PetscViewer v, MPI_Comm comm, KergsScene sc)
+{
+  KergsProvenance prov;
+  PetscInt        step;
+  PetscReal       time;
+  const char     *name;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetStep(sc, &step, &time, NULL));
+  PetscCall(KergsSceneGetName(sc, &name));
+  PetscCall(KergsProvenanceGet(comm, &prov));
+  PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "kergs_format", PETSC_STRING, KERGS_CHECKPOINT_FORMAT));
+  PetscCall(WriteInt(v, "/", "dim", KERGS_DIM));
+  PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "kergs_version", PETSC_STRING, prov.version));
+  PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "options", PETSC_STRING, prov.options));
+  PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "date", PETSC_STRING, prov.date));
+  PetscCall(WriteInt(v, "/", "ranks", prov.ranks));
+  PetscCall(PetscViewerHDF5WriteAttribute(v, "/", "scene_name", PETSC_STRING, name));
+  PetscCall(WriteInt(v, "/", "step", step));
+  PetscCall(WriteReal(v, "/", "time", time));
+  PetscCall(KergsProvenanceDestroy(&prov));
+  PetscFunctionReturn(0);
+}
+
+/* /disks: every per-disk field of the owned disks, in global-index order; xref: the positions the ghost layer was
+   built from (the positions themselves when there is no layer). */
+static PetscErrorCode WriteDisks(PetscViewer v, MPI_Comm comm, KergsScene sc)
+{
+  KergsDisks       D;
+  const PetscReal *xref;
+  PetscBool        layer;
+  PetscInt         rebuilds;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetGhostState(sc, &layer, &xref, &rebuilds));
+  PetscCall(PetscViewerHDF5PushGroup(v, "/disks"));
+  PetscCall(KergsViewIntegers(v, comm, "id", D.nowned, D.id));
+  PetscCall(KergsViewIntegers(v, comm, "material", D.nowned, D.material));
+  PetscCall(KergsViewBlocks(v, comm, "x", D.nowned, KERGS_DIM, D.x));
+  PetscCall(KergsViewBlocks(v, comm, "v", D.nowned, KERGS_DIM, D.v));
+  PetscCall(KergsViewBlocks(v, comm, "rot", D.nowned, KERGS_NROT, D.rot));
+  PetscCall(KergsViewBlocks(v, comm, "omega", D.nowned, KERGS_NROT, D.omega));
+  PetscCall(KergsViewBlocks(v, comm, "radius", D.nowned, 1, D.radius));
+  PetscCall(KergsViewBlocks(v, comm, "xref", D.nowned, KERGS_DIM, layer ? xref : D.x));
+  PetscCall(WriteInt(v, NULL, "ndisks", D.ndisks));
+  PetscCall(WriteInt(v, NULL, "ghost_layer", layer ? 1 : 0));
+  PetscCall(WriteInt(v, NULL, "ghost_rebuilds", rebuilds));
+  /* the ghosts: global indices of the disks of other ranks held here, in local order */
+  {
+    PetscInt *gidx;
+    PetscCall(PetscMalloc1(D.nlocal - D.nowned + 1, &gidx));
+    for (PetscInt k = 0; k < D.nlocal - D.nowned; k++) gidx[k] = D.gidx[D.nowned + k];
+    PetscCall(KergsViewIntegers(v, comm, "ghosts", D.nlocal - D.nowned, gidx));
+    PetscCall(PetscFree(gidx));
+  }
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  PetscFunctionReturn(0);
+}
+
+/* /walls (rank 0 writes, the walls are replicated): endpoints a, b, velocity v, displacement disp; names as an
+   attribute, to check them against the restarted run's options. */
+static PetscErrorCode WriteWalls(PetscViewer v, MPI_Comm comm, KergsScene sc)
+{
+  const KergsWall *walls;
+  PetscInt         nwalls, n;
+  PetscMPIInt      rank;
+  PetscReal       *f[4];
+  const char      *names[4] = {"a", "b", "v", "disp"};
+  char            *joined;
+  size_t           len = 1;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetWalls(sc, &nwalls, &walls));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  n = rank == 0 ? nwalls : 0;
+  for (int k = 0; k < 4; k++) PetscCall(PetscMalloc1(KERGS_DIM * n + 1, &f[k]));
+  for (PetscInt w = 0; w < n; w++)
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      f[0][KERGS_DIM * w + d] = walls[w].a[d];
+      f[1][KERGS_DIM * w + d] = walls[w].b[d];
+      f[2][KERGS_DIM * w + d] = walls[w].v[d];
+      f[3][KERGS_DIM * w + d] = walls[w].disp[d];
+    }
+  PetscCall(PetscViewerHDF5PushGroup(v, "/walls"));
+  for (int k = 0; k < 4; k++) PetscCall(KergsViewBlocks(v, comm, names[k], n, KERGS_DIM, f[k]));
+  for (PetscInt w = 0; w < nwalls; w++) len += strlen(walls[w].name) + 1;
+  PetscCall(PetscCalloc1(len, &joined));
+  for (PetscInt w = 0; w < nwalls; w++) {
+    if (w) strcat(joined, ",");
+    strcat(joined, walls[w].name);
+  }
+  PetscCall(WriteInt(v, NULL, "nwalls", nwalls));
+  PetscCall(PetscViewerHDF5WriteAttribute(v, NULL, "names", PETSC_STRING, joined));
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  PetscCall(PetscFree(joined));
+  for (int k = 0; k < 4; k++) PetscCall(PetscFree(f[k]));
+  PetscFunctionReturn(0);
+}
+
+/* /contacts, in global contact order: a by grain id, kind, id of b (the key of the warm start), the geometry the
+   partition's measures read before the next detection, the impulse r, and whether the pair persisted. */
+static PetscErrorCode WriteContacts(PetscViewer v, MPI_Comm comm, KergsScene sc, KergsContacts ct)
+{
+  KergsDisks    D;
+  KergsContact *c;
+  PetscInt      m, *ida, *kind, *idb, *persistent;
+  PetscReal    *n, *ra, *rb, *gap, *mu, *r;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsContactsGetLocal(ct, &m, &c));
+  PetscCall(PetscMalloc4(m + 1, &ida, m + 1, &kind, m + 1, &idb, m + 1, &persistent));
+  PetscCall(PetscMalloc6(KERGS_DIM * m + 1, &n, m + 1, &ra, m + 1, &rb, m + 1, &gap, m + 1, &mu, KERGS_MAXCOMP * m + 1, &r));
+  for (PetscInt k = 0; k < m; k++) {
+    ida[k]        = D.id[c[k].a];
+    kind[k]       = c[k].kind == KERGS_CONTACT_DISK_WALL ? 1 : 0;
+    idb[k]        = c[k].idb;
+    persistent[k] = c[k].persistent ? 1 : 0;
+    ra[k]         = c[k].ra;
+    rb[k]         = c[k].rb;
+    gap[k]        = c[k].gap;
+    mu[k]         = c[k].mu;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) n[KERGS_DIM * k + d] = c[k].n[d];
+    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) r[KERGS_MAXCOMP * k + j] = c[k].r[j];
+  }
+  PetscCall(PetscViewerHDF5PushGroup(v, "/contacts"));
+  PetscCall(KergsViewIntegers(v, comm, "a_id", m, ida));
+  PetscCall(KergsViewIntegers(v, comm, "kind", m, kind));
+  PetscCall(KergsViewIntegers(v, comm, "b_id", m, idb));
+  PetscCall(KergsViewIntegers(v, comm, "persistent", m, persistent));
+  PetscCall(KergsViewBlocks(v, comm, "n", m, KERGS_DIM, n));
+  PetscCall(KergsViewBlocks(v, comm, "ra", m, 1, ra));
+  PetscCall(KergsViewBlocks(v, comm, "rb", m, 1, rb));
+  PetscCall(KergsViewBlocks(v, comm, "gap", m, 1, gap));
+  PetscCall(KergsViewBlocks(v, comm, "mu", m, 1, mu));
+  PetscCall(KergsViewBlocks(v, comm, "r", m, KERGS_MAXCOMP, r));
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  PetscCall(PetscFree4(ida, kind, idb, persistent));
+  PetscCall(PetscFree6(n, ra, rb, gap, mu, r));
+  PetscFunctionReturn(0);
+}
+
+/* /ranks: one entry per rank (disk range, counts, the partition's measured work), and /state: the scalars of the
+   partition, the results writer and the time loop. */
+static PetscErrorCode WriteState(PetscViewer v, MPI_Comm comm, const WriteWork *w)
+{
+  KergsDisks          D;
+  KergsPartitionState ps;
+  KergsResultsState   rs;
+  PetscReal           mine[RANK_FIELDS], alert;
+  PetscInt            m;
+  const char         *path;
+  PetscBool           enabled;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(w->scene, &D));
+  PetscCall(KergsContactsGetLocal(w->contacts, &m, NULL));
+  PetscCall(KergsPartitionGetState(w->partition, &ps));
+  PetscCall(KergsResultsGetState(w->results, &rs));
+  PetscCall(KergsResultsGetPath(w->results, &path, &enabled));
+  PetscCall(KergsSceneGetContactRule(w->scene, &alert, NULL));
+  mine[RANK_DSTART]          = (PetscReal)D.dstart;
+  mine[RANK_NOWNED]          = (PetscReal)D.nowned;
+  mine[RANK_NCONTACTS]       = (PetscReal)m;
+  mine[RANK_NGHOSTS]         = (PetscReal)(D.nlocal - D.nowned);
+  mine[RANK_COMPUTE_SECONDS] = ps.compute_seconds;
+  mine[RANK_WORK_SCALE]      = ps.work_scale;
+  PetscCall(PetscViewerHDF5PushGroup(v, "/ranks"));
+  for (int k = 0; k < RANK_FIELDS; k++) PetscCall(KergsViewBlocks(v, comm, RankFields[k], 1, 1, &mine[k]));
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  PetscCall(PetscViewerHDF5PushGroup(v, "/state"));
+  PetscCall(WriteReal(v, NULL, "alert", alert));
+  PetscCall(WriteInt(v, NULL, "partition_initialized", ps.initialized ? 1 : 0));
+  PetscCall(WriteInt(v, NULL, "partition_provisional", ps.provisional ? 1 : 0));
+  PetscCall(WriteInt(v, NULL, "partition_edgecut_base", ps.edgecut_base));
+  PetscCall(WriteInt(v, NULL, "partition_repartitions", ps.nrepartitions));
+  PetscCall(WriteInt(v, NULL, "partition_moved", ps.nmoved));
+  PetscCall(WriteInt(v, NULL, "partition_last_method", ps.last_method));
+  PetscCall(WriteReal(v, NULL, "partition_imbalance_base", ps.imbalance_base));
+  PetscCall(WriteInt(v, NULL, "results_enabled", enabled ? 1 : 0));
+  PetscCall(PetscViewerHDF5WriteAttribute(v, NULL, "results_path", PETSC_STRING, path));
+  PetscCall(WriteInt(v, NULL, "results_rows", rs.nrows));
+  PetscCall(WriteInt(v, NULL, "results_snapshots", rs.nsnapshots));
+  PetscCall(WriteInt(v, NULL, "results_last_snapshot_step", rs.last_snapshot_step));
+  PetscCall(WriteInt(v, NULL, "nonconverged", w->run->nonconverged));
+  PetscCall(WriteReal(v, NULL, "max_violation", w->run->max_violation));
+  PetscCall(WriteInt(v, NULL, "moved", w->run->moved ? 1 : 0));
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode WriteAll(MPI_Comm comm, const char tmp[], const WriteWork *w)
+{
+  PetscViewer v;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5Open(comm, tmp, FILE_MODE_WRITE, &v));
+  PetscCall(PetscViewerHDF5SetBaseDimension2(v, PETSC_FALSE));
+  PetscCall(PetscViewerHDF5SetSPOutput(v, PETSC_FALSE));
+  PetscCall(WriteRoot(v, comm, w->scene));
+  PetscCall(WriteDisks(v, comm, w->scene));
+  PetscCall(WriteWalls(v, comm, w->scene));
+  PetscCall(WriteContacts(v, comm, w->scene, w->contacts));
+  PetscCall(WriteState(v, comm, w));
+  PetscCall(PetscViewerDestroy(&v));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsCheckpointWrite(const char path[], KergsScene sc, KergsContacts ct, KergsPartition p, KergsResults res,
+                                    const KergsRunState *run)
+{
+  WriteWork      w = {path, sc, ct, p, res, run};
+  MPI_Comm       comm;
+  KergsDisks     D;
+  PetscInt       m, mall, step;
+  char           tmp[PETSC_MAX_PATH_LEN + 8], what[64];
+  PetscReal      bytes;
+  PetscErrorCode ierr;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetComm(sc, &comm));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetStep(sc, &step, NULL, NULL));
+  PetscCall(KergsContactsGetLocal(ct, &m, NULL));
+  PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Checkpoint file name is empty (-checkpoint_path)");
+  PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
+  PetscCall(MPIU_Allreduce(&m, &mall, 1, MPIU_INT, MPI_SUM, comm));
+  PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "the checkpoint of step %" PetscInt_FMT, step));
+  PetscCall(KergsFileMakeParentDir(comm, path));
+  /* per disk 10 + 2 KERGS_DIM values and at most one ghost each, per contact 9 + KERGS_DIM + KERGS_MAXCOMP, metadata */
+  bytes = 8.0 * ((PetscReal)D.ndisks * (11 + 2 * KERGS_DIM) + (PetscReal)mall * (7 + KERGS_DIM + KERGS_MAXCOMP)) + 131072.0;
+  PetscCall(KergsFileCheckSpace(comm, path, tmp, what, bytes));
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = WriteAll(comm, tmp, &w);
+  PetscCall(PetscPopErrorHandler());
+  if (ierr) PetscCall(KergsFileWriteFailed(path, tmp, what)); /* the previous checkpoint under path is untouched */
+  PetscCall(KergsFileCommit(comm, tmp, path));
+  PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Reading                                                                                          */
+
+/* Rank 0 checks that path is a readable HDF5 file holding a kergs checkpoint (quietly: failing is an expected
+   outcome), so that PETSc's viewer only ever opens a good one. */
+static PetscErrorCode CheckFile(MPI_Comm comm, const char path[])
+{
+  char        msg[PETSC_MAX_PATH_LEN + 256] = "";
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    PetscBool readable;
+    PetscCall(PetscTestFile(path, 'r', &readable));
+    if (!readable)
+      PetscCall(PetscSNPrintf(msg, sizeof(msg), "Checkpoint file %s (-restart) does not exist or is not readable", path));
+    else {
+      H5E_auto2_t  handler    = NULL;
+      void        *data       = NULL;
+      char         format[64] = "";
+      const herr_t got        = H5Eget_auto2(H5E_DEFAULT, &handler, &data);
+      hid_t        file, attr, type;
+
+      if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+      file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+      attr = file >= 0 ? H5Aopen_by_name(file, "/", "kergs_format", H5P_DEFAULT, H5P_DEFAULT) : -1;
+      type = H5Tcopy(H5T_C_S1);
+      (void)H5Tset_size(type, sizeof(format) - 1);
+      if (file < 0)
+        PetscCall(PetscSNPrintf(msg, sizeof(msg), "Checkpoint file %s cannot be opened as HDF5: not an HDF5 file, or truncated or corrupt",
+                                path));
+      else if (attr < 0 || H5Aread(attr, type, format) < 0 || strncmp(format, KERGS_CHECKPOINT_FORMAT, strlen(KERGS_CHECKPOINT_FORMAT)))
+        PetscCall(PetscSNPrintf(msg, sizeof(msg), "File %s is not a kergs checkpoint (root attribute kergs_format is not \"%s\")", path,
+                                KERGS_CHECKPOINT_FORMAT));
+      (void)H5Tclose(type);
+      if (attr >= 0) (void)H5Aclose(attr);
+      if (file >= 0) (void)H5Fclose(file);
+      if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, handler, data);
+    }
+  }
+  PetscCallMPI(MPI_Bcast(msg, (int)sizeof(msg), MPI_CHAR, 0, comm));
+  PetscCheck(msg[0] == 0, comm, PETSC_ERR_FILE_OPEN, "%s", msg);
+  PetscFunctionReturn(0);
+}
+
+/* Dataset `name` of the current group, nlocal blocks of bs values on this rank (the ranks' parts in rank order; nlocal
+   PETSC_DECIDE: an even split), into a new array (*local, PetscFree; *nlocal set). The whole dataset must hold nglobal
+   blocks. */
+static PetscErrorCode LoadLocal(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal,
+                                PetscInt bs, PetscInt *nlocal, PetscReal **local)
+{
+  Vec                vec;
+  PetscInt           fbs, fN, n;
+  const PetscScalar *a;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5ReadSizes(v, name, &fbs, &fN));
+  PetscCheck(fN == nglobal * bs, comm, PETSC_ERR_FILE_UNEXPECTED,
+             "Checkpoint file %s: dataset %s/%s holds %" PetscInt_FMT " values, expected %" PetscInt_FMT " x %" PetscInt_FMT, path, group,
+             name, fN, nglobal, bs);
+  n = *nlocal;
+  if (n == PETSC_DECIDE) PetscCall(PetscSplitOwnership(comm, &n, &nglobal));
+  *nlocal = n;
+  PetscCall(PetscMalloc1(n * bs + 1, local));
+  if (nglobal == 0) PetscFunctionReturn(0); /* an empty dataset: nothing to load */
+  PetscCall(VecCreate(comm, &vec));
+  PetscCall(VecSetSizes(vec, n * bs, nglobal * bs));
+  PetscCall(VecSetBlockSize(vec, bs));
+  PetscCall(VecSetType(vec, VECMPI));
+  PetscCall(PetscObjectSetName((PetscObject)vec, name));
+  PetscCall(VecLoad(vec, v));
+  PetscCall(VecGetArrayRead(vec, &a));
+  for (PetscInt i = 0; i < n * bs; i++) (*local)[i] = PetscRealPart(a[i]);
+  PetscCall(VecRestoreArrayRead(vec, &a));
+  PetscCall(VecDestroy(&vec));
+  PetscFunctionReturn(0);
+}
+
+/* The whole dataset on every rank. */
+static PetscErrorCode LoadAll(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal,
+                              PetscInt bs, PetscReal **all)
+{
+  PetscInt    n = PETSC_DECIDE, *counts;
+  PetscReal  *mine;
+  PetscMPIInt size, *rc, *displs, nm;
+
+  PetscFunctionBeginUser;
+  PetscCall(LoadLocal(v, comm, path, group, name, nglobal, bs, &n, &mine));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscMalloc3(size, &counts, size, &rc, size, &displs));
+  nm = (PetscMPIInt)(n * bs);
+  PetscCallMPI(MPI_Allgather(&nm, 1, MPI_INT, rc, 1, MPI_INT, comm));
+  displs[0] = 0;
+  for (PetscMPIInt q = 1; q < size; q++) displs[q] = displs[q - 1] + rc[q - 1];
+  PetscCall(PetscMalloc1(nglobal * bs + 1, all));
+  PetscCallMPI(MPI_Allgatherv(mine, nm, MPIU_REAL, *all, rc, displs, MPIU_REAL, comm));
+  PetscCall(PetscFree(mine));
+  PetscCall(PetscFree3(counts, rc, displs));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReadInt(PetscViewer v, const char path[], const char group[], const char name[], PetscInt *value)
+{
+  PetscBool has;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5HasAttribute(v, group, name, &has));
+  PetscCheck(has, PetscObjectComm((PetscObject)v), PETSC_ERR_FILE_UNEXPECTED, "Checkpoint file %s has no attribute %s on %s", path, name,
+             group);
+  PetscCall(PetscViewerHDF5ReadAttribute(v, group, name, PETSC_INT, NULL, value));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReadReal(PetscViewer v, const char path[], const char group[], const char name[], PetscReal *value)
+{
+  PetscBool has;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5HasAttribute(v, group, name, &has));
+  PetscCheck(has, PetscObjectComm((PetscObject)v), PETSC_ERR_FILE_UNEXPECTED, "Checkpoint file %s has no attribute %s on %s", path, name,
+             group);
+  PetscCall(PetscViewerHDF5ReadAttribute(v, group, name, PETSC_REAL, NULL, value));
+  PetscFunctionReturn(0);
+}
+
+/* What the file says of the run as a whole. */
+typedef struct {
+  PetscInt   ranks, step, ndisks, ncontacts, nwalls, layer, rebuilds;
+  PetscReal  time, alert;
+  PetscReal *rankinfo[RANK_FIELDS]; /* per saved rank */
+} Header;
+
+static PetscErrorCode ReadHeader(PetscViewer v, MPI_Comm comm, const char path[], Header *h)
+{
+  PetscInt dim;
+
+  PetscFunctionBeginUser;
+  PetscCall(ReadInt(v, path, "/", "dim", &dim));
+  PetscCheck(dim == KERGS_DIM, comm, PETSC_ERR_FILE_UNEXPECTED,
+             "Checkpoint file %s is of dimension %" PetscInt_FMT ", kergs computes in %d", path, dim, KERGS_DIM);
+  PetscCall(ReadInt(v, path, "/", "ranks", &h->ranks));
+  PetscCall(ReadInt(v, path, "/", "step", &h->step));
+  PetscCall(ReadReal(v, path, "/", "time", &h->time));
+  PetscCall(ReadInt(v, path, "/disks", "ndisks", &h->ndisks));
+  PetscCall(ReadInt(v, path, "/disks", "ghost_layer", &h->layer));
+  PetscCall(ReadInt(v, path, "/disks", "ghost_rebuilds", &h->rebuilds));
+  PetscCall(ReadInt(v, path, "/walls", "nwalls", &h->nwalls));
+  PetscCall(ReadReal(v, path, "/state", "alert", &h->alert));
+  PetscCheck(h->ranks >= 1 && h->step >= 0 && h->ndisks >= 0 && h->ndisks <= KERGS_MAX_DISKS && h->nwalls >= 0, comm,
+             PETSC_ERR_FILE_UNEXPECTED,
+             "Checkpoint file %s: ranks %" PetscInt_FMT ", step %" PetscInt_FMT ", ndisks %" PetscInt_FMT ", nwalls %" PetscInt_FMT
+             " are not those of a run",
+             path, h->ranks, h->step, h->ndisks, h->nwalls);
+  PetscCall(PetscViewerHDF5PushGroup(v, "/ranks"));
+  for (int k = 0; k < RANK_FIELDS; k++) PetscCall(LoadAll(v, comm, path, "/ranks", RankFields[k], h->ranks, 1, &h->rankinfo[k]));
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  h->ncontacts = 0;
+  for (PetscInt q = 0; q < h->ranks; q++) h->ncontacts += (PetscInt)h->rankinfo[RANK_NCONTACTS][q];
+  PetscFunctionReturn(0);
+}
+
+/* The disks: this rank's range of the checkpoint (same ranks) or an even split; then the clock and the alert. */
+static PetscErrorCode RestoreDisks(PetscViewer v, MPI_Comm comm, const char path[], const Header *h, PetscBool same, KergsScene sc,
+                                   PetscReal **xref)
+{
+  PetscMPIInt rank;
+  PetscInt    n, n2;
+  PetscReal  *id, *mat, *x, *vel, *rot, *omega, *radius;
+  PetscInt   *iid, *imat;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  n = same ? (PetscInt)h->rankinfo[RANK_NOWNED][rank] : PETSC_DECIDE;
+  PetscCall(PetscViewerHDF5PushGroup(v, "/disks"));
+  PetscCall(LoadLocal(v, comm, path, "/disks", "id", h->ndisks, 1, &n, &id));
+  n2 = n;
+  PetscCall(LoadLocal(v, comm, path, "/disks", "material", h->ndisks, 1, &n2, &mat));
+  PetscCall(LoadLocal(v, comm, path, "/disks", "x", h->ndisks, KERGS_DIM, &n2, &x));
+  PetscCall(LoadLocal(v, comm, path, "/disks", "v", h->ndisks, KERGS_DIM, &n2, &vel));
+  PetscCall(LoadLocal(v, comm, path, "/disks", "rot", h->ndisks, KERGS_NROT, &n2, &rot));
+  PetscCall(LoadLocal(v, comm, path, "/disks", "omega", h->ndisks, KERGS_NROT, &n2, &omega));
+  PetscCall(LoadLocal(v, comm, path, "/disks", "radius", h->ndisks, 1, &n2, &radius));
+  PetscCall(LoadLocal(v, comm, path, "/disks", "xref", h->ndisks, KERGS_DIM, &n2, xref));
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  PetscCall(PetscMalloc2(n + 1, &iid, n + 1, &imat));
+  for (PetscInt i = 0; i < n; i++) {
+    iid[i]  = (PetscInt)id[i];
+    imat[i] = (PetscInt)mat[i];
+  }
+  PetscCall(KergsSceneRestoreDisks(sc, h->ndisks, n, iid, imat, x, rot, vel, omega, radius));
+  PetscCall(KergsSceneRestoreState(sc, h->step, h->time, h->alert));
+  PetscCall(PetscFree2(iid, imat));
+  PetscCall(PetscFree(id));
+  PetscCall(PetscFree(mat));
+  PetscCall(PetscFree(x));
+  PetscCall(PetscFree(vel));
+  PetscCall(PetscFree(rot));
+  PetscCall(PetscFree(omega));
+  PetscCall(PetscFree(radius));
+  PetscFunctionReturn(0);
+}
+
+/* The walls of the options (by name, in order) take the checkpoint's positions, velocities and displacements. */
+static PetscErrorCode RestoreWalls(PetscViewer v, MPI_Comm comm, const char path[], const Header *h, KergsScene sc)
+{
+  const KergsWall *walls;
+  PetscInt         nwalls;
+  char            *names, *mine;
+  PetscReal       *f[4];
+  const char      *fields[4] = {"a", "b", "v", "disp"};
+  size_t           len       = 1;
+  PetscBool        same;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetWalls(sc, &nwalls, &walls));
+  PetscCall(PetscViewerHDF5ReadAttribute(v, "/walls", "names", PETSC_STRING, NULL, &names));
+  for (PetscInt w = 0; w < nwalls; w++) len += strlen(walls[w].name) + 1;
+  PetscCall(PetscCalloc1(len, &mine));
+  for (PetscInt w = 0; w < nwalls; w++) {
+    if (w) strcat(mine, ",");
+    strcat(mine, walls[w].name);
+  }
+  PetscCall(PetscStrcmp(names, mine, &same));
+  PetscCheck(same && nwalls == h->nwalls, comm, PETSC_ERR_FILE_UNEXPECTED,
+             "Checkpoint file %s holds the walls %s; the options of this run give %s: a restart keeps the walls of its run", path,
+             names[0] ? names : "(none)", mine[0] ? mine : "(none)");
+  PetscCall(PetscFree(names));
+  PetscCall(PetscFree(mine));
+  PetscCall(PetscViewerHDF5PushGroup(v, "/walls"));
+  for (int k = 0; k < 4; k++) PetscCall(LoadAll(v, comm, path, "/walls", fields[k], nwalls, KERGS_DIM, &f[k]));
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  for (PetscInt w = 0; w < nwalls; w++)
+    PetscCall(KergsSceneRestoreWall(sc, w, &f[0][KERGS_DIM * w], &f[1][KERGS_DIM * w], &f[2][KERGS_DIM * w], &f[3][KERGS_DIM * w]));
+  for (int k = 0; k < 4; k++) PetscCall(PetscFree(f[k]));
+  PetscFunctionReturn(0);
+}
+
+/* Local index of each grain id held here (owned and ghosts): a sorted table. */
+typedef struct {
+  PetscInt id, local;
+} IdIndex;
+
+static int CompareIdIndex(const void *x, const void *y)
+{
+  const IdIndex *p = (const IdIndex *)x, *q = (const IdIndex *)y;
+  return p->id < q->id ? -1 : (p->id > q->id ? 1 : 0);
+}
+
+static PetscInt FindId(const IdIndex *t, PetscInt n, PetscInt id)
+{
+  PetscInt lo = 0, hi = n - 1;
+  while (lo <= hi) {
+    PetscInt mid = (lo + hi) / 2;
+    if (t[mid].id == id) return t[mid].local;
+    if (t[mid].id < id)
+      lo = mid + 1;
+    else
+      hi = mid - 1;
+  }
+  return -1;
+}
+
+static PetscErrorCode IdTable(KergsScene sc, PetscInt n, IdIndex **t)
+{
+  KergsDisks D;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(PetscMalloc1(n + 1, t));
+  for (PetscInt i = 0; i < n; i++) (*t)[i] = (IdIndex){D.id[i], i};
+  qsort(*t, (size_t)n, sizeof(IdIndex), CompareIdIndex);
+  PetscFunctionReturn(0);
+}
+
+/* The contact records of the file (this rank's part: nlocal, or all: nlocal PETSC_DETERMINE), by field. */
+typedef struct {
+  PetscInt   n;
+  PetscReal *ida, *kind, *idb, *persistent, *nrm, *ra, *rb, *gap, *mu, *r;
+} ContactRecords;
+
+static PetscErrorCode LoadContacts(PetscViewer v, MPI_Comm comm, const char path[], const Header *h, PetscInt nlocal, ContactRecords *cr)
+{
+  PetscReal **dst[10]   = {&cr->ida, &cr->kind, &cr->idb, &cr->persistent, &cr->nrm, &cr->ra, &cr->rb, &cr->gap, &cr->mu, &cr->r};
+  const char *names[10] = {"a_id", "kind", "b_id", "persistent", "n", "ra", "rb", "gap", "mu", "r"};
+  PetscInt    bs[10]    = {1, 1, 1, 1, KERGS_DIM, 1, 1, 1, 1, KERGS_MAXCOMP};
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5PushGroup(v, "/contacts"));
+  for (int k = 0; k < 10; k++) {
+    PetscInt n = nlocal;
+    if (nlocal == PETSC_DETERMINE) {
+      PetscCall(LoadAll(v, comm, path, "/contacts", names[k], h->ncontacts, bs[k], dst[k]));
+      n = h->ncontacts;
+    } else
+      PetscCall(LoadLocal(v, comm, path, "/contacts", names[k], h->ncontacts, bs[k], &n, dst[k]));
+    cr->n = n;
+  }
+  PetscCall(PetscViewerHDF5PopGroup(v));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode FreeContacts(ContactRecords *cr)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(cr->ida));
+  PetscCall(PetscFree(cr->kind));
+  PetscCall(PetscFree(cr->idb));
+  PetscCall(PetscFree(cr->persistent));
+  PetscCall(PetscFree(cr->nrm));
+  PetscCall(PetscFree(cr->ra));
+  PetscCall(PetscFree(cr->rb));
+  PetscCall(PetscFree(cr->gap));
+  PetscCall(PetscFree(cr->mu));
+  PetscCall(PetscFree(cr->r));
+  PetscFunctionReturn(0);
+}
+
+/* Contact k of the records as a contact of this rank; whole (b found among the disks held here) or, when `keyonly`,
+   only its key and impulse (b = -1: the next detection warm-starts from it). */
+static void ContactOf(const ContactRecords *cr, PetscInt k, PetscInt a, PetscInt b, PetscBool keyonly, KergsContact *c)
+{
+  memset(c, 0, sizeof(*c));
+  c->kind = cr->kind[k] != 0 ? KERGS_CONTACT_DISK_WALL : KERGS_CONTACT_DISK_DISK;
+  c->a    = a;
+  c->b    = keyonly ? -1 : b;
+  c->idb  = (PetscInt)cr->idb[k];
+  for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) c->r[j] = cr->r[KERGS_MAXCOMP * k + j];
+  if (keyonly) return;
+  c->n[0]       = cr->nrm[KERGS_DIM * k];
+  c->n[1]       = cr->nrm[KERGS_DIM * k + 1];
+  c->t[0]       = -c->n[1]; /* t = (-n_y, n_x), as detection sets it */
+  c->t[1]       = c->n[0];
+  c->ra         = cr->ra[k];
+  c->rb         = cr->rb[k];
+  c->gap        = cr->gap[k];
+  c->mu         = cr->mu[k];
+  c->persistent = cr->persistent[k] != 0 ? PETSC_TRUE : PETSC_FALSE;
+}
+
+/* Same ranks: the ghost layer, then every contact whole, on the rank that held it. */
+static PetscErrorCode RestoreExact(PetscViewer v, MPI_Comm comm, const char path[], const Header *h, const PetscReal *xref, KergsScene sc,
+                                   KergsContacts ct)
+{
+  KergsDisks     D;
+  PetscMPIInt    rank;
+  PetscInt       ng, nc, *gidx, nwalls;
+  PetscReal     *g;
+  ContactRecords cr = {0};
+  IdIndex       *table;
+  KergsContact  *c;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  ng = (PetscInt)h->rankinfo[RANK_NGHOSTS][rank];
+  nc = (PetscInt)h->rankinfo[RANK_NCONTACTS][rank];
+  {
+    PetscInt total = 0;
+    for (PetscInt q = 0; q < h->ranks; q++) total += (PetscInt)h->rankinfo[RANK_NGHOSTS][q];
+    PetscCall(PetscViewerHDF5PushGroup(v, "/disks"));
+    PetscCall(LoadLocal(v, comm, path, "/disks", "ghosts", total, 1, &ng, &g));
+    PetscCall(PetscViewerHDF5PopGroup(v));
+  }
+  PetscCall(PetscMalloc1(ng + 1, &gidx));
+  for (PetscInt k = 0; k < ng; k++) gidx[k] = (PetscInt)g[k];
+  PetscCall(KergsSceneRestoreGhosts(sc, h->layer ? PETSC_TRUE : PETSC_FALSE, ng, gidx, xref, h->rebuilds));
+  PetscCall(PetscFree(gidx));
+  PetscCall(PetscFree(g));
+  PetscCall(LoadContacts(v, comm, path, h, nc, &cr));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(KergsSceneGetWalls(sc, &nwalls, NULL));
+  PetscCall(IdTable(sc, D.nlocal, &table));
+  PetscCall(PetscMalloc1(nc + 1, &c));
+  for (PetscInt k = 0; k < nc; k++) {
+    const PetscInt ida = (PetscInt)cr.ida[k], idb = (PetscInt)cr.idb[k], a = FindId(table, D.nlocal, ida);
+    const PetscInt b = cr.kind[k] != 0 ? idb : FindId(table, D.nlocal, idb);
+    PetscCheck(a >= 0 && a < D.nowned && b >= 0 && (cr.kind[k] != 0 ? b < nwalls : b < D.nlocal), PETSC_COMM_SELF,
+               PETSC_ERR_FILE_UNEXPECTED,
+               "Checkpoint file %s: contact of grain %" PetscInt_FMT " with %s %" PetscInt_FMT " is not on rank %d's disks", path, ida,
+               cr.kind[k] != 0 ? "wall" : "grain", idb, rank);
+    ContactOf(&cr, k, a, b, PETSC_FALSE, &c[k]);
+  }
+  PetscCall(KergsContactsRestore(ct, nc, c));
+  PetscCall(PetscFree(c));
+  PetscCall(PetscFree(table));
+  PetscCall(FreeContacts(&cr));
+  PetscFunctionReturn(0);
+}
+
+static int CompareContactKeys(const void *p, const void *q) { return KERGS_COMPARE_KEYS((const KergsContact *)p, (const KergsContact *)q); }
+
+/* Another number of ranks: a new initial partition, then the contacts of the grains owned here as warm start of a
+   detection at the restored positions. */
+static PetscErrorCode RestoreRepartitioned(PetscViewer v, MPI_Comm comm, const char path[], const Header *h, KergsScene sc,
+                                           KergsContacts ct, KergsPartition p)
+{
+  KergsDisks     D;
+  ContactRecords cr = {0};
+  IdIndex       *table;
+  KergsContact  *c;
+  PetscInt       nc = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsContactsRestore(ct, 0, NULL));
+  PetscCall(KergsSceneRestoreGhosts(sc, PETSC_FALSE, 0, NULL, NULL, 0));
+  PetscCall(KergsPartitionSetState(p, NULL));
+  PetscCall(KergsPartitionUpdate(p, sc, ct, NULL)); /* the initial partition of a new run: no contacts yet */
+  PetscCall(LoadContacts(v, comm, path, h, PETSC_DETERMINE, &cr));
+  PetscCall(KergsSceneGetDisks(sc, &D));
+  PetscCall(IdTable(sc, D.nowned, &table));
+  PetscCall(PetscMalloc1(cr.n + 1, &c));
+  for (PetscInt k = 0; k < cr.n; k++) {
+    const PetscInt a = FindId(table, D.nowned, (PetscInt)cr.ida[k]);
+    if (a >= 0) ContactOf(&cr, k, a, -1, PETSC_TRUE, &c[nc++]);
+  }
+  qsort(c, (size_t)nc, sizeof(KergsContact), CompareContactKeys);
+  PetscCall(KergsContactsRestore(ct, nc, c));
+  PetscCall(KergsContactsDetect(ct, sc)); /* the contacts of the restored positions, impulses carried over */
+  PetscCall(PetscFree(c));
+  PetscCall(PetscFree(table));
+  PetscCall(FreeContacts(&cr));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsCheckpointRead(const char path[], KergsScene sc, KergsContacts ct, KergsPartition p, KergsResults res,
+                                   KergsRunState *run)
+{
+  MPI_Comm          comm;
+  PetscViewer       v;
+  PetscMPIInt       size, rank;
+  Header            h = {0};
+  PetscReal        *xref;
+  PetscBool         same, enabled;
+  PetscInt          flag;
+  KergsResultsState rs;
+  char             *source;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetComm(sc, &comm));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
+  PetscCall(CheckFile(comm, path));
+  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &v));
+  PetscCall(ReadHeader(v, comm, path, &h));
+  same = (PetscBool)(h.ranks == size);
+  PetscCall(RestoreDisks(v, comm, path, &h, same, sc, &xref));
+  PetscCall(RestoreWalls(v, comm, path, &h, sc));
+  PetscCall(KergsSceneCheck(sc)); /* the restored state against the options of this run (materials, ...) */
+  if (same) {
+    KergsPartitionState ps;
+    PetscCall(RestoreExact(v, comm, path, &h, xref, sc, ct));
+    PetscCall(ReadInt(v, path, "/state", "partition_initialized", &flag));
+    ps.initialized = flag ? PETSC_TRUE : PETSC_FALSE;
+    PetscCall(ReadInt(v, path, "/state", "partition_provisional", &flag));
+    ps.provisional = flag ? PETSC_TRUE : PETSC_FALSE;
+    PetscCall(ReadInt(v, path, "/state", "partition_edgecut_base", &ps.edgecut_base));
+    PetscCall(ReadInt(v, path, "/state", "partition_repartitions", &ps.nrepartitions));
+    PetscCall(ReadInt(v, path, "/state", "partition_moved", &ps.nmoved));
+    PetscCall(ReadInt(v, path, "/state", "partition_last_method", &ps.last_method));
+    PetscCall(ReadReal(v, path, "/state", "partition_imbalance_base", &ps.imbalance_base));
+    ps.compute_seconds = h.rankinfo[RANK_COMPUTE_SECONDS][rank];
+    ps.work_scale      = h.rankinfo[RANK_WORK_SCALE][rank];
+    PetscCall(KergsPartitionSetState(p, &ps));
+  } else
+    PetscCall(RestoreRepartitioned(v, comm, path, &h, sc, ct, p));
+  PetscCall(ReadInt(v, path, "/state", "nonconverged", &run->nonconverged));
+  PetscCall(ReadReal(v, path, "/state", "max_violation", &run->max_violation));
+  PetscCall(ReadInt(v, path, "/state", "moved", &flag));
+  run->moved = flag ? PETSC_TRUE : PETSC_FALSE;
+  PetscCall(ReadInt(v, path, "/state", "results_enabled", &flag));
+  PetscCall(ReadInt(v, path, "/state", "results_rows", &rs.nrows));
+  PetscCall(ReadInt(v, path, "/state", "results_snapshots", &rs.nsnapshots));
+  PetscCall(ReadInt(v, path, "/state", "results_last_snapshot_step", &rs.last_snapshot_step));
+  PetscCall(PetscViewerHDF5ReadAttribute(v, "/state", "results_path", PETSC_STRING, NULL, &source));
+  PetscCall(KergsResultsGetPath(res, NULL, &enabled));
+  if (enabled && flag) PetscCall(KergsResultsSetContinue(res, source, &rs, h.step));
+  PetscCall(PetscFree(source));
+  PetscCall(PetscViewerDestroy(&v));
+  PetscCall(PetscFree(xref));
+  for (int k = 0; k < RANK_FIELDS; k++) PetscCall(PetscFree(h.rankinfo[k]));
+  PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
+  PetscCall(PetscInfo(NULL, "Restored step %" PetscInt_FMT " of %s (%" PetscInt_FMT " ranks, now %d)\n", h.step, path, h.ranks, size));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Options                                                                                          */
+
+/* Whether token starts an option: '-' then a letter (a negative number such as -0.05 is a value). */
+static PetscBool IsOptionName(const char *t)
+{
+  return t[0] == '-' && ((t[1] >= 'a' && t[1] <= 'z') || (t[1] >= 'A' && t[1] <= 'Z')) ? PETSC_TRUE : PETSC_FALSE;
+}
+
+/* The pairs of PetscOptionsGetAll's text: "-name value words -name2 -name3 value". */
+static PetscErrorCode InsertOptions(const char text[])
+{
+  char  *copy, *save = NULL, *tok, name[256] = "", value[4096] = "";
+  size_t len;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscStrallocpy(text, &copy));
+  for (tok = strtok_r(copy, " \t\n", &save);; tok = strtok_r(NULL, " \t\n", &save)) {
+    if (!tok || IsOptionName(tok)) {
+      if (name[0]) {
+        PetscBool set, skip;
+        PetscCall(PetscStrcmp(name, "-restart", &skip));
+        PetscCall(PetscOptionsHasName(NULL, NULL, name, &set));
+        if (!skip && !set) PetscCall(PetscOptionsSetValue(NULL, name, value[0] ? value : NULL)); /* the command line wins */
+      }
+      if (!tok) break;
+      PetscCall(PetscStrncpy(name, tok, sizeof(name)));
+      value[0] = 0;
+      continue;
+    }
+    PetscCall(PetscStrlen(value, &len));
+    PetscCall(PetscSNPrintf(value + len, sizeof(value) - len, "%s%s", len ? " " : "", tok));
+  }
+  PetscCall(PetscFree(copy));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsCheckpointLoadOptions(MPI_Comm comm, const char path[])
+{
+  PetscViewer v;
+  char       *text;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsInitializePackage());
+  PetscCall(CheckFile(comm, path));
+  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &v));
+  PetscCall(PetscViewerHDF5ReadAttribute(v, "/", "options", PETSC_STRING, NULL, &text));
+  PetscCall(PetscViewerDestroy(&v));
+  PetscCall(InsertOptions(text));
+  PetscCall(PetscFree(text));
+  PetscFunctionReturn(0);
+}

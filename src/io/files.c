@@ -1,0 +1,407 @@
+/* kergs files: atomic output files, the checks of a run's paths before any work, free space and failed writes
+   (include/kergs/files.h). Rank 0 touches the file system; every rank gets the same outcome. */
+#include <kergs/files.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
+
+/* Longest message a collective check broadcasts. */
+#define KERGS_FILE_MSG (2 * PETSC_MAX_PATH_LEN + 512)
+
+/* Broadcast rank 0's message; a non-empty one becomes the same error on every rank. */
+static PetscErrorCode RaiseFromRoot(MPI_Comm comm, PetscErrorCode code, char msg[], int len)
+{
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Bcast(msg, len, MPI_CHAR, 0, comm));
+  PetscCheck(msg[0] == 0, comm, code, "%s", msg);
+  PetscFunctionReturn(0);
+}
+
+/* The directory part of path ("." when it has none), into dir. */
+static void DirName(const char path[], char dir[], size_t len)
+{
+  const char *slash = strrchr(path, '/');
+
+  if (!slash)
+    snprintf(dir, len, ".");
+  else if (slash == path)
+    snprintf(dir, len, "/");
+  else
+    snprintf(dir, len, "%.*s", (int)(slash - path), path);
+}
+
+/* The deepest existing ancestor of dir (dir itself when it exists), into anc; *isdir tells whether it is a directory. */
+static void ExistingAncestor(const char dir[], char anc[], size_t len, PetscBool *isdir)
+{
+  struct stat st;
+
+  snprintf(anc, len, "%s", dir);
+  while (stat(anc, &st)) {
+    char *slash = strrchr(anc, '/');
+    if (!slash) {
+      snprintf(anc, len, ".");
+      break;
+    }
+    if (slash == anc)
+      slash[1] = 0;
+    else
+      *slash = 0;
+  }
+  *isdir = (PetscBool)(!stat(anc, &st) && S_ISDIR(st.st_mode));
+}
+
+/* Bytes free for this process on the file system of path (its deepest existing directory); -1 when unknown. */
+static double FreeBytes(const char path[])
+{
+  char           dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN];
+  struct statvfs sv;
+  PetscBool      isdir;
+
+  DirName(path, dir, sizeof(dir));
+  ExistingAncestor(dir, anc, sizeof(anc), &isdir);
+  if (statvfs(anc, &sv)) return -1;
+  return (double)sv.f_bavail * (double)sv.f_frsize;
+}
+
+/* mkdir -p of the directory part of path (rank 0 only); the message is empty on success. */
+static void MakeDirectories(const char path[], char msg[], size_t len)
+{
+  char dir[PETSC_MAX_PATH_LEN];
+
+  msg[0] = 0;
+  if (strlen(path) >= sizeof(dir)) {
+    snprintf(msg, len, "Output path %s is too long", path);
+    return;
+  }
+  strcpy(dir, path);
+  {
+    char *slash = strrchr(dir, '/');
+    if (!slash || slash == dir) return; /* in the current directory, or directly under / */
+    *slash = 0;
+  }
+  for (char *p = dir + 1;; p++) {
+    const char saved = *p;
+    if (saved != '/' && saved != 0) continue;
+    *p = 0;
+    if (mkdir(dir, 0777) && errno != EEXIST) {
+      snprintf(msg, len, "Cannot create directory %s for output file %s: %s", dir, path, strerror(errno));
+      return;
+    }
+    *p = saved;
+    if (!saved) break;
+  }
+  {
+    struct stat st;
+    if (stat(dir, &st) || !S_ISDIR(st.st_mode))
+      snprintf(msg, len, "Cannot use %s as the directory of output file %s: not a directory", dir, path);
+  }
+}
+
+PetscErrorCode KergsFileMakeParentDir(MPI_Comm comm, const char path[])
+{
+  char        msg[KERGS_FILE_MSG] = "";
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) MakeDirectories(path, msg, sizeof(msg));
+  PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_OPEN, msg, (int)sizeof(msg)));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsFileCommit(MPI_Comm comm, const char tmp[], const char path[])
+{
+  char        msg[KERGS_FILE_MSG] = "";
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Barrier(comm)); /* every rank has closed its handle on tmp */
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0 && rename(tmp, path)) snprintf(msg, sizeof(msg), "Cannot rename %s to %s: %s", tmp, path, strerror(errno));
+  PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_WRITE, msg, (int)sizeof(msg)));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsFileExists(MPI_Comm comm, const char path[], PetscBool *exists)
+{
+  PetscMPIInt rank;
+  int         found = 0;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    struct stat st;
+    found = !stat(path, &st);
+  }
+  PetscCallMPI(MPI_Bcast(&found, 1, MPI_INT, 0, comm));
+  *exists = found ? PETSC_TRUE : PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
+/* Rank 0: copy src to dst in blocks; the message is empty on success (a partial dst is removed). */
+static void CopyFile(const char src[], const char dst[], char msg[], size_t len)
+{
+  static char buf[1 << 20];
+  FILE       *in = fopen(src, "rb"), *out;
+  size_t      n;
+
+  msg[0] = 0;
+  if (!in) {
+    snprintf(msg, len, "Cannot read %s: %s", src, strerror(errno));
+    return;
+  }
+  out = fopen(dst, "wb");
+  if (!out) {
+    snprintf(msg, len, "Cannot create %s: %s", dst, strerror(errno));
+    fclose(in);
+    return;
+  }
+  while ((n = fread(buf, 1, sizeof(buf), in)) > 0)
+    if (fwrite(buf, 1, n, out) != n) break;
+  if (ferror(in))
+    snprintf(msg, len, "Cannot read %s: %s", src, strerror(errno));
+  else if (ferror(out) || fflush(out))
+    snprintf(msg, len, "Cannot write %s: %s", dst, strerror(errno));
+  fclose(in);
+  if (fclose(out) && !msg[0]) snprintf(msg, len, "Cannot write %s: %s", dst, strerror(errno));
+  if (msg[0]) (void)remove(dst);
+}
+
+PetscErrorCode KergsFileCopy(MPI_Comm comm, const char src[], const char dst[])
+{
+  char        msg[KERGS_FILE_MSG] = "";
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) CopyFile(src, dst, msg, sizeof(msg));
+  PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_WRITE, msg, (int)sizeof(msg)));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsFileCheckSpace(MPI_Comm comm, const char path[], const char tmp[], const char what[], PetscReal bytes)
+{
+  char        msg[KERGS_FILE_MSG] = "";
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    const double avail = FreeBytes(path);
+    if (avail >= 0 && avail < (double)bytes) {
+      if (tmp) (void)remove(tmp);
+      snprintf(msg, sizeof(msg), "No space left on device: %s of %s needs about %.0f bytes, %.0f are free on its file system%s%s%s", what,
+               path, (double)bytes, avail, tmp ? "; the partial " : "", tmp ? tmp : "", tmp ? " was removed" : "");
+    }
+  }
+  PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_WRITE, msg, (int)sizeof(msg)));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsFileWriteFailed(const char path[], const char tmp[], const char what[])
+{
+  const double avail = FreeBytes(path);
+
+  PetscFunctionBeginUser;
+  if (tmp) (void)remove(tmp);
+  /* HDF5 and MPI-IO say "file write failed" and keep errno to themselves: a full file system is told by its free space */
+  PetscCheck(!(avail >= 0 && avail < 1048576.0), PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE,
+             "No space left on device: %s of %s failed with %.0f bytes free on its file system; the partial %s was removed", what, path,
+             avail, tmp ? tmp : path);
+  SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write %s of %s (HDF5 write failed, %.0f bytes free); the partial %s was removed",
+          what, path, avail, tmp ? tmp : path);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Checks of a run's paths                                                                          */
+
+/* The directory entry that writing path (by rename) replaces, links resolved: realpath of its deepest existing
+   directory, then the directories still to be created, then the base name. Empty message on success. */
+static void EntryOf(const char path[], char entry[], size_t len)
+{
+  char        dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN], real[PATH_MAX];
+  char        rest[PETSC_MAX_PATH_LEN + 8] = ""; /* the directories below anc still to be created by mkdir -p, from a '/' */
+  const char *base                         = strrchr(path, '/');
+  PetscBool   isdir;
+  size_t      na;
+
+  base = base ? base + 1 : path;
+  DirName(path, dir, sizeof(dir));
+  ExistingAncestor(dir, anc, sizeof(anc), &isdir);
+  na = strlen(anc);
+  if (!realpath(anc, real)) snprintf(real, sizeof(real), "%s", anc);
+  if (!strcmp(real, "/")) real[0] = 0; /* entries are joined with '/' below */
+  if (strcmp(anc, dir)) {
+    if (!strcmp(anc, ".") && strncmp(dir, "./", 2))
+      snprintf(rest, sizeof(rest), "/%.*s", (int)(sizeof(dir) - 1), dir);
+    else if (!strncmp(dir, anc, na))
+      snprintf(rest, sizeof(rest), "%s", dir + na - (anc[na - 1] == '/' ? 1 : 0));
+  }
+  snprintf(entry, len, "%s%s/%s", real, rest, base);
+}
+
+typedef struct {
+  const char *option, *path;
+  char        entry[PETSC_MAX_PATH_LEN + 16], tmpentry[PETSC_MAX_PATH_LEN + 16], real[PATH_MAX];
+} Named;
+
+/* Rank 0: the checks of one output; the message is empty when it passes. */
+static void CheckOutput(const Named *o, char msg[], size_t len)
+{
+  char        dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN], probe[PETSC_MAX_PATH_LEN + 64], tmp[PETSC_MAX_PATH_LEN + 8];
+  size_t      n = strlen(o->path);
+  struct stat st;
+  PetscBool   isdir;
+  int         fd;
+
+  msg[0] = 0;
+  if (n + 8 >= PETSC_MAX_PATH_LEN) {
+    snprintf(msg, len, "Output %s %s is too long (at most %d characters)", o->option, o->path, PETSC_MAX_PATH_LEN - 9);
+    return;
+  }
+  snprintf(tmp, sizeof(tmp), "%s.tmp", o->path);
+  if (o->path[n - 1] == '/' || (!stat(o->path, &st) && S_ISDIR(st.st_mode))) {
+    snprintf(msg, len, "Output %s %s is a directory: give a file name", o->option, o->path);
+    return;
+  }
+  if (!stat(tmp, &st) && S_ISDIR(st.st_mode)) {
+    snprintf(msg, len, "Output %s %s cannot be written: its temporary file %s is a directory", o->option, o->path, tmp);
+    return;
+  }
+  DirName(o->path, dir, sizeof(dir));
+  ExistingAncestor(dir, anc, sizeof(anc), &isdir);
+  if (!isdir) {
+    snprintf(msg, len, "Output %s %s cannot be written: %s is not a directory", o->option, o->path, anc);
+    return;
+  }
+  /* permissions, read-only file systems, quotas on inodes: create and remove a file where the output will go */
+  snprintf(probe, sizeof(probe), "%s/.kergs-probe-%ld", anc, (long)getpid());
+  fd = open(probe, O_CREAT | O_EXCL | O_WRONLY, 0600);
+  if (fd < 0) {
+    snprintf(msg, len, "Output %s %s cannot be written: cannot create files in %s: %s", o->option, o->path, anc, strerror(errno));
+    return;
+  }
+  close(fd);
+  (void)unlink(probe);
+}
+
+static PetscBool SameEntry(const char a[], const char b[]) { return a[0] && !strcmp(a, b) ? PETSC_TRUE : PETSC_FALSE; }
+
+static PetscBool Allowed(const char *out, const char *in, PetscInt nsame, const char *const same[][2])
+{
+  for (PetscInt k = 0; k < nsame; k++)
+    if (!strcmp(same[k][0], out) && !strcmp(same[k][1], in)) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
+/* Rank 0: every check; the message is empty when all pass. */
+static void CheckPaths(PetscInt nout, Named out[], PetscInt nin, Named in[], PetscInt nsame, const char *const same[][2], char msg[],
+                       size_t len)
+{
+  msg[0] = 0;
+  for (PetscInt i = 0; i < nout; i++) {
+    CheckOutput(&out[i], msg, len);
+    if (msg[0]) return;
+    EntryOf(out[i].path, out[i].entry, sizeof(out[i].entry));
+    snprintf(out[i].tmpentry, sizeof(out[i].tmpentry), "%s.tmp", out[i].entry);
+  }
+  for (PetscInt j = 0; j < nin; j++) {
+    EntryOf(in[j].path, in[j].entry, sizeof(in[j].entry));
+    if (!realpath(in[j].path, in[j].real)) in[j].real[0] = 0; /* a missing input: its reader says so */
+  }
+  for (PetscInt i = 0; i < nout; i++) {
+    for (PetscInt j = 0; j < nin; j++) {
+      const PetscBool clash = (PetscBool)(SameEntry(out[i].entry, in[j].entry) || SameEntry(out[i].entry, in[j].real) ||
+                                          SameEntry(out[i].tmpentry, in[j].entry) || SameEntry(out[i].tmpentry, in[j].real));
+      if (clash && !Allowed(out[i].option, in[j].option, nsame, same)) {
+        snprintf(msg, len, "Output %s %s is the input %s %s (links resolved): writing it would replace the input; choose another file",
+                 out[i].option, out[i].path, in[j].option, in[j].path);
+        return;
+      }
+    }
+    for (PetscInt k = 0; k < i; k++)
+      if (SameEntry(out[i].entry, out[k].entry) || SameEntry(out[i].entry, out[k].tmpentry) || SameEntry(out[i].tmpentry, out[k].entry)) {
+        snprintf(msg, len, "Outputs %s %s and %s %s are the same file (links resolved, .tmp files included): give each its own",
+                 out[k].option, out[k].path, out[i].option, out[i].path);
+        return;
+      }
+  }
+}
+
+PetscErrorCode KergsFileCheckPaths(MPI_Comm comm, PetscInt nout, const KergsFileRole outputs[], PetscInt nin, const KergsFileRole inputs[],
+                                   PetscInt nsame, const char *const same[][2])
+{
+  char        msg[KERGS_FILE_MSG] = "";
+  PetscMPIInt rank;
+  Named      *out, *in;
+  PetscInt    no = 0, ni = 0;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    PetscCall(PetscCalloc2(nout + 1, &out, nin + 1, &in));
+    for (PetscInt i = 0; i < nout; i++)
+      if (outputs[i].path && outputs[i].path[0]) {
+        out[no].option = outputs[i].option;
+        out[no++].path = outputs[i].path;
+      }
+    for (PetscInt j = 0; j < nin; j++)
+      if (inputs[j].path && inputs[j].path[0]) {
+        in[ni].option = inputs[j].option;
+        in[ni++].path = inputs[j].path;
+      }
+    CheckPaths(no, out, ni, in, nsame, same, msg, sizeof(msg));
+    PetscCall(PetscFree2(out, in));
+  }
+  PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_OPEN, msg, (int)sizeof(msg)));
+  PetscFunctionReturn(0);
+}
+
+void KergsFileAvoidLongPathAbort(void)
+{
+  /* setenv before MPI_Init: Open MPI reads its MCA parameters from the environment then. Harmless elsewhere. */
+  if (!getenv("OMPI_MCA_sharedfp")) (void)setenv("OMPI_MCA_sharedfp", "^lockedfile", 0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Datasets                                                                                         */
+
+/* A Vec of nlocal blocks of bs reals on this rank, named, viewed into the current group, destroyed.
+   values holds the nlocal * bs local entries (NULL when nlocal is 0). */
+PetscErrorCode KergsViewBlocks(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt nlocal, PetscInt bs, const PetscReal *values)
+{
+  Vec          vec;
+  PetscScalar *a;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecCreate(comm, &vec));
+  PetscCall(VecSetSizes(vec, nlocal * bs, PETSC_DETERMINE));
+  PetscCall(VecSetBlockSize(vec, bs));
+  PetscCall(VecSetType(vec, VECMPI));
+  PetscCall(VecGetArray(vec, &a));
+  for (PetscInt i = 0; i < nlocal * bs; i++) a[i] = values[i];
+  PetscCall(VecRestoreArray(vec, &a));
+  PetscCall(PetscObjectSetName((PetscObject)vec, name));
+  PetscCall(VecView(vec, viewer));
+  PetscCall(VecDestroy(&vec));
+  PetscFunctionReturn(0);
+}
+
+/* Integer fields are stored as reals (exact up to 2^53). */
+PetscErrorCode KergsViewIntegers(PetscViewer viewer, MPI_Comm comm, const char name[], PetscInt nlocal, const PetscInt *values)
+{
+  PetscReal *r;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(nlocal, &r));
+  for (PetscInt i = 0; i < nlocal; i++) r[i] = (PetscReal)values[i];
+  PetscCall(KergsViewBlocks(viewer, comm, name, nlocal, 1, r));
+  PetscCall(PetscFree(r));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,340 @@
+#!/usr/bin/python3
+"""Batch use of kergs (docs/running.md), tested through the executable on 1 and 2 ranks.
+
+  check_batch.py TEST --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
+
+TEST is one of:
+  restart   10 + 10 steps of confine500 against 20 (scripts/compare_results.py: bit for bit) on 2 ranks; 4 + 4 steps,
+            2 -> 1 and 1 -> 2 ranks, against the uninterrupted 8, frictionless and solved to 1e-10 (velocities unique): the
+            first 4 rows bit for bit, the end within the solver's tolerance
+  signals   SIGTERM and SIGINT sent to the ranks, SIGUSR1 to mpiexec (which forwards it): exit status 4, the results file
+            complete under its final name, the checkpoint of the last step; a restart continues the same file
+  kill      SIGKILL: the .tmp left is readable and holds every flushed row and snapshot; a restart from the last
+            checkpoint continues it into one run's file
+  paths     outputs that would replace an input or another output (links resolved), a directory, a path under a
+            file: refused before any work, inputs untouched; a 300-character path on 2 ranks works
+  enospc    a full file system (a 200 KB tmpfs; skipped when it cannot be mounted): "No space left on device", the
+            file named, the partial .tmp removed
+  fclib     -fclib_step N exports the problem solved in the step whose line says "step N"
+  statuses  exit statuses 0, 2 (blow-up), 3 (-error_on_nonconvergence on the infeasible straight row); progress lines
+Exit status 0 when every check holds, 1 otherwise, 77 when the test cannot run here (skipped)."""
+import argparse
+import hashlib
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
+CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
+failures = []
+
+
+def check(ok, what):
+    print(("ok   " if ok else "FAIL ") + what, flush=True)
+    if not ok:
+        failures.append(what)
+    return ok
+
+
+class Kergs:
+    def __init__(self, a):
+        self.kergs, self.mpiexec, self.dir = os.path.abspath(a.kergs), a.mpiexec, os.path.abspath(a.dir)
+
+    def cmd(self, ranks, args):
+        return [self.mpiexec, "-n", str(ranks), self.kergs] + [str(x) for x in args]
+
+    def run(self, ranks, *args, log=None):
+        p = subprocess.run(self.cmd(ranks, args), cwd=ROOT, capture_output=True, text=True)
+        if log:
+            with open(os.path.join(self.dir, log), "w") as f:
+                f.write(p.stdout + p.stderr)
+        return p
+
+    def start(self, ranks, *args, log):
+        out = open(os.path.join(self.dir, log), "w")
+        return subprocess.Popen(self.cmd(ranks, args), cwd=ROOT, stdout=out, stderr=subprocess.STDOUT), os.path.join(self.dir, log)
+
+    def path(self, name):
+        return os.path.join(self.dir, name)
+
+
+def ranks_of(p):
+    """The rank processes of a run: the children of mpiexec."""
+    out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(p.pid)], capture_output=True, text=True).stdout
+    return [int(x) for x in out.split()]
+
+
+def wait_for_steps(log, n, p, timeout=60):
+    """Until the run has printed its step line n (or ended)."""
+    t0 = time.time()
+    while time.time() - t0 < timeout and p.poll() is None:
+        with open(log) as f:
+            if sum(1 for line in f if line.startswith("step ")) >= n:
+                return True
+        time.sleep(0.05)
+    return False
+
+
+def stats(path):
+    with h5py.File(path, "r") as f:
+        return {k: f["stats"][k][()] for k in f["stats"]}, dict(f.attrs), sorted(f["snapshots"])
+
+
+def sha(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def compare(a, b):
+    p = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "scripts", "compare_results.py"), a, b], capture_output=True, text=True)
+    return p.returncode, p.stdout.strip()
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+
+def test_restart(k):
+    common = ["-options_file", CONFINE500, "-quiet"]
+    # same number of ranks: bit for bit, snapshots and physical statistics (scripts/compare_results.py)
+    k.run(2, *common, "-steps", 20, "-output", k.path("A.h5"), log="A.log")
+    p1 = k.run(2, *common, "-steps", 10, "-output", k.path("B.h5"), "-checkpoint_every", 10, log="B1.log")
+    check(p1.returncode == 0 and os.path.exists(k.path("B.checkpoint.h5")), "restart: 10 steps write the checkpoint of step 10")
+    # under PETSc's -malloc_dump: every block the restore allocates is freed
+    p2 = k.run(2, "-restart", k.path("B.checkpoint.h5"), "-steps", 20, "-malloc_debug", "-malloc_dump", log="B2.log")
+    leaks = [line for line in (p2.stdout + p2.stderr).splitlines() if " bytes " in line and "]" in line]
+    check(p2.returncode == 0 and not leaks, "restart: -restart FILE -steps 20 continues to step 20 (exit status 0, nothing leaked) " + " ".join(leaks[:2]))
+    _, a_attrs, _ = stats(k.path("A.h5"))
+    date = a_attrs.get("date", b"").decode()
+    check(a_attrs.get("kergs_version", b"") not in (b"",) and a_attrs.get("ranks") == 2 and b"-steps 20" in a_attrs.get("options", b"")
+          and len(date) == 20 and date[4] == "-" and date.endswith("Z"),
+          f"provenance: root attributes kergs_version ({a_attrs.get('kergs_version')}), options, ranks (2), date ({date})")
+    rc, out = compare(k.path("A.h5"), k.path("B.h5"))
+    check(rc == 0, "restart: 10 + 10 steps on 2 ranks give the 20-step run bit for bit (snapshots, statistics) " + out[:300])
+    s, attrs, snaps = stats(k.path("B.h5"))
+    check(list(s["step"]) == list(range(1, 21)) and snaps == ["000000", "000001"],
+          "restart: one file, steps 1..20 once each, the snapshots of one run (first and last only: -output_every 25)")
+    check(attrs.get("restart_step") == 10 and b"-restart" in attrs.get("restart_options", b""),
+          "restart: the file records the restart (restart_step, restart_options) next to the first run's provenance")
+    # another number of ranks: to the solver's tolerance (frictionless: the velocities solve a problem with one answer);
+    # 4 + 4 steps against 8, each solved to a natural residual of 1e-10
+    tight = ["-friction", 0, "-solver_tol", "1e-10", "-solver_criterion", "natural", "-solver_max_it", 20000]
+    for first, second in ((2, 1), (1, 2)):
+        ref, part = k.path(f"R{first}.h5"), k.path(f"P{first}{second}.h5")
+        k.run(first, *common, *tight, "-steps", 8, "-output", ref, log=f"R{first}.log")
+        k.run(first, *common, *tight, "-steps", 4, "-output", part, "-checkpoint_every", 4, log=f"P{first}a.log")
+        ckpt = part.replace(".h5", ".checkpoint.h5")
+        p = k.run(second, "-restart", ckpt, "-steps", 8, log=f"P{first}{second}b.log")
+        check(p.returncode == 0, f"restart {first} -> {second} ranks: runs to step 8")
+        with h5py.File(ref, "r") as f, h5py.File(part, "r") as g:
+            same4 = all(np.array_equal(f["stats"][n][:4], g["stats"][n][:4]) for n in ("residual", "contacts", "iterations", "time"))
+            check(same4 and g["stats/step"].shape == (8,), f"restart {first} -> {second} ranks: rows 1-4 are the first run's, bit for bit")
+
+            def last(h):
+                snap = h["snapshots"][sorted(h["snapshots"])[-1]]
+                order = np.argsort(snap["id"][()])
+                return snap["x"][()][order], snap["v"][()][order], snap.attrs["step"]
+            xa, va, sa = last(f)
+            xb, vb, sb = last(g)
+            dx, dv = np.abs(xa - xb).max(), np.abs(va - vb).max()
+            # an uninterrupted run on the other number of ranks differs by about 1e-13 m; losing the velocities or the walls
+            # would move the grains by 1e-5 m or more in 4 steps
+            check(sa == sb == 8 and dx < 1e-10 and dv < 1e-8,
+                  f"restart {first} -> {second} ranks: step 8 within the solver's tolerance (positions {dx:.1e} m, velocities {dv:.1e} m/s)")
+
+
+def test_signals(k):
+    for sig, how in ((signal.SIGTERM, "ranks"), (signal.SIGINT, "ranks"), (signal.SIGUSR1, "mpiexec")):
+        name = sig.name
+        out = k.path(f"{name}.h5")
+        p, log = k.start(2, "-options_file", CONFINE500, "-steps", 100000, "-output", out, "-output_every", 10, log=f"{name}.log")
+        started = wait_for_steps(log, 5, p)
+        targets = ranks_of(p) if how == "ranks" else [p.pid]
+        for pid in targets:
+            os.kill(pid, sig)
+        try:
+            rc = p.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            rc = None
+        text = open(log).read()
+        check(started and rc == 4, f"{name} to the {how}: the run stops with exit status 4 (got {rc})")
+        check(f"{name} received" in text, f"{name}: the log says the signal was received")
+        check(os.path.exists(out) and not os.path.exists(out + ".tmp"), f"{name}: the results file is closed under its final name")
+        try:
+            s, attrs, snaps = stats(out)
+            nrows = len(s["step"])
+            with h5py.File(out.replace(".h5", ".checkpoint.h5"), "r") as c:
+                cstep = int(c.attrs["step"])
+            check(attrs.get("complete") == 1 and attrs.get("end") == f"stopped by {name}".encode() and nrows >= 5
+                  and list(s["step"]) == list(range(1, nrows + 1)),
+                  f"{name}: the file is complete (end = 'stopped by {name}', {nrows} rows, steps 1..{nrows})")
+            check(cstep == nrows, f"{name}: the checkpoint is of the last step ({cstep} = {nrows})")
+        except (OSError, KeyError) as e:
+            check(False, f"{name}: results and checkpoint readable ({e})")
+            continue
+        if sig == signal.SIGTERM:  # the batch system's next job: restart, 3 more steps
+            p2 = k.run(2, "-restart", out.replace(".h5", ".checkpoint.h5"), "-steps", nrows + 3, log="SIGTERM-restart.log")
+            s2, attrs2, _ = stats(out)
+            with h5py.File(out, "r") as f:
+                steps = sorted(int(g.attrs["step"]) for g in f["snapshots"].values())
+            want = sorted({0, nrows + 3} | {n for n in range(10, nrows + 4, 10)})
+            check(p2.returncode == 0 and list(s2["step"]) == list(range(1, nrows + 4)) and attrs2.get("end") == b"done" and steps == want,
+                  f"SIGTERM: the restart continues the same file to step {nrows + 3}: rows contiguous, snapshots those of one "
+                  f"run (steps {want}; the stop's own snapshot dropped)")
+
+
+def test_kill(k):
+    out = k.path("killed.h5")
+    p, log = k.start(2, "-options_file", CONFINE500, "-steps", 100000, "-output", out, "-output_every", 10, "-output_flush_every", 5,
+                     "-checkpoint_every", 20, log="killed.log")
+    started = wait_for_steps(log, 45, p)
+    for pid in ranks_of(p):
+        os.kill(pid, signal.SIGKILL)
+    p.wait(timeout=60)
+    printed = sum(1 for line in open(log) if line.startswith("step "))
+    check(started and not os.path.exists(out) and os.path.exists(out + ".tmp"),
+          "SIGKILL: the run leaves only <output>.tmp (a file under the final name is always complete)")
+    try:
+        with h5py.File(out + ".tmp", "r") as f:
+            n = int(f["stats"].attrs["nrows"])
+            steps = f["stats/step"][()]
+            nsnap = int(f.attrs["nsnapshots"])
+            snaps_ok = all(f["snapshots"][f"{i:06d}"]["x"].shape[0] == 500 for i in range(nsnap))
+            complete = int(f.attrs["complete"])
+        check(complete == 0 and len(steps) == n and list(steps) == list(range(1, n + 1)) and n >= printed - 5 - 1,
+              f"SIGKILL: the .tmp is readable: {n} rows of the {printed} steps printed (flushed every 5), steps 1..{n}, complete = 0")
+        check(nsnap >= n // 10 and snaps_ok, f"SIGKILL: its {nsnap} snapshots (nsnapshots) are whole")
+    except (OSError, KeyError) as e:
+        check(False, f"SIGKILL: the .tmp is a readable results file ({e})")
+        return
+    p2 = k.run(2, "-restart", k.path("killed.checkpoint.h5"), "-steps", 60, log="killed-restart.log")
+    s, attrs, snaps = stats(out)
+    check(p2.returncode == 0 and list(s["step"]) == list(range(1, 61)) and not os.path.exists(out + ".tmp"),
+          "SIGKILL: a restart from the last checkpoint continues the killed run's .tmp into one file of steps 1..60")
+
+
+def test_paths(k):
+    d = k.path("p")
+    os.makedirs(d, exist_ok=True)
+    sample = os.path.join(d, "sample.h5")
+    shutil.copy(os.path.join(ROOT, "cases", "deposit500.h5"), sample)
+    os.symlink(d, os.path.join(d, "link"))
+    before = sha(sample)
+    base = ["-options_file", CONFINE500, "-steps", 2, "-quiet", "-sample_input", sample]
+    bad = [
+        (["-output", os.path.join(d, "link", "sample.h5")], "is the input -sample_input", "-output through a link to the input"),
+        (["-output", os.path.join(d, "r.h5"), "-sample_output", os.path.join(d, "link", "sample.h5")], "is the input -sample_input",
+         "-sample_output replacing the input"),
+        (["-output", os.path.join(d, "r.h5"), "-sample_output", os.path.join(d, "link", "r.h5")], "are the same file",
+         "two outputs, one through a link"),
+        (["-output", os.path.join(d, "r.h5"), "-checkpoint_path", os.path.join(d, "r.h5.tmp")], "are the same file",
+         "an output on another's .tmp"),
+        (["-output", d], "is a directory", "an output that is a directory"),
+        (["-output", os.path.join(sample, "r.h5")], "is not a directory", "an output under a regular file"),
+        (["-output", os.path.join(d, "r.h5"), "-checkpoint_path", CONFINE500], "is the input -options_file", "-checkpoint_path on the options file"),
+    ]
+    for extra, message, what in bad:
+        p = k.run(2, *base, *extra, log="paths.log")
+        text = p.stdout + p.stderr
+        check(p.returncode == 1 and message in text and "step " not in p.stdout, f"paths: {what} is refused before any step ('{message}')")
+    check(sha(sample) == before and not os.path.exists(os.path.join(d, "r.h5")), "paths: the input is untouched, nothing written")
+    # a path of 300 characters on 2 ranks (Open MPI's ompio aborted from 241 on)
+    long_dir = os.path.join(k.dir, "L" * 100, "o" * 100)
+    os.makedirs(long_dir, exist_ok=True)
+    out = os.path.join(long_dir, "n" * (300 - len(long_dir) - 4) + ".h5")
+    p = k.run(2, "-options_file", CONFINE5, "-steps", 3, "-quiet", "-output", out, "-checkpoint_every", 3, log="long.log")
+    ok = p.returncode == 0 and os.path.exists(out) and os.path.exists(out[:-3] + ".checkpoint.h5")
+    check(ok and len(out) == 300, f"paths: an output path of {len(out)} characters works on 2 ranks (results and checkpoint)")
+
+
+def test_enospc(k):
+    if os.geteuid() != 0:
+        print("skipped: mounting a small tmpfs needs root")
+        return 77
+    mnt = k.path("full")
+    os.makedirs(mnt, exist_ok=True)
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", mnt], capture_output=True).returncode != 0:
+        print("skipped: cannot mount a tmpfs here")
+        return 77
+    try:
+        out = os.path.join(mnt, "r.h5")
+        p = k.run(2, "-options_file", CONFINE500, "-steps", 30, "-quiet", "-output", out, "-output_every", 1, log="enospc.log")
+        text = p.stdout + p.stderr
+        check(p.returncode == 1 and "No space left on device" in text and out in text,
+              "enospc: a full disk stops the run with 'No space left on device' naming the file")
+        check(not os.path.exists(out + ".tmp") and not os.path.exists(out), "enospc: the partial .tmp is removed")
+    finally:
+        subprocess.run(["umount", mnt])
+    return 0
+
+
+def test_statuses(k):
+    straight = os.path.join(ROOT, "cases", "confine5_straight.opts")
+    p = k.run(1, "-options_file", straight, "-steps", 3, "-quiet", "-output_none", log="straight.log")
+    check(p.returncode == 0 and " 0 not converged" not in p.stdout,
+          f"statuses: the infeasible straight row has steps that do not converge, exit status 0 by default (got {p.returncode})")
+    p = k.run(1, "-options_file", straight, "-steps", 3, "-quiet", "-output_none", "-error_on_nonconvergence", log="straight-error.log")
+    check(p.returncode == 3 and "exit status 3" in p.stdout, f"statuses: ... and 3 with -error_on_nonconvergence (got {p.returncode})")
+    p = k.run(1, "-options_file", CONFINE5, "-steps", 3, "-quiet", "-output_none", "-error_on_nonconvergence", log="done.log")
+    check(p.returncode == 0 and " 0 not converged" in p.stdout, f"statuses: a converged run with -error_on_nonconvergence exits 0 (got {p.returncode})")
+    out = k.path("blowup.h5")
+    p = k.run(2, "-options_file", CONFINE5, "-gravity", "0,1e308", "-dt", 10, "-steps", 5, "-quiet", "-output", out, log="blowup.log")
+    _, attrs, snaps = stats(out)
+    check(p.returncode == 2 and "blow-up after step 1: grain" in p.stdout and attrs.get("end") == b"blow-up: non-finite state" and len(snaps) == 2,
+          f"statuses: a blow-up (gravity 1e308) stops after step 1 naming the grain, exit status 2, the results file closed (got {p.returncode})")
+    p = k.run(2, "-options_file", CONFINE5, "-steps", "2", "-quiet", "-output_none", "-progress_every", 1, log="progress.log")
+    lines = [line for line in p.stdout.splitlines() if line.startswith("progress: step")]
+    fields = ("step 2/2", " t ", " contacts ", " sweeps ", " residual ", " max interpenetration ", " s/step, ", " to the end")
+    check(len(lines) == 2 and all(f in lines[-1] for f in fields),
+          "statuses: -progress_every 1 prints step, time, contacts, sweeps, residual, interpenetration, s/step, time to the end")
+
+
+def test_fclib(k):
+    out, fc = k.path("fc.h5"), k.path("fc.fclib.h5")
+    p = k.run(1, "-options_file", CONFINE5, "-steps", 6, "-output", out, "-output_every", 1, "-fclib_step", 4, "-fclib_output", fc,
+              log="fclib.log")
+    check(p.returncode == 0 and "FCLib problem of step 4" in p.stdout, "fclib: -fclib_step 4 exports")
+    with h5py.File(out, "r") as f, h5py.File(fc, "r") as g:
+        title = g["fclib_local/info/title"][()]
+        title = title.decode() if isinstance(title, bytes) else str(title)
+        r = g["solution/r"][()].reshape(-1, 2)[:, 0]  # normal components of the active contacts
+        by_step = {int(s.attrs["step"]): s for s in f["snapshots"].values()}
+        # snapshot of step N holds the contacts and impulses solved in step N
+        matches = {n: np.array_equal(np.sort(by_step[n]["r"][()][:, 0][by_step[n]["r"][()][:, 0] != 0]), np.sort(r[r != 0]))
+                   for n in (3, 4, 5)}
+        active = int(f["stats/active"][3])
+    check(title.endswith("step 4") and matches[4] and not matches[3] and not matches[5] and active == len(r),
+          f"fclib: the file holds the problem of the step printed 'step 4' (title '{title}', impulses of step 4, stats row 3)")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("test", choices=["restart", "signals", "kill", "paths", "enospc", "fclib", "statuses"])
+    ap.add_argument("--kergs", required=True)
+    ap.add_argument("--mpiexec", default="mpiexec")
+    ap.add_argument("--dir", required=True)
+    a = ap.parse_args()
+    if os.path.isdir(a.dir):
+        subprocess.run(["umount", os.path.join(a.dir, "full")], capture_output=True)
+        shutil.rmtree(a.dir)
+    os.makedirs(a.dir)
+    try:
+        status = globals()["test_" + a.test](Kergs(a)) or 0
+    except (OSError, KeyError, ValueError) as e:  # a file that a check needs is missing or not what it should be
+        check(False, f"{a.test}: {type(e).__name__}: {e}")
+        status = 0
+    if status == 77:
+        return 77
+    print(f"{a.test}: {len(failures)} failure(s)")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,24 @@
+# Batch use (docs/running.md): counts that do not fit in the build's 32-bit integers are refused, not wrapped.
+kergs_bad_input(steps_overflow "Option .steps: 10000000000 is out of the range" -options_file cases/confine5.opts -steps 10000000000)
+kergs_bad_input(lattice_overflow "lattice_n 65536,65537 asks for 4295032832 disks"
+                -options_file cases/confine5.opts -disks_source lattice -lattice_n 65536,65537 -lattice_radius 0.1)
+kergs_bad_input(solver_count_overflow "Option .solver_max_it: 3000000000 is out of the range" -options_file cases/confine5.opts -solver_max_it 3000000000)
+# a checkpoint that is missing, or a file that is not a checkpoint
+kergs_bad_input(missing_checkpoint "no_such.checkpoint.h5 .-restart. does not exist" -restart tests/data/no_such.checkpoint.h5)
+kergs_bad_input(not_a_checkpoint "deposit500.h5 is not a kergs checkpoint" -restart cases/deposit500.h5)
+# the solver types' integer options are checked from the stepper (src/solver/ stays untouched): none may be missing
+add_test(NAME int_options COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/check_int_options.sh WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(int_options PROPERTIES LABELS layout TIMEOUT 60)
+
+# tests/check_batch.py drives the kergs executable through mpiexec and reads the files with h5py (Debian's python3):
+# restart (bit for bit on 2 ranks, 2 -> 1 and 1 -> 2 to the solver's tolerance), signals (SIGTERM, SIGINT to the ranks,
+# SIGUSR1 to mpiexec), kill (SIGKILL leaves a readable .tmp), paths (outputs replacing inputs or each other refused, a
+# 300-character path), enospc (a full tmpfs; skipped when none can be mounted), fclib (-fclib_step numbering),
+# statuses (exit statuses of a blow-up and of -error_on_nonconvergence, progress lines).
+foreach(t restart signals kill paths enospc fclib statuses)
+  add_test(NAME batch_${t}
+           COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_batch.py ${t} --kergs $<TARGET_FILE:kergs_exe> --mpiexec ${MPIEXEC_EXECUTABLE}
+                   --dir ${CMAKE_CURRENT_BINARY_DIR}/batch_${t}
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(batch_${t} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 180 SKIP_RETURN_CODE 77 LABELS batch)
+endforeach()
