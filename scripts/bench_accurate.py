@@ -5,7 +5,7 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
   confine500  10 steps: newton to natural residual 1e-10 against nlgs to natural 1e-6 (no cap). Target: every step
               <= 1e-10, mean solve time per step <= 1/5 of nlgs's.
   biaxial20k  5 steps: newton to 1e-8 against nlgs to quad 1e-4 (no cap). Target: every step <= 1e-8, in less time.
-  siconos     confine500's step 5 exported (-fclib_step): newton's Newton steps and time on it against Siconos's fc2d
+  siconos     confine500's step 5 exported (-fclib_step 5): newton's Newton steps and time on it against Siconos's fc2d
               NSGS at 1e-8 on the same file (scripts/siconos_solve.py), side by side.
   ranks100k   biaxial 100,000, first step, newton to 1e-8 on 1 and on 2 ranks: residuals and speed-up.
   big         (--big only) biaxial 10^6 disks on 2 ranks, first step, newton to 1e-6: time, peak memory per grain.
@@ -97,7 +97,7 @@ if "biaxial20k" in parts:
 if "siconos" in parts:
     f = os.path.join(tmp, "confine500_step5.fclib.h5")
     w = run("confine500_newton_export5", 1, ["-options_file", "cases/confine500.opts", "-steps", "5"] + NEWTON +
-            ["-solver_tol", "1e-10", "-fclib_step", "4", "-fclib_output", f])
+            ["-solver_tol", "1e-10", "-fclib_step", "5", "-fclib_output", f])
     if w is not None and os.path.exists(f):
         res = subprocess.run(["/usr/bin/python3", "scripts/siconos_solve.py", f, "--solver", "nsgs", "--tol", "1e-8",
                               "--max-it", "200000", "--json"], capture_output=True, text=True, env=env)
@@ -105,10 +105,10 @@ if "siconos" in parts:
             sic = json.loads(res.stdout.strip().splitlines()[-1])
         except (ValueError, IndexError):
             sic = {"error": res.stderr[-500:]}
-        # the exported problem is the one of the last step kergs solved at -fclib_step (see docs/results.md)
-        emit({"bench": "siconos", "problem": "confine500, the step exported by -fclib_step 4",
-              "kergs_newton": {"newton_steps": [int(x) for x in w["iterations"]][-2:], "seconds": [float(x) for x in w["solve_seconds"]][-2:],
-                               "residual": [float(x) for x in w["residual"]][-2:]},
+        # -fclib_step 5 exports the problem of the step whose line says "step 5": row 4 of /stats
+        emit({"bench": "siconos", "problem": "confine500 step 5 (-fclib_step 5), warm start from step 4's impulses in kergs",
+              "kergs_newton": {"newton_steps": int(w["iterations"][4]), "seconds": float(w["solve_seconds"][4]),
+                               "residual": float(w["residual"][4])},
               "siconos_nsgs_1e-8": sic})
 
 if "ranks100k" in parts:

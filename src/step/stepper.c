@@ -30,9 +30,16 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
    loop's own; the other components check theirs where they read them (KergsOptionsCheckInt). */
 static PetscErrorCode CheckSolverIntegerOptions(MPI_Comm comm)
 {
-  static const char *names[] = {"-solver_max_it",          "-predictor_unilateral_max_it", "-kernel_diag_batch",
-                                "-solver_omega_power_its", "-solver_nlkergs_max_size",     "-solver_newton_max_backtracks",
-                                "-solver_prox_inner_max",  "-solver_newton_max_sweeps",    NULL};
+  static const char *names[] = {"-solver_max_it",
+                                "-predictor_unilateral_max_it",
+                                "-kernel_diag_batch",
+                                "-solver_omega_power_its",
+                                "-solver_nlkergs_max_size",
+                                "-solver_newton_max_backtracks",
+                                "-solver_prox_inner_max",
+                                "-solver_newton_max_sweeps",
+                                "-solver_newton_stall_steps",
+                                NULL};
 
   PetscFunctionBeginUser;
   for (PetscInt i = 0; names[i]; i++) PetscCall(KergsOptionsCheckInt(comm, NULL, names[i]));
