@@ -561,8 +561,13 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     nt->sigma = nt->prox == NEWTON_PROX_IDENTITY
                     ? (nt->outer == 0 ? nt->sigma_min : PetscClipInterval(alpha * res, nt->sigma_min, nt->sigma_max)) * wmean
                     : 0.0;
-    inner_tol = nt->inner_rtol * res * (rnorm > 0 ? rnorm : 1.0);
-    PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
+    /* |F| scales with rho where the natural residual's map uses 1 / W_nn: a smaller rho asks for a smaller |F| */
+    inner_tol = nt->inner_rtol * PetscMin(1.0, nt->rho_factor) * res * (rnorm > 0 ? rnorm : 1.0);
+    {
+      const PetscInt before_steps = steps;
+      PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
+      if (steps == before_steps) steps++; /* an outer iteration without a Newton step still counts: the loop ends */
+    }
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
     nt->outer++;
     ok = (PetscBool)(PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */
@@ -583,8 +588,9 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
         res = before;
       }
     }
-    PetscCall(PetscInfo(NULL, "outer %" PetscInt_FMT ": natural residual %g -> %g, inner solved %d, alpha %g\n", nt->outer, (double)before,
-                        (double)res, (int)ok, (double)alpha));
+    PetscCall(PetscInfo(NULL,
+                        "outer %" PetscInt_FMT " (%" PetscInt_FMT " Newton steps): natural residual %g -> %g, inner solved %d, alpha %g\n",
+                        nt->outer, steps, (double)before, (double)res, (int)ok, (double)alpha));
   }
   stats->iterations    = steps;
   stats->criterion     = res;
