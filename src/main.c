@@ -37,9 +37,11 @@ static PetscBool IsPetscOption(const char *name)
                                    "use_gpu",
                                    "device",
                                    NULL};
-  /* a factorization package's options under any prefix (-solver_mat_mumps_icntl_7): read when the first matrix is
-     factored, inside the time loop, after the check */
-  static const char *packages[] = {"mat_mumps_", "mat_cholmod_", "mat_umfpack_", "mat_klu_", "mat_superlu_", NULL};
+  /* options under any prefix that PETSc reads when a preconditioner is first set up, inside the time loop, after the
+     check: a factorization package's (-solver_mat_mumps_icntl_7) and those of inner solvers (-solver_sub_pc_type lu of
+     block Jacobi, -solver_mg_levels_ksp_type of multigrid) */
+  static const char *packages[] = {"mat_mumps_", "mat_cholmod_", "mat_umfpack_", "mat_klu_", "mat_superlu_",
+                                   "sub_",       "mg_levels_",   "mg_coarse_",   NULL};
   for (PetscInt i = 0; prefixes[i]; i++) {
     size_t n = strlen(prefixes[i]);
     if (!strncmp(name, prefixes[i], n) && (prefixes[i][n - 1] == '_' || name[n] == '\0' || name[n] == '_')) return PETSC_TRUE;

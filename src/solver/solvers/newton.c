@@ -284,6 +284,32 @@ static PetscErrorCode EnableNullPivots(Newton *nt)
   PetscFunctionReturn(0);
 }
 
+/* Block Jacobi (the default on several ranks): each rank's block of J factored by PETSc's LU with an AMD ordering
+   rather than ILU(0), unless -solver_sub_pc_type and the like say otherwise (read last, so they win). The sub-solvers
+   exist once the KSP is set up; they keep their type when J's values change during the step. */
+static PetscErrorCode ConfigureBlocks(Newton *nt)
+{
+  PC        pc, subpc;
+  KSP      *sub;
+  PetscInt  nblocks;
+  PetscBool bjacobi;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCBJACOBI, &bjacobi));
+  if (!bjacobi) PetscFunctionReturn(0);
+  PetscCall(KSPSetUp(nt->ksp));
+  PetscCall(PCBJacobiGetSubKSP(pc, &nblocks, NULL, &sub));
+  for (PetscInt b = 0; b < nblocks; b++) {
+    PetscCall(KSPSetType(sub[b], KSPPREONLY));
+    PetscCall(KSPGetPC(sub[b], &subpc));
+    PetscCall(PCSetType(subpc, PCLU));
+    PetscCall(PCFactorSetMatOrderingType(subpc, MATORDERINGAMD));
+    PetscCall(KSPSetFromOptions(sub[b]));
+  }
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
   Newton        *nt = (Newton *)s->data;
@@ -325,6 +351,7 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->sigma_used = -1.0;
   PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
   PetscCall(EnableNullPivots(nt));
+  PetscCall(ConfigureBlocks(nt));
   PetscFunctionReturn(0);
 }
 
@@ -702,10 +729,12 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
   PetscFunctionReturn(0);
 }
 
-/* Direct LU by default: PETSc's own with an AMD ordering on one rank (the fastest measured on the Jacobians of
-   confine500 and biaxial 20k), MUMPS on several (with its null-pivot detection on, EnableNullPivots).
-   -solver_ksp_type, -solver_pc_type, -solver_pc_factor_mat_solver_type and -solver_pc_factor_mat_ordering_type choose
-   otherwise. */
+/* One rank: a direct LU, PETSc's own with an AMD ordering (the fastest measured on the Jacobians of confine500 and
+   biaxial 20k). Several ranks: GMRES preconditioned by block Jacobi with one block per rank, each factored by LU
+   (ConfigureBlocks): the blocks hold all but the coupling across the partition's cut, so GMRES needs about a dozen
+   iterations per Newton step, where MUMPS on the whole J was measured 10-100 times slower (biaxial 20k, 2 ranks).
+   -solver_ksp_type, -solver_pc_type, -solver_sub_pc_type, -solver_pc_factor_mat_solver_type mumps (then with its
+   null-pivot detection, EnableNullPivots) and the like choose otherwise. */
 static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
 {
   PC          pc;
@@ -715,11 +744,17 @@ static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
   PetscCall(KSPCreate(s->comm, &nt->ksp));
   PetscCall(KSPSetOptionsPrefix(nt->ksp, "solver_"));
-  PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
   PetscCall(KSPGetPC(nt->ksp, &pc));
-  PetscCall(PCSetType(pc, PCLU));
-  PetscCall(PCFactorSetMatSolverType(pc, size > 1 ? MATSOLVERMUMPS : MATSOLVERPETSC));
-  if (size == 1) PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD)); /* 1.6-2.5 times faster than nd here */
+  if (size == 1) {
+    PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
+    PetscCall(PCSetType(pc, PCLU));
+    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERPETSC));
+    PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD)); /* 1.6-2.5 times faster than nd here */
+  } else {
+    PetscCall(KSPSetType(nt->ksp, KSPGMRES));
+    PetscCall(KSPSetTolerances(nt->ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, 200));
+    PetscCall(PCSetType(pc, PCBJACOBI));
+  }
   PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
