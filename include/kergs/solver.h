@@ -75,4 +75,5 @@ PETSC_EXTERN PetscErrorCode KergsSolverGetActive(KergsSolver, const PetscBool **
 PETSC_EXTERN PetscErrorCode KergsSolverNeedsH(KergsSolver, PetscBool *);
 /* -solver_max_it and -solver_tol */
 PETSC_EXTERN PetscErrorCode KergsSolverGetTolerances(KergsSolver, PetscReal *tol, PetscInt *max_it);
+PETSC_EXTERN PetscErrorCode KergsSolverGetIterationName(KergsSolver, const char **);
 #endif

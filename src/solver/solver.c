@@ -331,3 +331,11 @@ PetscErrorCode KergsSolverGetTolerances(KergsSolver s, PetscReal *tol, PetscInt 
   if (max_it) *max_it = s->max_it;
   PetscFunctionReturn(0);
 }
+
+/* What -solver_max_it counts, for messages: "sweeps" or "Newton steps". */
+PetscErrorCode KergsSolverGetIterationName(KergsSolver s, const char **name)
+{
+  PetscFunctionBeginUser;
+  *name = s->iteration_name;
+  PetscFunctionReturn(0);
+}

@@ -236,6 +236,7 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   PetscReal         ek, vmax;
   PetscBool         rest = PETSC_FALSE, view, enabled, stopped = PETSC_FALSE;
   PetscInt          step, nsteps, max_it;
+  const char       *counted;
   const char       *path;
   char              end[64];
 
@@ -295,11 +296,13 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   if (st->status == KERGS_EXIT_DONE && st->error_on_nonconvergence && st->nonconverged > 0) st->status = KERGS_EXIT_NOT_CONVERGED;
   PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
   PetscCall(KergsSolverGetTolerances(st->solver, NULL, &max_it));
+  PetscCall(KergsSolverGetIterationName(st->solver, &counted));
   if (stopped || st->progress_every || st->progress_seconds) PetscCall(KergsStepperProgress(st, PETSC_TRUE));
   PetscCall(PetscPrintf(st->comm,
                         "kergs: %" PetscInt_FMT " steps%s, %" PetscInt_FMT " not converged (cap %" PetscInt_FMT
-                        " sweeps), largest interpenetration %.3g, kinetic energy %.3g, fastest grain %.3g\n",
-                        step, rest ? " (at rest)" : "", st->nonconverged, max_it, (double)st->max_violation, (double)ek, (double)vmax));
+                        " %s), largest interpenetration %.3g, kinetic energy %.3g, fastest grain %.3g\n",
+                        step, rest ? " (at rest)" : "", st->nonconverged, max_it, counted, (double)st->max_violation, (double)ek,
+                        (double)vmax));
   PetscCall(KergsPartitionGetView(st->partition, &view));
   if (view) PetscCall(KergsPartitionView(st->partition, PETSC_VIEWER_STDOUT_(st->comm)));
   PetscCall(KergsResultsGetPath(st->results, &path, &enabled));
