@@ -248,9 +248,10 @@ static PetscErrorCode TestFrictionless(void)
 
 /* Frictionless confine500, 3 steps, on every rank of the world and on one rank: the disks' velocities agree grain by
    grain to the solver's tolerance. */
-static PetscErrorCode TestRanks(void)
+/* `linear`: the options of the linear solver on several ranks (J gathered whole, or GMRES with block Jacobi). */
+static PetscErrorCode TestRanks(const char *linear, const char *what)
 {
-  const char  *opts = "-options_file cases/confine500.opts -friction 0 -steps 3 -solver_type newton -solver_tol 1e-12";
+  char         opts[PETSC_MAX_PATH_LEN], label[128];
   KergsStepper all, one;
   PetscReal   *va, *vo, diff = 0, scale = 0;
   PetscInt     n;
@@ -258,6 +259,9 @@ static PetscErrorCode TestRanks(void)
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  PetscCall(PetscSNPrintf(opts, sizeof(opts),
+                          "-options_file cases/confine500.opts -friction 0 -steps 3 -solver_type newton -solver_tol 1e-12 %s", linear));
+  PetscCall(PetscSNPrintf(label, sizeof(label), "frictionless confine500, %s: velocities on every rank = on one rank (relative)", what));
   PetscCall(MakeStepper(opts, &all));
   for (PetscInt s = 0; s < 3; s++) PetscCall(KergsStepperStep(all));
   PetscCall(MakeStepperOn(PETSC_COMM_SELF, opts, &one));
@@ -270,8 +274,7 @@ static PetscErrorCode TestRanks(void)
     diff  = PetscMax(diff, PetscAbsReal(va[i] - vo[i]));
     scale = PetscMax(scale, PetscAbsReal(vo[i]));
   }
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-8 * scale),
-                     "frictionless confine500: velocities on every rank = on one rank (relative)", diff / scale, 1e-8));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-8 * scale), label, diff / scale, 1e-8));
   (void)size;
   PetscCall(PetscFree2(va, vo));
   PetscCall(KergsStepperDestroy(&all));
@@ -319,8 +322,10 @@ int main(int argc, char **argv)
     PetscCall(TestWedged());
     PetscCall(TestFrictionless());
     PetscCall(TestLineSearch());
-  } else
-    PetscCall(TestRanks());
+  } else {
+    PetscCall(TestRanks("", "J gathered on every rank"));
+    PetscCall(TestRanks("-solver_newton_redundant_max 0", "GMRES with block Jacobi"));
+  }
   {
     int code = Finish();
     PetscCall(PetscFinalize());

@@ -39,6 +39,7 @@ static PetscErrorCode CheckSolverIntegerOptions(MPI_Comm comm)
                                 "-solver_prox_inner_max",
                                 "-solver_newton_max_sweeps",
                                 "-solver_newton_stall_steps",
+                                "-solver_newton_redundant_max",
                                 NULL};
 
   PetscFunctionBeginUser;

@@ -7,7 +7,7 @@
    u_n, tau = mu max(0, xi); F = r for an inactive contact. F = 0 exactly when r solves the step's problem. F is
    piecewise linear, and an element of its generalized Jacobian is J = A + B W with A, B block diagonal (one ncomp x
    ncomp block per contact). W over the active contacts is stored whole (both triangles) and J is built on its pattern;
-   J d = -F is solved through a KSP (prefix solver_): a direct LU by default (PETSc's on one rank, MUMPS on several),
+   J d = -F is solved through a KSP (prefix solver_): a direct LU by default (PETSc's; on several ranks see ChooseLinearSolver),
    any Krylov method and preconditioner by options.
 
    W is singular in a confined packing (its kernel: the self-equilibrated force networks), and so is J where stick
@@ -53,6 +53,8 @@ typedef struct {
   PetscReal  alpha_min;            /* smallest alpha */
   PetscInt   inner_max;            /* -solver_prox_inner_max: Newton steps per outer iteration */
   PetscInt   stall_steps;          /* -solver_newton_stall_steps: crawling steps that end an inner Newton */
+  PetscInt   redundant_max;        /* -solver_newton_redundant_max: several ranks, J gathered whole up to this many rows */
+  PetscBool  user_pc;              /* -solver_pc_type given: the user chose the linear solver */
   PetscReal  inner_rtol;           /* inner tolerance on |F|, relative to the natural residual times |r| */
   PetscReal  sigma;                /* this outer iteration's sigma (0 without the proximal term) */
   PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
@@ -284,20 +286,41 @@ static PetscErrorCode EnableNullPivots(Newton *nt)
   PetscFunctionReturn(0);
 }
 
-/* Block Jacobi (the default on several ranks): each rank's block of J factored by PETSc's LU with an AMD ordering
-   rather than ILU(0), unless -solver_sub_pc_type and the like say otherwise (read last, so they win). The sub-solvers
-   exist once the KSP is set up; they keep their type when J's values change during the step. */
-static PetscErrorCode ConfigureBlocks(Newton *nt)
+/* The default linear solver on several ranks, chosen each step from J's size unless -solver_pc_type was given:
+   - up to -solver_newton_redundant_max rows, J gathered whole on every rank and factored there by PETSc's LU with
+     AMD (PCREDUNDANT): exact, and as fast as one rank. MUMPS spent about 12 ms in every factorization of
+     confine500's J, where PETSc's LU takes well under one, and Newton factors up to 250 Jacobians a step; block
+     Jacobi took 140 GMRES iterations per Newton step there (the network of forces crosses the cut).
+   - above, GMRES preconditioned by block Jacobi, one block per rank factored by LU with AMD: nothing of the size of
+     the whole J on one rank, about a dozen GMRES iterations per Newton step on biaxial 20k and 100k.
+   The sub-solvers exist once the KSP is set up; -solver_sub_* and -solver_redundant_* options, read last, win. */
+static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
 {
-  PC        pc, subpc;
-  KSP      *sub;
-  PetscInt  nblocks;
-  PetscBool bjacobi;
+  PC          pc, subpc;
+  KSP        *sub, inner;
+  PetscInt    nblocks, rows;
+  PetscMPIInt size;
 
   PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  if (size == 1 || nt->user_pc) PetscFunctionReturn(0);
   PetscCall(KSPGetPC(nt->ksp, &pc));
-  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCBJACOBI, &bjacobi));
-  if (!bjacobi) PetscFunctionReturn(0);
+  PetscCall(MatGetSize(nt->J, &rows, NULL));
+  if (rows <= nt->redundant_max) {
+    PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
+    PetscCall(PCSetType(pc, PCREDUNDANT));
+    PetscCall(PCRedundantGetKSP(pc, &inner));
+    PetscCall(KSPGetPC(inner, &subpc));
+    PetscCall(PCSetType(subpc, PCLU));
+    PetscCall(PCFactorSetMatSolverType(subpc, MATSOLVERPETSC));
+    PetscCall(PCFactorSetMatOrderingType(subpc, MATORDERINGAMD));
+    PetscCall(KSPSetFromOptions(inner));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(KSPSetType(nt->ksp, KSPGMRES));
+  PetscCall(KSPSetTolerances(nt->ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, 200));
+  PetscCall(PCSetType(pc, PCBJACOBI));
+  PetscCall(KSPSetFromOptions(nt->ksp)); /* -solver_ksp_rtol and the like */
   PetscCall(KSPSetUp(nt->ksp));
   PetscCall(PCBJacobiGetSubKSP(pc, &nblocks, NULL, &sub));
   for (PetscInt b = 0; b < nblocks; b++) {
@@ -350,8 +373,8 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KSPReset(nt->ksp)); /* J's sizes and pattern are this step's */
   nt->sigma_used = -1.0;
   PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
+  PetscCall(ChooseLinearSolver(s, nt));
   PetscCall(EnableNullPivots(nt));
-  PetscCall(ConfigureBlocks(nt));
   PetscFunctionReturn(0);
 }
 
@@ -672,6 +695,11 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_max", "Largest sigma / mean W_nn", "", nt->sigma_max, &nt->sigma_max, NULL));
   PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
+  PetscCall(
+      PetscOptionsInt("-solver_newton_redundant_max",
+                      "Several ranks: J gathered whole on every rank and factored there up to this many rows, else GMRES with block Jacobi",
+                      "", nt->redundant_max, &nt->redundant_max, NULL));
+  PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_type", &nt->user_pc));
   PetscCall(PetscOptionsInt("-solver_newton_stall_steps",
                             "Newton steps in a row that each cut |F| by less than a tenth and end an outer iteration's Newton (0: never)",
                             "", nt->stall_steps, &nt->stall_steps, NULL));
@@ -685,6 +713,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              (double)nt->sigma_max);
   PetscCheck(nt->inner_max >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_prox_inner_max %" PetscInt_FMT " must be at least 1",
              nt->inner_max);
+  PetscCheck(nt->redundant_max >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_redundant_max %" PetscInt_FMT " must be non-negative", nt->redundant_max);
   PetscCheck(nt->stall_steps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_stall_steps %" PetscInt_FMT " must be non-negative",
              nt->stall_steps);
   PetscCheck(nt->max_sweeps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_max_sweeps %" PetscInt_FMT " must be non-negative",
@@ -730,11 +760,9 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
 }
 
 /* One rank: a direct LU, PETSc's own with an AMD ordering (the fastest measured on the Jacobians of confine500 and
-   biaxial 20k). Several ranks: GMRES preconditioned by block Jacobi with one block per rank, each factored by LU
-   (ConfigureBlocks): the blocks hold all but the coupling across the partition's cut, so GMRES needs about a dozen
-   iterations per Newton step, where MUMPS on the whole J was measured 10-100 times slower (biaxial 20k, 2 ranks).
-   -solver_ksp_type, -solver_pc_type, -solver_sub_pc_type, -solver_pc_factor_mat_solver_type mumps (then with its
-   null-pivot detection, EnableNullPivots) and the like choose otherwise. */
+   biaxial 20k). Several ranks: chosen each step by ChooseLinearSolver. -solver_ksp_type, -solver_pc_type,
+   -solver_pc_factor_mat_solver_type mumps (then with its null-pivot detection, EnableNullPivots) and the like choose
+   otherwise. */
 static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
 {
   PC          pc;
@@ -744,17 +772,11 @@ static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
   PetscCall(KSPCreate(s->comm, &nt->ksp));
   PetscCall(KSPSetOptionsPrefix(nt->ksp, "solver_"));
+  PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
   PetscCall(KSPGetPC(nt->ksp, &pc));
-  if (size == 1) {
-    PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
-    PetscCall(PCSetType(pc, PCLU));
-    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERPETSC));
-    PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD)); /* 1.6-2.5 times faster than nd here */
-  } else {
-    PetscCall(KSPSetType(nt->ksp, KSPGMRES));
-    PetscCall(KSPSetTolerances(nt->ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, 200));
-    PetscCall(PCSetType(pc, PCBJACOBI));
-  }
+  PetscCall(PCSetType(pc, PCLU));
+  PetscCall(PCFactorSetMatSolverType(pc, size > 1 ? MATSOLVERMUMPS : MATSOLVERPETSC)); /* -solver_pc_type lu on several */
+  PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD));                           /* 1.6-2.5 times faster than nd here */
   PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
@@ -779,6 +801,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->sigma_max      = 1.0;
   nt->inner_max      = 20;
   nt->stall_steps    = 3;
+  nt->redundant_max  = 400000;
   nt->inner_rtol     = 0.1;
   PetscCall(CreateLinearSolver(s, nt));
   s->data               = nt;
