@@ -2,6 +2,7 @@
    chosen by name (-solver_type), the way PETSc chooses a KSP. This file holds what the types share:
    the registry, the options, which contacts are active, and the loop of sweeps with its stopping test. */
 #include <kergs/private/solverimpl.h>
+#include <math.h>
 
 const char *const KergsCriteria[] = {"quad", "maxm", "natural", "KergsCriterion", "KERGS_CRITERION_", NULL};
 
@@ -102,6 +103,7 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
                              "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, "
                              "LMGC90 Maxm), natural (natural-map residual, Siconos)",
                              "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
+  PetscCall(KergsSolverMonitorSetFromOptions(PetscOptionsObject, s));
   if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
   PetscOptionsEnd();
   if (s->fixed_criterion) s->criterion = KERGS_CRITERION_NATURAL; /* -solver_criterion does not apply (docs/solver.md) */
@@ -185,6 +187,8 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
         PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &value));
         break;
       }
+      /* the natural residual of the original problem is known here only when it is the criterion (s->sweep is on W) */
+      PetscCall(KergsSolverMonitor(s, k, value, s->criterion == KERGS_CRITERION_NATURAL ? value : (PetscReal)NAN));
       if (value < s->tol) {
         stats->criterion_met = PETSC_TRUE;
         break;
@@ -227,9 +231,12 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscCall(PetscMemzero(stats, sizeof(*stats)));
   PetscCall(PetscLogEventBegin(KERGS_Solve, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
+  s->solve_start = t0;
+  s->held        = PETSC_FALSE;
   if (s->ops.setup) PetscCall((*s->ops.setup)(s, scene, contacts, ops));
   PetscCall((*s->ops.solve)(s, scene, contacts, ops, stats));
   PetscCall(DecideConvergence(s, ops, stats));
+  PetscCall(KergsSolverMonitorFlush(s, stats->residual));
   if (s->ops.stats) PetscCall((*s->ops.stats)(s, stats));
   /* the sweep lives for one solve: drop its reference to this step's W, so that W is freed at the start of the
      next assembly instead of coexisting with the next step's W (the peak memory) */
@@ -258,6 +265,7 @@ PetscErrorCode KergsSolverDestroy(KergsSolver *s)
   PetscFunctionBeginUser;
   if (!*s) PetscFunctionReturn(0);
   if ((*s)->ops.destroy) PetscCall((*(*s)->ops.destroy)(*s));
+  PetscCall(KergsSolverMonitorCancel(*s));
   PetscCall(KergsSweepDestroy(&(*s)->sweep));
   PetscCall(PetscFree2((*s)->mu, (*s)->active));
   PetscCall(PetscFree(*s));
