@@ -720,7 +720,10 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
 }
 
 /* Direct LU by default: PETSc's own with an AMD ordering on one rank (the fastest measured on the Jacobians of
-   confine500 and biaxial 20k), MUMPS on several (with its null-pivot detection on, EnableNullPivots).
+   confine500 and biaxial 20k), and on several ranks the same on the whole J gathered on every rank (PCREDUNDANT):
+   MUMPS spends about 12 ms in each factorization of confine500's J where PETSc's LU takes well under one, and Newton
+   factors up to 250 Jacobians a step (docs/solver.md). MUMPS (with its null-pivot detection, EnableNullPivots) by
+   -solver_pc_type lu -solver_pc_factor_mat_solver_type mumps.
    -solver_ksp_type, -solver_pc_type, -solver_pc_factor_mat_solver_type and -solver_pc_factor_mat_ordering_type choose
    otherwise. */
 static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
@@ -734,6 +737,18 @@ static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCall(KSPSetOptionsPrefix(nt->ksp, "solver_"));
   PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
   PetscCall(KSPGetPC(nt->ksp, &pc));
+  if (size > 1) { /* every rank gathers J and factors it whole with PETSc's LU */
+    KSP inner;
+    PC  ipc;
+    PetscCall(PCSetType(pc, PCREDUNDANT));
+    PetscCall(PCRedundantGetKSP(pc, &inner));
+    PetscCall(KSPGetPC(inner, &ipc));
+    PetscCall(PCSetType(ipc, PCLU));
+    PetscCall(PCFactorSetMatSolverType(ipc, MATSOLVERPETSC));
+    PetscCall(PCFactorSetMatOrderingType(ipc, MATORDERINGAMD));
+    PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PCSetType(pc, PCLU));
   PetscCall(PCFactorSetMatSolverType(pc, size > 1 ? MATSOLVERMUMPS : MATSOLVERPETSC));
   if (size == 1) PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD)); /* 1.6-2.5 times faster than nd here */
