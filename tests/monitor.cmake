@@ -5,3 +5,5 @@ add_test(NAME solver_monitor
                  --dir ${CMAKE_CURRENT_BINARY_DIR}/solver_monitor
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(solver_monitor PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 120 LABELS solver)
+# the monitor writes text: another viewer type is refused by name
+kergs_bad_input(monitor_binary "-solver_monitor writes text" -options_file cases/confine5.opts -steps 1 -solver_monitor binary:${CMAKE_BINARY_DIR}/monitor.bin)
