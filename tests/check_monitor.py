@@ -3,6 +3,7 @@
 (-solver_monitor ascii:FILE) agree with the results file: per step, as many lines as the step's `iterations`,
 numbered 1, 2, ... in order, times non-decreasing, and the last line's natural residual equal to the step's
 recorded `residual`; where a residual is printed before the last line it is the criterion (natural criterion).
+Newton's results are the same without the monitor. The energy balance error (law_work_error) follows the accuracy.
 
   check_monitor.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
@@ -92,6 +93,15 @@ def main():
         q, n = got["quad", 1][0], got["natural", 1][0]
         check(all(math.isnan(r[2]) for v in q.values() for r in v[:-1]), "quad criterion: no residual before the last line")
         check(all(r[2] == r[1] for v in n.values() for r in v[:-1]), "natural criterion: the residual is the criterion")
+    # the energy balance error (law_work_error over contact_energy) follows the accuracy, on the 4 steps before confine5
+    # jams: below 1e-8 for newton to 1e-10, of the order of the residual (1e-5) for NLGS to 1e-6, above 1e-3 for NLGS-Jac
+    ratios = {}
+    for tag in ("newton_1", "nlgs_natural_1", "nlgsjac_1"):
+        with h5py.File(os.path.join(a.dir, tag + ".h5"), "r") as f:
+            ratios[tag] = f["stats/law_work_error"][:4] / f["stats/contact_energy"][:4]
+    check(max(ratios["newton_1"]) < 1e-8, f"newton 1e-10: energy balance error {max(ratios['newton_1']):.2g} < 1e-8")
+    check(1e-9 < max(ratios["nlgs_natural_1"]) < 1e-4, f"nlgs natural 1e-6: energy balance error {max(ratios['nlgs_natural_1']):.2g}")
+    check(min(ratios["nlgsjac_1"]) > 1e-3, f"nlgsjac: energy balance error at least {min(ratios['nlgsjac_1']):.2g} > 1e-3")
     if got["newton", 1]:  # the monitor computes residuals Newton would not: the results must not change
         out = os.path.join(a.dir, "newton_nomonitor.h5")
         p = subprocess.run([a.kergs, "-options_file", CONFINE5, "-steps", "12", "-solver_type", "newton", "-solver_tol", "1e-10",
