@@ -33,6 +33,8 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
+# the batch tests run confine500 with the paper's NLGS (fast, many steps), not the scene's default newton
+PAPER500 = ["-options_file", CONFINE500, "-solver_type", "nlgs", "-solver_max_it", "150", "-solver_tol", "1e-4"]
 CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
 failures = []
 
@@ -101,7 +103,7 @@ def compare(a, b):
 # ---------------------------------------------------------------------------------------------------------------------
 
 def test_restart(k):
-    common = ["-options_file", CONFINE500, "-quiet"]
+    common = [*PAPER500, "-quiet"]
     # same number of ranks: bit for bit, snapshots and physical statistics (scripts/compare_results.py)
     k.run(2, *common, "-steps", 20, "-output", k.path("A.h5"), log="A.log")
     p1 = k.run(2, *common, "-steps", 10, "-output", k.path("B.h5"), "-checkpoint_every", 10, log="B1.log")
@@ -153,7 +155,7 @@ def test_signals(k):
     for sig, how in ((signal.SIGTERM, "ranks"), (signal.SIGINT, "ranks"), (signal.SIGUSR1, "mpiexec")):
         name = sig.name
         out = k.path(f"{name}.h5")
-        p, log = k.start(2, "-options_file", CONFINE500, "-steps", 100000, "-output", out, "-output_every", 10, log=f"{name}.log")
+        p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, "-output_every", 10, log=f"{name}.log")
         started = wait_for_steps(log, 5, p)
         targets = ranks_of(p) if how == "ranks" else [p.pid]
         for pid in targets:
@@ -192,7 +194,7 @@ def test_signals(k):
 
 def test_kill(k):
     out = k.path("killed.h5")
-    p, log = k.start(2, "-options_file", CONFINE500, "-steps", 100000, "-output", out, "-output_every", 10, "-output_flush_every", 5,
+    p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, "-output_every", 10, "-output_flush_every", 5,
                      "-checkpoint_every", 20, log="killed.log")
     started = wait_for_steps(log, 45, p)
     for pid in ranks_of(p):
@@ -227,7 +229,7 @@ def test_paths(k):
     shutil.copy(os.path.join(ROOT, "cases", "deposit500.h5"), sample)
     os.symlink(d, os.path.join(d, "link"))
     before = sha(sample)
-    base = ["-options_file", CONFINE500, "-steps", 2, "-quiet", "-sample_input", sample]
+    base = [*PAPER500, "-steps", 2, "-quiet", "-sample_input", sample]
     bad = [
         (["-output", os.path.join(d, "link", "sample.h5")], "is the input -sample_input", "-output through a link to the input"),
         (["-output", os.path.join(d, "r.h5"), "-sample_output", os.path.join(d, "link", "sample.h5")], "is the input -sample_input",
@@ -265,7 +267,7 @@ def test_enospc(k):
         return 77
     try:
         out = os.path.join(mnt, "r.h5")
-        p = k.run(2, "-options_file", CONFINE500, "-steps", 30, "-quiet", "-output", out, "-output_every", 1, log="enospc.log")
+        p = k.run(2, *PAPER500, "-steps", 30, "-quiet", "-output", out, "-output_every", 1, log="enospc.log")
         text = p.stdout + p.stderr
         check(p.returncode == 1 and "No space left on device" in text and out in text,
               "enospc: a full disk stops the run with 'No space left on device' naming the file")

@@ -19,7 +19,7 @@ allowed() {
     sweepimpl.h) echo "src/solver/sweep.c" ;;
     kernelimpl.h) echo "src/solver/kernel.c" ;;
     predictorimpl.h) echo "src/solver/predictor.c src/solver/predictors/" ;;
-    solverimpl.h) echo "src/solver/solver.c src/solver/solvers/" ;;
+    solverimpl.h) echo "src/solver/solver.c src/solver/monitor.c src/solver/solvers/" ;;
     partitionimpl.h) echo "src/partition/" ;;
     resultsimpl.h) echo "src/io/results.c" ;;
     stepperimpl.h) echo "src/step/" ;;

@@ -256,7 +256,9 @@ static PetscErrorCode DepositWindow(const char *extra, PetscReal xmax, PetscReal
   PetscInt   n = 0;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscSNPrintf(opts, sizeof(opts), "-options_file cases/confine500.opts -wall_box_right_velocity 0,0 %s", extra));
+  PetscCall(PetscSNPrintf(
+      opts, sizeof(opts),
+      "-options_file cases/confine500.opts -solver_type nlgs -solver_max_it 150 -solver_tol 1e-4 -wall_box_right_velocity 0,0 %s", extra));
   PetscCall(MakeStepper(opts, st));
   sc = (*st)->scene;
   PetscCall(PetscMalloc4(KERGS_DIM * (sc->ndisks + 2), &x, sc->ndisks + 2, &r, KERGS_DIM * sc->ndisks + 1, &xall, sc->ndisks + 1, &rall));
@@ -318,7 +320,7 @@ static PetscErrorCode TestDeposit500(void)
   KergsKernel  k;
 
   PetscFunctionBeginUser;
-  PetscCall(MakeStepper("-options_file cases/confine500.opts", &st));
+  PetscCall(MakeStepper("-options_file cases/confine500.opts -solver_type nlgs -solver_max_it 150 -solver_tol 1e-4", &st));
   for (PetscInt s = 0; s < 2; s++) PetscCall(KergsStepperStep(st));
   PetscCall(Assemble(st));
   PetscCall(MakeKernel("-kernel_diag bound", st, &k));

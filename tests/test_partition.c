@@ -620,7 +620,8 @@ static PetscErrorCode TestThresholds(void)
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
-  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20", NULL, &st));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_type nlgs -solver_tol 1e-4 -solver_max_it 20",
+                             NULL, &st));
   p = st->partition;
   n = st->scene->ndisks;
   PetscCall(StepTo(st, 10));
@@ -685,7 +686,8 @@ static PetscErrorCode TestMeasuredWork(void)
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &rank));
   if (size == 1) PetscFunctionReturn(0);
-  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20", NULL, &st));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_type nlgs -solver_tol 1e-4 -solver_max_it 20",
+                             NULL, &st));
   p = st->partition;
   PetscCall(StepTo(st, 11));               /* METIS replaced the geometric partition at step 10 (modelled work: deterministic) */
   p->work = KERGS_PARTITION_WORK_MEASURED; /* from here on, with the times set below */
@@ -724,7 +726,9 @@ static PetscErrorCode TestGhostsNearOwned(void)
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   if (size == 1) PetscFunctionReturn(0);
-  PetscCall(StepperWithExtra(PETSC_COMM_WORLD, "-options_file cases/confine500.opts -solver_max_it 20 -ghost_skin 0.002", NULL, &st));
+  PetscCall(StepperWithExtra(PETSC_COMM_WORLD,
+                             "-options_file cases/confine500.opts -solver_type nlgs -solver_tol 1e-4 -solver_max_it 20 -ghost_skin 0.002",
+                             NULL, &st));
   PetscCall(StepTo(st, 11)); /* METIS at step 10 */
   sc = st->scene;
   for (PetscInt i = 0; i < sc->nlocal; i++) rmax = PetscMax(rmax, sc->radius[i]);
@@ -759,7 +763,9 @@ int main(int argc, char **argv)
   PetscCall(TestSamePhysics("confine5 frictionless, 1 vs n ranks", CONFINE5 "-steps 8", 8, 4));
   PetscCall(TestSamePhysics("deposit frictionless, 1 vs n ranks", DEPOSIT, 50, 50));
   PetscCall(TestGhostRebuilds());
-  PetscCall(TestSamePhysics("confine500 frictionless, 1 vs n ranks", "-options_file cases/confine500.opts -steps 5 " TIGHT, 5, 5));
+  PetscCall(TestSamePhysics("confine500 frictionless, 1 vs n ranks",
+                            "-options_file cases/confine500.opts -solver_type nlgs -solver_max_it 150 -solver_tol 1e-4 -steps 5 " TIGHT, 5,
+                            5));
   PetscCall(TestRenumberingKeepsPhysics());
   PetscCall(TestMigrationKeepsImpulses(PETSC_TRUE));
   PetscCall(TestMigrationKeepsImpulses(PETSC_FALSE));

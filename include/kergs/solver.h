@@ -65,6 +65,19 @@ PETSC_EXTERN PetscErrorCode KergsSolverDestroy(KergsSolver *);
 /* With -help: print the options of every registered type, not only of the chosen one. Collective. */
 PETSC_EXTERN PetscErrorCode KergsSolverPrintHelpAllTypes(MPI_Comm);
 
+/* Monitors (as KSPMonitorSet): called once per iteration of a solve (a sweep, or a Newton step) with the step number
+   (KergsSolverSetStepNumber), the iteration (1, 2, ...), the value of the type's own criterion, the natural residual of
+   the original problem where the type computes it (NaN otherwise; the last iteration's is the residual recorded at exit)
+   and the seconds since the solve started. -solver_monitor [ascii:FILE] sets KergsSolverMonitorDefault. */
+typedef PetscErrorCode (*KergsSolverMonitorFn)(KergsSolver, PetscInt step, PetscInt it, PetscReal criterion, PetscReal residual,
+                                               PetscReal seconds, void *ctx);
+PETSC_EXTERN PetscErrorCode KergsSolverMonitorSet(KergsSolver, KergsSolverMonitorFn, void *ctx, PetscErrorCode (*destroy)(void **));
+PETSC_EXTERN PetscErrorCode KergsSolverMonitorCancel(KergsSolver);
+/* One line per iteration on a PetscViewerAndFormat's ASCII viewer (ctx) */
+PETSC_EXTERN PetscErrorCode KergsSolverMonitorDefault(KergsSolver, PetscInt, PetscInt, PetscReal, PetscReal, PetscReal, void *);
+/* The step number the next solves belong to (the step lines' numbering), for the monitors */
+PETSC_EXTERN PetscErrorCode KergsSolverSetStepNumber(KergsSolver, PetscInt);
+
 /* Accessors. */
 PETSC_EXTERN PetscErrorCode KergsSolverGetType(KergsSolver, KergsSolverType *);
 /* Per local contact, whether it was active in the last solve (valid until the next solve) */

@@ -2,6 +2,7 @@
    chosen by name (-solver_type), the way PETSc chooses a KSP. This file holds what the types share:
    the registry, the options, which contacts are active, and the loop of sweeps with its stopping test. */
 #include <kergs/private/solverimpl.h>
+#include <math.h>
 
 const char *const KergsCriteria[] = {"quad", "maxm", "natural", "KergsCriterion", "KERGS_CRITERION_", NULL};
 
@@ -102,6 +103,7 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
                              "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, "
                              "LMGC90 Maxm), natural (natural-map residual, Siconos)",
                              "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
+  PetscCall(KergsSolverMonitorSetFromOptions(PetscOptionsObject, s));
   if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
   PetscOptionsEnd();
   if (s->fixed_criterion) s->criterion = KERGS_CRITERION_NATURAL; /* -solver_criterion does not apply (docs/solver.md) */
@@ -185,6 +187,8 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
         PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &value));
         break;
       }
+      /* the natural residual of the original problem is known here only when it is the criterion (s->sweep is on W) */
+      PetscCall(KergsSolverMonitor(s, k, value, s->criterion == KERGS_CRITERION_NATURAL ? value : (PetscReal)NAN));
       if (value < s->tol) {
         stats->criterion_met = PETSC_TRUE;
         break;
@@ -218,6 +222,45 @@ static PetscErrorCode DecideConvergence(KergsSolver s, KergsOperators ops, Kergs
   PetscFunctionReturn(0);
 }
 
+/* The energy the answer's errors put into the step. Over a step the kinetic energy changes by 1/2 (V+ + V-)^T (H r + R^d);
+   the contacts' share at the end-of-step velocities u = W r + v^d is 1/2 sum_a r_a . u_a, which the exact law makes
+   -1/2 sum_a mu r_n |u_t| (r_n u_n = 0, sliding against friction): anything else is energy created or destroyed by
+   the solver's error. Recorded: law_work_error = 1/2 sum_a (|r_n u_n| + |r_t u_t + mu r_n |u_t||) (J), and, as its
+   scale, contact_energy = 1/2 r^T W r (J), the kinetic energy the impulses alone would impart. v holds W r + v^d. */
+static PetscErrorCode RecordLawWork(KergsSolver s, KergsOperators ops, KergsSolveStats *stats)
+{
+  const PetscScalar *r, *v, *vd;
+  KergsDofLayout     layout;
+  PetscReal          sums[2] = {0.0, 0.0};
+  PetscInt           n, nc;
+  Vec                rv, vv, vdv;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &rv, &vv, &vdv));
+  PetscCall(VecGetLocalSize(rv, &n));
+  nc = layout.ncomp;
+  PetscCall(VecGetArrayRead(rv, &r));
+  PetscCall(VecGetArrayRead(vv, &v));
+  PetscCall(VecGetArrayRead(vdv, &vd));
+  for (PetscInt a = 0; a < n / nc; a++) {
+    const PetscReal rn = PetscRealPart(r[a * nc]), un = PetscRealPart(v[a * nc]);
+    sums[0] += PetscAbsReal(rn * un);
+    if (nc > 1) {
+      const PetscReal rt = PetscRealPart(r[a * nc + 1]), ut = PetscRealPart(v[a * nc + 1]);
+      sums[0] += PetscAbsReal(rt * ut + s->mu[a] * rn * PetscAbsReal(ut));
+    }
+    for (PetscInt c = 0; c < nc; c++) sums[1] += PetscRealPart(r[a * nc + c]) * PetscRealPart(v[a * nc + c] - vd[a * nc + c]);
+  }
+  PetscCall(VecRestoreArrayRead(rv, &r));
+  PetscCall(VecRestoreArrayRead(vv, &v));
+  PetscCall(VecRestoreArrayRead(vdv, &vd));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, s->comm));
+  PetscCall(KergsSolveStatsAdd(stats, "law_work_error", 0.5 * sums[0]));
+  PetscCall(KergsSolveStatsAdd(stats, "contact_energy", 0.5 * sums[1]));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops, KergsSolveStats *stats)
 {
   PetscLogDouble t0, t1;
@@ -227,9 +270,13 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscCall(PetscMemzero(stats, sizeof(*stats)));
   PetscCall(PetscLogEventBegin(KERGS_Solve, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
+  s->solve_start = t0;
+  s->held        = PETSC_FALSE;
   if (s->ops.setup) PetscCall((*s->ops.setup)(s, scene, contacts, ops));
   PetscCall((*s->ops.solve)(s, scene, contacts, ops, stats));
   PetscCall(DecideConvergence(s, ops, stats));
+  PetscCall(KergsSolverMonitorFlush(s, stats->residual));
+  PetscCall(RecordLawWork(s, ops, stats));
   if (s->ops.stats) PetscCall((*s->ops.stats)(s, stats));
   /* the sweep lives for one solve: drop its reference to this step's W, so that W is freed at the start of the
      next assembly instead of coexisting with the next step's W (the peak memory) */
@@ -258,6 +305,7 @@ PetscErrorCode KergsSolverDestroy(KergsSolver *s)
   PetscFunctionBeginUser;
   if (!*s) PetscFunctionReturn(0);
   if ((*s)->ops.destroy) PetscCall((*(*s)->ops.destroy)(*s));
+  PetscCall(KergsSolverMonitorCancel(*s));
   PetscCall(KergsSweepDestroy(&(*s)->sweep));
   PetscCall(PetscFree2((*s)->mu, (*s)->active));
   PetscCall(PetscFree(*s));

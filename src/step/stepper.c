@@ -181,6 +181,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(KergsOperatorsAssembleW(st->ops, sc, st->contacts, (PetscBool)!needsH));
   PetscCall(KergsOperatorsGetImpulses(st->ops, st->contacts)); /* warm start */
   PetscCall(PetscTime(&t2));
+  PetscCall(KergsSolverSetStepNumber(st->solver, step + 1)); /* numbered as the step lines, for -solver_monitor */
   PetscCall(KergsSolverSolve(st->solver, sc, st->contacts, st->ops, &ss));
   PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
   if (step + 1 == st->fclib_step) { /* the step that the line "step N" reports: N = step + 1 */

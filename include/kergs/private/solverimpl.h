@@ -1,10 +1,12 @@
-/* kergs solver, private: the solver object and its operations, for src/solver/solver.c and the types in
+/* kergs solver, private: the solver object and its operations, for src/solver/solver.c, monitor.c and the types in
    src/solver/solvers/ (as PETSc's KSP types use kspimpl.h); other components go through kergs/solver.h. */
 #ifndef KERGS_SOLVERIMPL_H
 #define KERGS_SOLVERIMPL_H
 
 #include <kergs/solver.h>
 #include <kergs/sweep.h>
+
+#define KERGS_SOLVER_MAXMONITORS 5
 
 typedef struct {
   PetscErrorCode (*setfromoptions)(PetscOptionItems *, KergsSolver); /* inside the solver's options block, as PETSc's types */
@@ -35,9 +37,21 @@ struct _p_KergsSolver {
   PetscBool      needs_H;         /* the type reads H_f, H_g during its solve (kernel projector, predictors), and W over all
                                      pairs of contacts: the time step keeps H alive from assembly to the velocity update and
                                      assembles the whole W (otherwise W couples the active contacts only) */
-  PetscReal *mu;                  /* per local contact */
-  PetscBool *active;              /* per local contact */
-  PetscInt   nalloc;
+  /* monitors (KergsSolverMonitorSet); the last iteration's call is held back until the solve's exit, so that its residual
+     is the one recorded (KergsSolverMonitor) */
+  KergsSolverMonitorFn monitor[KERGS_SOLVER_MAXMONITORS];
+  void                *monitorctx[KERGS_SOLVER_MAXMONITORS];
+  PetscErrorCode (*monitordestroy[KERGS_SOLVER_MAXMONITORS])(void **);
+  PetscInt       nmonitors;
+  PetscBool      monitor_options; /* -solver_monitor's monitor is set */
+  PetscInt       step;            /* KergsSolverSetStepNumber */
+  PetscLogDouble solve_start;
+  PetscBool      held; /* an iteration's monitor call is held back */
+  PetscInt       held_it;
+  PetscReal      held_criterion, held_residual, held_seconds;
+  PetscReal     *mu;     /* per local contact */
+  PetscBool     *active; /* per local contact */
+  PetscInt       nalloc;
 };
 
 /* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */
@@ -45,6 +59,12 @@ PETSC_INTERN PetscErrorCode KergsSolverSetUpSweep(KergsSolver, KergsScene, Kergs
 /* Shared by the types: run sweeps until the criterion or max_it, extra/diag as in KergsSweepRun; when the type
    has a presweep hook, extra (one entry per local component) is updated by it before every sweep. */
 PETSC_INTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *);
+/* For the types: iteration `it` of the solve ended with the type's criterion at `criterion` and the natural residual of
+   the original problem at `residual` (NaN when the type did not compute it). Nothing when no monitor is set. */
+PETSC_INTERN PetscErrorCode KergsSolverMonitor(KergsSolver, PetscInt it, PetscReal criterion, PetscReal residual);
+/* At the solve's exit: the last iteration's monitor call, with the residual recorded for the step (src/solver/monitor.c) */
+PETSC_INTERN PetscErrorCode KergsSolverMonitorFlush(KergsSolver, PetscReal residual);
+PETSC_INTERN PetscErrorCode KergsSolverMonitorSetFromOptions(PetscOptionItems *, KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver);

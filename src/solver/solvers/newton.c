@@ -506,6 +506,19 @@ static PetscErrorCode Sweeps(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc,
   PetscFunctionReturn(0);
 }
 
+/* The monitors' line of a Newton step: the criterion of this type is the natural residual of the original problem,
+   computed here only when a monitor is set (u = W r + v^d after the line search). */
+static PetscErrorCode MonitorNewtonStep(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscInt step)
+{
+  PetscReal res;
+
+  PetscFunctionBeginUser;
+  if (!s->nmonitors) PetscFunctionReturn(0);
+  PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
+  PetscCall(KergsSolverMonitor(s, step, res, res));
+  PetscFunctionReturn(0);
+}
+
 /* Newton on the current (proximal) problem, from r: at most `count` steps, until |F| is at most `ftol`; *ok is false
    when some line search failed. Newton stops early when it crawls: -solver_newton_stall_steps steps in a row that
    each cut the merit by less than a tenth (many contacts change piece at every step, and the line search keeps
@@ -538,6 +551,7 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
       crawling = merit > 0.81 * m0 ? crawling + 1 : 0; /* |F| down by less than a tenth */
     }
     (*steps)++;
+    PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, *steps));
     if (!decreased) *ok = PETSC_FALSE;
     if (nt->stall_steps > 0 && crawling >= nt->stall_steps) {
       *ok = PETSC_FALSE;
@@ -616,7 +630,10 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     {
       const PetscInt before_steps = steps;
       PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
-      if (steps == before_steps) steps++; /* an outer iteration without a Newton step still counts: the loop ends */
+      if (steps == before_steps) { /* an outer iteration without a Newton step still counts: the loop ends */
+        steps++;
+        PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, steps));
+      }
     }
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
     nt->outer++;
