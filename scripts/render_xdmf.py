@@ -39,7 +39,7 @@ def blocks_at(path, step):
         g = out.GetBlock(b)
         copy = g.NewInstance()
         copy.DeepCopy(g)
-        grids[out.GetMetaData(b).Get(out.NAME()).split("[")[0]] = copy
+        grids[out.GetMetaData(b).Get(out.NAME())] = copy
     return grids, t, len(times)
 
 

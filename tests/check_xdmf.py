@@ -75,7 +75,7 @@ def compare_step(h5, k, t, blocks, label):
     s = h5["snapshots"][f"{k:06d}"]
     n, m, w = int(s.attrs["ndisks"]), int(s.attrs["ncontacts"]), int(s.attrs["nwalls"])
     x, radius, r = s["x"][()], s["radius"][()], s["r"][()].reshape(-1, 2)
-    ok = t == float(s.attrs["time"]) and [b[0].split("[")[0] for b in blocks] == ["disks", "contacts", "walls"]
+    ok = t == float(s.attrs["time"]) and [b[0] for b in blocks] == ["disks", "contacts", "walls"]
     if not check(ok, f"{label}: time step {k} is snapshot {k} (time {t}), blocks disks, contacts, walls"):
         return
     disks, contacts, walls = (b[1] for b in blocks)

@@ -1,7 +1,8 @@
 /* kergs XDMF: the text file that lets ParaView (its "XDMF Reader", Xdmf 2) open a results file's snapshots as a time
    series, written beside the results file by the results writer (src/io/results.c, -output_xdmf) and described in
    docs/results.md, "XDMF file for ParaView". It holds no data: every array is a reference to a dataset of
-   /snapshots/<k> in the HDF5 file. Per snapshot, one spatial collection of three grids:
+   /snapshots/<k> in the HDF5 file. Three temporal collections (the reader's blocks, named alike at every time), each
+   with one grid per snapshot:
      disks     n points (Polyvertex cells), point attributes radius, v, omega, rot, id, material
      contacts  m lines (Polyline of 2 nodes) from the dataset segment, cell attributes rn, rt (columns of r), n, gap, kind
      walls     w lines from the dataset walls, cell attribute infinite */

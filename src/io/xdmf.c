@@ -49,7 +49,7 @@ static void XdmfAttribute(FILE *fp, const char h5[], const char group[], const c
     snprintf(dims, sizeof(dims), "%" PetscInt_FMT, rows);
   else
     snprintf(dims, sizeof(dims), "%" PetscInt_FMT " %" PetscInt_FMT, rows, columns);
-  fprintf(fp, "     <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"%s\">", label, columns == 1 ? "Scalar" : "Vector", center);
+  fprintf(fp, "    <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"%s\">", label, columns == 1 ? "Scalar" : "Vector", center);
   XdmfData(fp, h5, group, name, dims);
   fprintf(fp, "</Attribute>\n");
 }
@@ -60,7 +60,7 @@ static void XdmfColumn(FILE *fp, const char h5[], const char group[], const char
   char dims[64];
 
   snprintf(dims, sizeof(dims), "%" PetscInt_FMT " 2", rows);
-  fprintf(fp, "     <Attribute Name=\"%s\" AttributeType=\"Scalar\" Center=\"Cell\">\n", label);
+  fprintf(fp, "    <Attribute Name=\"%s\" AttributeType=\"Scalar\" Center=\"Cell\">\n", label);
   fprintf(fp, "      <DataItem ItemType=\"HyperSlab\" Dimensions=\"%" PetscInt_FMT " 1\" Type=\"HyperSlab\">\n", rows);
   fprintf(fp, "       <DataItem Dimensions=\"3 2\" Format=\"XML\">0 %" PetscInt_FMT " 1 1 %" PetscInt_FMT " 1</DataItem>\n       ", col,
           rows);
@@ -68,68 +68,96 @@ static void XdmfColumn(FILE *fp, const char h5[], const char group[], const char
   fprintf(fp, "\n      </DataItem>\n     </Attribute>\n");
 }
 
-/* The grid of n lines (2 nodes each) whose endpoints are the rows of dataset `name` (n, 4): a_x a_y b_x b_y; the Xdmf 2
-   reader takes the 4n values as 2n points and joins points 2k and 2k + 1. A grid without lines keeps its place (the
-   blocks keep their order at every time) with one point and no cell: the reader cannot read an empty dataset. */
-static void XdmfLines(FILE *fp, const char h5[], const char group[], const char grid[], const char name[], PetscInt n)
+/* The opening of the uniform grid of one snapshot in a temporal collection: its name and time. */
+static void XdmfGridBegin(FILE *fp, const KergsXdmfSnapshot *s)
+{
+  fprintf(fp, "   <Grid Name=\"step %" PetscInt_FMT "\" GridType=\"Uniform\">\n    <Time Value=\"%.17g\"/>\n", s->step, (double)s->time);
+}
+
+/* n lines (2 nodes each) whose endpoints are the rows of dataset `name` (n, 4): a_x a_y b_x b_y; the Xdmf 2 reader
+   takes the 4n values as 2n points and joins points 2k and 2k + 1. Without lines the grid keeps its place with one
+   point and no cell (the reader cannot read an empty dataset). PETSC_FALSE when there is no line (no attribute then). */
+static PetscBool XdmfLines(FILE *fp, const char h5[], const char group[], const char name[], PetscInt n)
 {
   char dims[64];
 
-  fprintf(fp, "    <Grid Name=\"%s\" GridType=\"Uniform\">\n", grid);
-  fprintf(fp, "     <Topology TopologyType=\"Polyline\" NumberOfElements=\"%" PetscInt_FMT "\" NodesPerElement=\"2\"/>\n", n);
+  fprintf(fp, "    <Topology TopologyType=\"Polyline\" NumberOfElements=\"%" PetscInt_FMT "\" NodesPerElement=\"2\"/>\n", n);
   if (n == 0) {
-    fprintf(fp, "     <Geometry GeometryType=\"XY\"><DataItem Dimensions=\"1 2\" Format=\"XML\">0 0</DataItem></Geometry>\n");
-    return;
+    fprintf(fp, "    <Geometry GeometryType=\"XY\"><DataItem Dimensions=\"1 2\" Format=\"XML\">0 0</DataItem></Geometry>\n");
+    return PETSC_FALSE;
   }
   snprintf(dims, sizeof(dims), "%" PetscInt_FMT " 4", n);
-  fprintf(fp, "     <Geometry GeometryType=\"XY\">");
+  fprintf(fp, "    <Geometry GeometryType=\"XY\">");
   XdmfData(fp, h5, group, name, dims);
   fprintf(fp, "</Geometry>\n");
+  return PETSC_TRUE;
 }
 
-static void XdmfDisks(FILE *fp, const char h5[], const char group[], PetscInt n)
+/* The disks of snapshot k: n points, one single-point cell each, and their fields. */
+static void XdmfDisks(FILE *fp, const char h5[], const char group[], const KergsXdmfSnapshot *s)
 {
-  char dims[64];
+  const PetscInt n = s->ndisks;
+  char           dims[64];
 
-  fprintf(fp, "    <Grid Name=\"disks\" GridType=\"Uniform\">\n");
-  fprintf(fp, "     <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%" PetscInt_FMT "\" NodesPerElement=\"1\"/>\n", n);
-  if (n == 0) {
-    fprintf(fp, "     <Geometry GeometryType=\"XY\"><DataItem Dimensions=\"1 2\" Format=\"XML\">0 0</DataItem></Geometry>\n    </Grid>\n");
-    return;
+  XdmfGridBegin(fp, s);
+  fprintf(fp, "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%" PetscInt_FMT "\" NodesPerElement=\"1\"/>\n", n);
+  if (n == 0)
+    fprintf(fp, "    <Geometry GeometryType=\"XY\"><DataItem Dimensions=\"1 2\" Format=\"XML\">0 0</DataItem></Geometry>\n");
+  else {
+    snprintf(dims, sizeof(dims), "%" PetscInt_FMT " 2", n);
+    fprintf(fp, "    <Geometry GeometryType=\"XY\">");
+    XdmfData(fp, h5, group, "x", dims);
+    fprintf(fp, "</Geometry>\n");
+    XdmfAttribute(fp, h5, group, "radius", "radius", "Node", n, 1);
+    XdmfAttribute(fp, h5, group, "v", "v", "Node", n, 2);
+    XdmfAttribute(fp, h5, group, "omega", "omega", "Node", n, 1);
+    XdmfAttribute(fp, h5, group, "rot", "rot", "Node", n, 1);
+    XdmfAttribute(fp, h5, group, "id", "id", "Node", n, 1);
+    XdmfAttribute(fp, h5, group, "material", "material", "Node", n, 1);
   }
-  snprintf(dims, sizeof(dims), "%" PetscInt_FMT " 2", n);
-  fprintf(fp, "     <Geometry GeometryType=\"XY\">");
-  XdmfData(fp, h5, group, "x", dims);
-  fprintf(fp, "</Geometry>\n");
-  XdmfAttribute(fp, h5, group, "radius", "radius", "Node", n, 1);
-  XdmfAttribute(fp, h5, group, "v", "v", "Node", n, 2);
-  XdmfAttribute(fp, h5, group, "omega", "omega", "Node", n, 1);
-  XdmfAttribute(fp, h5, group, "rot", "rot", "Node", n, 1);
-  XdmfAttribute(fp, h5, group, "id", "id", "Node", n, 1);
-  XdmfAttribute(fp, h5, group, "material", "material", "Node", n, 1);
-  fprintf(fp, "    </Grid>\n");
+  fprintf(fp, "   </Grid>\n");
 }
 
-static void XdmfSnapshot(FILE *fp, const char h5[], PetscInt k, const KergsXdmfSnapshot *s)
+/* The contacts of snapshot k: m lines (the force-chain segments) with the impulse's columns and the contact's fields. */
+static void XdmfContacts(FILE *fp, const char h5[], const char group[], const KergsXdmfSnapshot *s)
 {
+  const PetscInt m = s->ncontacts;
+
+  XdmfGridBegin(fp, s);
+  if (XdmfLines(fp, h5, group, "segment", m)) {
+    XdmfColumn(fp, h5, group, "r", "rn", m, 0);
+    XdmfColumn(fp, h5, group, "r", "rt", m, 1);
+    XdmfAttribute(fp, h5, group, "n", "n", "Cell", m, 2);
+    XdmfAttribute(fp, h5, group, "gap", "gap", "Cell", m, 1);
+    XdmfAttribute(fp, h5, group, "kind", "kind", "Cell", m, 1);
+  }
+  fprintf(fp, "   </Grid>\n");
+}
+
+/* The walls of snapshot k: w lines. */
+static void XdmfWalls(FILE *fp, const char h5[], const char group[], const KergsXdmfSnapshot *s)
+{
+  XdmfGridBegin(fp, s);
+  if (XdmfLines(fp, h5, group, "walls", s->nwalls)) XdmfAttribute(fp, h5, group, "wall_infinite", "infinite", "Cell", s->nwalls, 1);
+  fprintf(fp, "   </Grid>\n");
+}
+
+/* One temporal collection per kind of object (the reader's blocks disks, contacts, walls, under the same names at every
+   time), each listing the snapshots in order. */
+static void XdmfBody(FILE *fp, const char h5[], PetscInt n, const KergsXdmfSnapshot snap[])
+{
+  const char *kinds[3]                                                           = {"disks", "contacts", "walls"};
+  void (*grid[3])(FILE *, const char[], const char[], const KergsXdmfSnapshot *) = {XdmfDisks, XdmfContacts, XdmfWalls};
   char group[64];
 
-  snprintf(group, sizeof(group), "/snapshots/%06" PetscInt_FMT, k);
-  fprintf(fp, "   <Grid Name=\"step %" PetscInt_FMT "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n", s->step);
-  fprintf(fp, "    <Time Value=\"%.17g\"/>\n", (double)s->time);
-  XdmfDisks(fp, h5, group, s->ndisks);
-  XdmfLines(fp, h5, group, "contacts", "segment", s->ncontacts);
-  if (s->ncontacts > 0) {
-    XdmfColumn(fp, h5, group, "r", "rn", s->ncontacts, 0);
-    XdmfColumn(fp, h5, group, "r", "rt", s->ncontacts, 1);
-    XdmfAttribute(fp, h5, group, "n", "n", "Cell", s->ncontacts, 2);
-    XdmfAttribute(fp, h5, group, "gap", "gap", "Cell", s->ncontacts, 1);
-    XdmfAttribute(fp, h5, group, "kind", "kind", "Cell", s->ncontacts, 1);
+  for (int j = 0; j < 3; j++) {
+    fprintf(fp, "  <Grid Name=\"%s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", kinds[j]);
+    for (PetscInt k = 0; k < n; k++) {
+      snprintf(group, sizeof(group), "/snapshots/%06" PetscInt_FMT, k);
+      grid[j](fp, h5, group, &snap[k]);
+    }
+    fprintf(fp, "  </Grid>\n");
   }
-  fprintf(fp, "    </Grid>\n");
-  XdmfLines(fp, h5, group, "walls", "walls", s->nwalls);
-  if (s->nwalls > 0) XdmfAttribute(fp, h5, group, "wall_infinite", "infinite", "Cell", s->nwalls, 1);
-  fprintf(fp, "    </Grid>\n   </Grid>\n");
 }
 
 PetscErrorCode KergsXdmfWrite(const char path[], const char h5file[], PetscInt n, const KergsXdmfSnapshot snap[])
@@ -146,9 +174,9 @@ PetscErrorCode KergsXdmfWrite(const char path[], const char h5file[], PetscInt n
   fp = fopen(tmp, "w");
   PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot create the XDMF file %s: %s", tmp, strerror(errno));
   fprintf(fp, "<?xml version=\"1.0\" ?>\n<!-- kergs results %s as a time series; open it with ParaView's \"XDMF Reader\" -->\n", h5);
-  fprintf(fp, "<Xdmf Version=\"2.0\">\n <Domain>\n  <Grid Name=\"kergs\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
-  for (PetscInt k = 0; k < n; k++) XdmfSnapshot(fp, h5, k, &snap[k]);
-  fprintf(fp, "  </Grid>\n </Domain>\n</Xdmf>\n");
+  fprintf(fp, "<Xdmf Version=\"2.0\">\n <Domain>\n");
+  XdmfBody(fp, h5, n, snap);
+  fprintf(fp, " </Domain>\n</Xdmf>\n");
   failed = ferror(fp);
   err    = failed ? errno : 0;
   if (fclose(fp) && !failed) {
