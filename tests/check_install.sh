@@ -34,9 +34,9 @@ check $([ "$headers" -eq "$installed" ]; echo $?) "every public header: $install
 leaks=$(grep -l "$work/installed" -r "$p" 2>/dev/null | head -3)
 check $([ -z "$leaks" ]; echo $?) "no installed file names the install path${leaks:+ ($leaks)}"
 
-cmake -S examples -B "$work/example" -DCMAKE_PREFIX_PATH="$p" -DCMAKE_BUILD_TYPE=Release > "$work/example-configure.log" 2>&1 &&
+cmake -S examples -B "$work/example" -DCMAKE_PREFIX_PATH="$p" -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_FLAGS="-Wall -Wextra -Werror" > "$work/example-configure.log" 2>&1 &&
   cmake --build "$work/example" > "$work/example-build.log" 2>&1
-check $? "examples/ configured with find_package(kergs 0.1) against the moved tree and built"
+check $? "examples/ configured with find_package(kergs 0.1) against the moved tree and built (-Wall -Wextra -Werror)"
 out=$("$mpiexec" -n 2 "$work/example/kergs_contacts" -options_file cases/confine500.opts -quiet 2>&1)
 rc=$?
 echo "$out" | tail -n 3
