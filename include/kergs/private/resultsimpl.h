@@ -41,6 +41,7 @@ struct _p_KergsResults {
   PetscInt           nsnapalloc;
   PetscInt           xdmf_written; /* snapshots listed in the XDMF file on disk */
   PetscLogDouble     last_xdmf;    /* wall clock of its last rewrite (rank 0) */
+  PetscLogDouble     xdmf_cost;    /* seconds that rewrite took */
 };
 
 #endif
