@@ -6,6 +6,9 @@ KERGS_BUILD=${KERGS_BUILD:-$KERGS_ROOT/build}
 KERGS_PACKAGES="petsc-dev libmetis-dev libhdf5-openmpi-dev openmpi-bin cmake pkg-config make gcc libopenblas0-pthread
   libfclib-dev python3-h5py python3-matplotlib python3-numpy python3-scipy python3-siconos valgrind"
 KERGS_PACKAGES="$KERGS_PACKAGES clang-format" # tests/check_format.sh
+# tests/check_xdmf.py, scripts/render_xdmf.py: VTK's XDMF readers and offscreen rendering. Debian's python3-vtk9 is built
+# without the XDMF readers; python3-paraview ships a VTK that has them (it replaces python3-vtk9).
+KERGS_PACKAGES="$KERGS_PACKAGES python3-paraview xvfb xauth" # xvfb-run: rendering without a display
 
 kergs_install() {
   local missing=""

@@ -13,6 +13,7 @@
 #include <kergs/predictor.h>
 #include <kergs/solver.h>
 #include <kergs/results.h>
+#include <kergs/xdmf.h>
 #include <kergs/sample.h>
 #include <kergs/fclib.h>
 #include <kergs/files.h>

@@ -2,6 +2,7 @@
    renamed when complete (atomic). Layout in docs/results.md:
      /stats/<name>                 one 1-D dataset per statistic, one entry per step (chunked, extendible)
      /snapshots/<k>/...            grain ids, positions, velocities, radii; contact list
+   and, beside it, an XDMF file that describes the snapshots for ParaView (-output_xdmf, kergs/xdmf.h).
    Statistics are recorded by name each step (KergsResultsRecord), so components add their own.
    A statistic first recorded after some rows were completed gets NaN in those earlier rows, and a
    statistic not recorded in a step gets NaN in that row.
@@ -48,6 +49,8 @@ PETSC_EXTERN PetscErrorCode KergsResultsGetStatistic(KergsResults, const char na
 PETSC_EXTERN PetscErrorCode KergsResultsGetNumRows(KergsResults, PetscInt *);
 /* The results file's path, and whether results are written at all (-output_none) */
 PETSC_EXTERN PetscErrorCode KergsResultsGetPath(KergsResults, const char **path, PetscBool *enabled);
+/* The XDMF file written beside the results file (-output_xdmf, include/kergs/xdmf.h); empty when none is written. */
+PETSC_EXTERN PetscErrorCode KergsResultsGetXdmfPath(KergsResults, const char **path);
 /* Whether the snapshot policy asks for a snapshot at this step: the first snapshot of the run (none
    written yet), the last step (last = PETSC_TRUE), and with -output_every N > 0 every step that is a
    multiple of N. Always PETSC_FALSE with -output_none. */

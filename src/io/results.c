@@ -4,6 +4,7 @@
    disk regularly, so that the .tmp of a killed run is a readable file holding every flushed row and snapshot. The
    layout is documented in docs/results.md. */
 #include <kergs/private/resultsimpl.h>
+#include <kergs/xdmf.h>
 #include <petscviewerhdf5.h>
 #include <math.h>
 #include <stdio.h>
@@ -38,6 +39,7 @@ PetscErrorCode KergsResultsCreate(MPI_Comm comm, KergsResults *res)
   (*res)->last_snapshot_step = -1;
   (*res)->flush_every        = 1000;
   (*res)->flush_seconds      = 5.0;
+  (*res)->xdmf               = PETSC_TRUE;
   PetscFunctionReturn(0);
 }
 
@@ -81,6 +83,9 @@ PetscErrorCode KergsResultsSetFromOptions(KergsResults res)
                             "KergsResultsFlush", res->flush_every, &res->flush_every, NULL));
   PetscCall(PetscOptionsReal("-output_flush_seconds", "Also flush the results file to disk every T seconds of wall time (0: not by time)",
                              "KergsResultsFlush", res->flush_seconds, &res->flush_seconds, NULL));
+  PetscCall(PetscOptionsBool(
+      "-output_xdmf", "Write <output without .h5>.xdmf beside the results file: its snapshots as a time series for ParaView's XDMF Reader",
+      "KergsXdmfWrite", res->xdmf, &res->xdmf, NULL));
   PetscOptionsEnd();
   PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_every"));
   PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_flush_every"));
@@ -93,6 +98,15 @@ PetscErrorCode KergsResultsSetFromOptions(KergsResults res)
   PetscCheck(!set || path[0], res->comm, PETSC_ERR_ARG_WRONG, "Option -output needs a file name (use -output_none for no results file)");
   res->enabled = (PetscBool)!none;
   if (!res->path[0]) PetscCall(ResultsDefaultPath(res, res->path, sizeof(res->path)));
+  if (res->enabled && res->xdmf) {
+    const char *slash = strrchr(res->path, '/');
+    PetscCheck(!strchr(slash ? slash + 1 : res->path, ':'), res->comm, PETSC_ERR_ARG_WRONG,
+               "The results file name %s contains ':', which an XDMF file cannot reference (XDMF separates the file from the dataset "
+               "with ':'): rename it, or give -output_xdmf false",
+               res->path);
+    PetscCall(KergsXdmfPath(res->path, res->xdmfpath, sizeof(res->xdmfpath)));
+  } else
+    res->xdmfpath[0] = 0;
   PetscFunctionReturn(0);
 }
 
@@ -159,6 +173,74 @@ static PetscErrorCode OpenNew(KergsResults res)
   res->nsnapshots         = 0;
   res->last_snapshot_step = -1;
   res->nflushed           = 0;
+  res->xdmf_written       = 0;
+  PetscFunctionReturn(0);
+}
+
+/* ---------------------------------------------------------------------------------------------
+   The snapshots' attributes, kept for the XDMF file */
+
+/* Keep the attributes of snapshot k (capacity doubles). */
+static PetscErrorCode ResultsKeepSnapshot(KergsResults res, PetscInt k, const KergsXdmfSnapshot *s)
+{
+  PetscFunctionBeginUser;
+  if (k >= res->nsnapalloc) {
+    KergsXdmfSnapshot *grown;
+    PetscInt           nalloc = PetscMax(2 * res->nsnapalloc, 16);
+    while (nalloc <= k) nalloc *= 2;
+    PetscCall(PetscMalloc1(nalloc, &grown));
+    if (res->nsnapalloc) PetscCall(PetscArraycpy(grown, res->snaps, res->nsnapalloc));
+    PetscCall(PetscFree(res->snaps));
+    res->snaps      = grown;
+    res->nsnapalloc = nalloc;
+  }
+  res->snaps[k] = *s;
+  PetscFunctionReturn(0);
+}
+
+/* The attributes of snapshot group k of an open file (every rank reads them: a continued file's earlier snapshots). */
+static PetscErrorCode ResultsReadSnapshot(hid_t file, PetscInt k, KergsXdmfSnapshot *s)
+{
+  const char *names[5] = {"step", "time", "ndisks", "nwalls", "ncontacts"};
+  const hid_t itype    = sizeof(PetscInt) == 8 ? H5T_NATIVE_LLONG : H5T_NATIVE_INT;
+  void       *dest[5]  = {&s->step, &s->time, &s->ndisks, &s->nwalls, &s->ncontacts};
+  char        group[64];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(group, sizeof(group), "/snapshots/%06" PetscInt_FMT, k));
+  for (int j = 0; j < 5; j++) {
+    hid_t a = H5Aopen_by_name(file, group, names[j], H5P_DEFAULT, H5P_DEFAULT);
+    PetscCheck(a >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "Results file: snapshot %s has no attribute %s", group, names[j]);
+    CallHDF5(H5Aread(a, j == 1 ? H5T_NATIVE_DOUBLE : itype, dest[j]));
+    CallHDF5(H5Aclose(a));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Rank 0 rewrites the XDMF file (-output_xdmf) when snapshots were added since it was last written: the first time at
+   once, then at most every -output_flush_seconds (at every call with 0) and every 20 times the last rewrite's duration
+   (each rewrite writes the whole list, about 50 us per snapshot here: this keeps its cost under 5 % of the run), and
+   always when `now` is set. It references the file under the name it has now: the .tmp while the run goes, the final
+   name once closed. */
+static PetscErrorCode ResultsRefreshXdmf(KergsResults res, PetscBool now, PetscBool final)
+{
+  PetscMPIInt    rank;
+  PetscLogDouble t, done;
+  const char    *h5 = final ? res->path : res->tmppath, *slash = strrchr(h5, '/');
+
+  PetscFunctionBeginUser;
+  if (!res->enabled || !res->xdmf) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_rank(res->comm, &rank));
+  if (rank != 0) PetscFunctionReturn(0);
+  PetscCall(PetscTime(&t));
+  if (!now && (res->nsnapshots == res->xdmf_written ||
+               (res->xdmf_written > 0 && t - res->last_xdmf < PetscMax((PetscLogDouble)res->flush_seconds, 20 * res->xdmf_cost))))
+    PetscFunctionReturn(0);
+  PetscCall(KergsXdmfWrite(res->xdmfpath, slash ? slash + 1 : h5, res->nsnapshots, res->snaps));
+  PetscCall(PetscTime(&done));
+  res->xdmf_written = res->nsnapshots;
+  res->last_xdmf    = t;
+  res->xdmf_cost    = done - t;
   PetscFunctionReturn(0);
 }
 
@@ -295,6 +377,12 @@ static PetscErrorCode TrimToCheckpoint(KergsResults res)
     if (has > 0) CallHDF5(H5Ldelete(file, name, H5P_DEFAULT));
   }
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, "/", "nsnapshots", PETSC_INT, &st->nsnapshots));
+  for (PetscInt k = 0; k < st->nsnapshots; k++) {
+    KergsXdmfSnapshot s;
+    PetscCall(ResultsReadSnapshot(file, k, &s));
+    PetscCall(ResultsKeepSnapshot(res, k, &s));
+  }
+  res->xdmf_written = 0;
   res->nrows = res->row0 = res->nflushed = st->nrows;
   res->nsnapshots                        = st->nsnapshots;
   res->last_snapshot_step                = st->last_snapshot_step;
@@ -358,6 +446,7 @@ PetscErrorCode KergsResultsOpen(KergsResults res)
   if (!res->enabled) PetscFunctionReturn(0);
   PetscCheck(!res->viewer, res->comm, PETSC_ERR_ORDER, "Results file %s is already open", res->tmppath);
   if (!res->path[0]) PetscCall(ResultsDefaultPath(res, res->path, sizeof(res->path)));
+  if (res->xdmf && !res->xdmfpath[0]) PetscCall(KergsXdmfPath(res->path, res->xdmfpath, sizeof(res->xdmfpath)));
   PetscCall(PetscSNPrintf(res->tmppath, sizeof(res->tmppath), "%s.tmp", res->path));
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
   PetscCall(KergsFileMakeParentDir(res->comm, res->path));
@@ -473,6 +562,13 @@ PetscErrorCode KergsResultsGetNumRows(KergsResults res, PetscInt *nrows)
 {
   PetscFunctionBeginUser;
   *nrows = res->nrows;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsResultsGetXdmfPath(KergsResults res, const char **path)
+{
+  PetscFunctionBeginUser;
+  *path = res->enabled && res->xdmf ? res->xdmfpath : "";
   PetscFunctionReturn(0);
 }
 
@@ -600,6 +696,7 @@ PetscErrorCode KergsResultsFlush(KergsResults res)
   PetscCall(Guarded(res, WriteRows, NULL, "the statistics"));
   res->nflushed = res->nrows;
   DropFlushedRows(res);
+  PetscCall(ResultsRefreshXdmf(res, PETSC_FALSE, PETSC_FALSE)); /* after the flush: it references what the file holds */
   PetscCall(PetscTime(&res->last_flush));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   PetscFunctionReturn(0);
@@ -652,6 +749,7 @@ PetscErrorCode KergsResultsClose(KergsResults res)
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
   PetscCall(Guarded(res, WriteEnd, NULL, "the end of the file"));
   PetscCall(KergsFileCommit(res->comm, res->tmppath, res->path));
+  PetscCall(ResultsRefreshXdmf(res, PETSC_TRUE, PETSC_TRUE)); /* now the final name */
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -663,6 +761,7 @@ PetscErrorCode KergsResultsDestroy(KergsResults *res)
   /* Not closed: the temporary file stays as it is (as flushed last), never renamed to the final name. */
   PetscCall(PetscViewerDestroy(&(*res)->viewer));
   for (PetscInt j = 0; j < (*res)->nstats; j++) PetscCall(PetscFree((*res)->statvalues[j]));
+  PetscCall(PetscFree((*res)->snaps));
   PetscCall(PetscFree(*res));
   PetscFunctionReturn(0);
 }
@@ -748,7 +847,7 @@ static PetscErrorCode SnapshotContacts(PetscViewer viewer, KergsScene scene, Ker
   MPI_Comm      comm;
   PetscBool     scfrictional;
   PetscInt     *a, *b, *kind;
-  PetscReal    *nrm, *gap, *r;
+  PetscReal    *nrm, *gap, *r, *seg;
 
   PetscFunctionBeginUser;
   if (contacts) PetscCall(KergsContactsGetLocal(contacts, &m, &cts));
@@ -756,12 +855,22 @@ static PetscErrorCode SnapshotContacts(PetscViewer viewer, KergsScene scene, Ker
   PetscCall(KergsSceneGetComm(scene, &comm));
   PetscCall(KergsSceneGetModel(scene, &scfrictional, NULL));
   PetscCall(PetscMalloc6(m, &a, m, &b, m, &kind, m * KERGS_DIM, &nrm, m, &gap, m * KERGS_MAXCOMP, &r));
+  PetscCall(PetscMalloc1(m * KERGS_WALL_COLUMNS, &seg));
   for (PetscInt k = 0; k < m; k++) {
     const KergsContact *c = &cts[k];
     a[k]                  = D.gidx[c->a];
-    b[k]                  = c->kind == KERGS_CONTACT_DISK_DISK ? D.gidx[c->b] : c->b;
-    kind[k]               = c->kind == KERGS_CONTACT_DISK_WALL ? 1 : 0;
-    gap[k]                = c->gap;
+    /* a contact that holds only its key (b < 0: migrated or restored on another number of ranks) until the next detection */
+    b[k] = c->kind == KERGS_CONTACT_DISK_DISK ? (c->b >= 0 ? D.gidx[c->b] : -1) : c->b;
+    /* the force-chain segment: centre of a, then centre of b (disk) or the contact point x_a - R_a n (wall) */
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      seg[k * KERGS_WALL_COLUMNS + d] = D.x[c->a * KERGS_DIM + d];
+      if (c->kind == KERGS_CONTACT_DISK_DISK)
+        seg[k * KERGS_WALL_COLUMNS + KERGS_DIM + d] = c->b >= 0 ? D.x[c->b * KERGS_DIM + d] : D.x[c->a * KERGS_DIM + d];
+      else
+        seg[k * KERGS_WALL_COLUMNS + KERGS_DIM + d] = D.x[c->a * KERGS_DIM + d] - D.radius[c->a] * c->n[d];
+    }
+    kind[k] = c->kind == KERGS_CONTACT_DISK_WALL ? 1 : 0;
+    gap[k]  = c->gap;
     for (PetscInt d = 0; d < KERGS_DIM; d++) nrm[k * KERGS_DIM + d] = c->n[d];
     for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) r[k * KERGS_MAXCOMP + j] = (j == 0 || scfrictional) ? c->r[j] : 0.0;
   }
@@ -771,7 +880,9 @@ static PetscErrorCode SnapshotContacts(PetscViewer viewer, KergsScene scene, Ker
   PetscCall(KergsViewBlocks(viewer, comm, "n", m, KERGS_DIM, nrm));
   PetscCall(KergsViewBlocks(viewer, comm, "gap", m, 1, gap));
   PetscCall(KergsViewBlocks(viewer, comm, "r", m, KERGS_MAXCOMP, r));
+  PetscCall(KergsViewBlocks(viewer, comm, "segment", m, KERGS_WALL_COLUMNS, seg));
   PetscCall(PetscFree6(a, b, kind, nrm, gap, r));
+  PetscCall(PetscFree(seg));
   PetscFunctionReturn(0);
 }
 
@@ -824,14 +935,15 @@ PetscErrorCode KergsResultsSnapshot(KergsResults res, KergsScene scene, KergsCon
   if (w.step == res->last_snapshot_step) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
   PetscCall(MPIU_Allreduce(&nlocal, &w.ncontacts, 1, MPIU_INT, MPI_SUM, res->comm));
-  /* per disk id, x, v, rot, omega, radius, material; per wall 5 values; per contact a, b, kind, n, gap, r */
+  /* per disk id, x, v, rot, omega, radius, material; per wall 5 values; per contact a, b, kind, n, gap, r, segment */
   bytes = 8.0 * ((PetscReal)D.ndisks * (5 + 2 * KERGS_DIM) + (PetscReal)w.nwalls * (KERGS_WALL_COLUMNS + 1) +
-                 (PetscReal)w.ncontacts * (4 + KERGS_DIM + KERGS_MAXCOMP)) +
+                 (PetscReal)w.ncontacts * (4 + KERGS_DIM + KERGS_MAXCOMP + KERGS_WALL_COLUMNS)) +
           KERGS_RESULTS_OVERHEAD;
   PetscCall(PetscSNPrintf(what, sizeof(what), "the snapshot of step %" PetscInt_FMT, w.step));
   PetscCall(KergsFileCheckSpace(res->comm, res->path, res->tmppath, what, bytes));
   PetscCall(Guarded(res, WriteSnapshot, &w, what));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
+  PetscCall(ResultsKeepSnapshot(res, res->nsnapshots, &(KergsXdmfSnapshot){w.step, w.time, D.ndisks, w.nwalls, w.ncontacts}));
   res->nsnapshots++;
   res->last_snapshot_step = w.step;
   PetscCall(KergsResultsFlush(res)); /* a completed snapshot survives a killed run */

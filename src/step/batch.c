@@ -79,22 +79,24 @@ PetscErrorCode KergsStepperCheckPaths(KergsStepper st)
 {
   static const char *const same[][2] = {{"-checkpoint_path", "-restart"}}; /* read whole first, replaced atomically later */
   char                     sample_in[PETSC_MAX_PATH_LEN] = "";
-  const char              *out;
+  const char              *out, *xdmf;
   PetscBool                enabled, set;
-  KergsFileRole            outputs[4], inputs[2 + KERGS_STEPPER_MAXINPUTS];
+  KergsFileRole            outputs[5], inputs[2 + KERGS_STEPPER_MAXINPUTS];
   PetscInt                 nin = 0;
 
   PetscFunctionBeginUser;
   PetscCall(KergsResultsGetPath(st->results, &out, &enabled));
+  PetscCall(KergsResultsGetXdmfPath(st->results, &xdmf));
   PetscCall(PetscOptionsGetString(NULL, NULL, "-sample_input", sample_in, sizeof(sample_in), &set));
   outputs[0]    = (KergsFileRole){"-output", enabled ? out : NULL};
   outputs[1]    = (KergsFileRole){"-sample_output", st->sample_out};
   outputs[2]    = (KergsFileRole){"-fclib_output", st->fclib_step >= 1 ? st->fclib_path : NULL};
   outputs[3]    = (KergsFileRole){"-checkpoint_path", st->checkpoint_path};
+  outputs[4]    = (KergsFileRole){"-output_xdmf", xdmf};                                    /* <output without .h5>.xdmf */
   inputs[nin++] = (KergsFileRole){"-sample_input", st->restart_path[0] ? NULL : sample_in}; /* a restart does not read it */
   inputs[nin++] = (KergsFileRole){"-restart", st->restart_path};
   for (PetscInt k = 0; k < st->ninputs; k++) inputs[nin++] = (KergsFileRole){st->input_option[k], st->input_path[k]};
-  PetscCall(KergsFileCheckPaths(st->comm, 4, outputs, nin, inputs, 1, same));
+  PetscCall(KergsFileCheckPaths(st->comm, 5, outputs, nin, inputs, 1, same));
   PetscFunctionReturn(0);
 }
 

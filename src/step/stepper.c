@@ -309,6 +309,8 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   if (view) PetscCall(KergsPartitionView(st->partition, PETSC_VIEWER_STDOUT_(st->comm)));
   PetscCall(KergsResultsGetPath(st->results, &path, &enabled));
   if (enabled) PetscCall(PetscPrintf(st->comm, "kergs: results in %s\n", path));
+  PetscCall(KergsResultsGetXdmfPath(st->results, &path));
+  if (path[0]) PetscCall(PetscPrintf(st->comm, "kergs: for ParaView (XDMF Reader) %s\n", path));
   if (st->sample_out[0] && st->status != KERGS_EXIT_SIGNAL && st->status != KERGS_EXIT_BLOWUP)
     PetscCall(PetscPrintf(st->comm, "kergs: sample in %s\n", st->sample_out));
   if (st->fclib_step >= 1 && st->fclib_step <= step)

@@ -4,6 +4,7 @@
 #define KERGS_RESULTSIMPL_H
 
 #include <kergs/results.h>
+#include <kergs/xdmf.h>
 
 #define KERGS_RESULTS_MAXTEXTS 16
 
@@ -33,6 +34,14 @@ struct _p_KergsResults {
   KergsResultsState source_state;
   PetscInt          source_step;
   PetscBool         continued; /* the open file continues the source (otherwise it began at the restart) */
+  /* XDMF file beside the results (-output_xdmf, src/io/xdmf.c): the snapshots' attributes, written by rank 0 */
+  PetscBool          xdmf;
+  char               xdmfpath[PETSC_MAX_PATH_LEN];
+  KergsXdmfSnapshot *snaps; /* [0, nsnapshots), capacity nsnapalloc */
+  PetscInt           nsnapalloc;
+  PetscInt           xdmf_written; /* snapshots listed in the XDMF file on disk */
+  PetscLogDouble     last_xdmf;    /* wall clock of its last rewrite (rank 0) */
+  PetscLogDouble     xdmf_cost;    /* seconds that rewrite took */
 };
 
 #endif
