@@ -12,3 +12,10 @@ foreach(t solve global bad)
            WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
   set_tests_properties(fclib_input_${t} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 180 LABELS fclib)
 endforeach()
+# scripts/profiles --quick: exports 3 small problems, runs kergs's Newton and NLGS and Siconos's fc2d NSGS and fc3d Newton
+# on them; the table, the PNG, and every kergs Newton solve at 1e-8
+add_test(NAME profiles_quick
+         COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_profiles.py --dir ${CMAKE_CURRENT_BINARY_DIR}/profiles_quick
+                 --kergs $<TARGET_FILE:kergs_exe>
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(profiles_quick PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 1 TIMEOUT 300 LABELS fclib)
