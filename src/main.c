@@ -85,17 +85,39 @@ static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **arg
   PetscFunctionReturn(0);
 }
 
+/* -fclib_input FILE: one FCLib problem instead of a scene */
+static PetscErrorCode RunFCLib(KergsExitStatus *status)
+{
+  KergsFCLibRun run;
+  KergsSolver   solver;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsFCLibRunCreate(PETSC_COMM_WORLD, &run));
+  PetscCall(KergsFCLibRunSetFromOptions(run));
+  PetscCall(KergsFCLibRunGetSolver(run, &solver));
+  PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
+  PetscCall(KergsSolverView(solver, PETSC_VIEWER_STDOUT_WORLD));
+  PetscCall(KergsFCLibRunSolve(run, status));
+  PetscCall(KergsFCLibRunDestroy(&run));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
 {
   KergsStepper stepper;
   KergsScene   scene;
   KergsSolver  solver;
-  PetscBool    want_help = PETSC_FALSE, restart;
+  PetscBool    want_help = PETSC_FALSE, restart, fclib;
   char         checkpoint[PETSC_MAX_PATH_LEN];
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
   PetscCall(PetscOptionsHasHelp(NULL, &want_help));
+  PetscCall(PetscOptionsHasName(NULL, NULL, "-fclib_input", &fclib));
+  if (fclib && !want_help) {
+    PetscCall(RunFCLib(status));
+    PetscFunctionReturn(0);
+  }
   /* a restart: the checkpointed run's options enter the database before anything reads it (the command line wins) */
   PetscCall(PetscOptionsGetString(NULL, NULL, "-restart", checkpoint, sizeof(checkpoint), &restart));
   if (restart && !want_help) PetscCall(KergsCheckpointLoadOptions(PETSC_COMM_WORLD, checkpoint));
@@ -105,9 +127,10 @@ static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
   PetscCall(KergsStepperGetScene(stepper, &scene));
   PetscCall(KergsStepperGetSolver(stepper, &solver));
   /* with -help, the options of every solver type, not only of the chosen one */
-  if (want_help)
+  if (want_help) {
     PetscCall(KergsSolverPrintHelpAllTypes(PETSC_COMM_WORLD));
-  else {
+    PetscCall(KergsFCLibRunPrintHelp(PETSC_COMM_WORLD));
+  } else {
     PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
     PetscCall(KergsSceneView(scene, PETSC_VIEWER_STDOUT_WORLD));
     PetscCall(KergsSolverView(solver, PETSC_VIEWER_STDOUT_WORLD));

@@ -10,6 +10,12 @@ set(KERGS_MALLOC_DUMP_LEAK "\\[ *[0-9]+\\] +[0-9]+ bytes ")
 kergs_test(NAME malloc_dump_confine5_nlgs NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/confine5.opts -steps 10 -quiet -malloc_debug -malloc_dump -output ${KERGS_MEMCHECK_DIR}/dump_confine5.h5
                 -sample_output ${KERGS_MEMCHECK_DIR}/dump_confine5_sample.h5 -fclib_step 3 -fclib_output ${KERGS_MEMCHECK_DIR}/dump_confine5.fclib.h5)
+# -fclib_input reading that export back on 2 ranks
+kergs_test(NAME malloc_dump_fclib_input NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
+           ARGS -fclib_input ${KERGS_MEMCHECK_DIR}/dump_confine5.fclib.h5 -solver_type newton -solver_max_it 1000 -malloc_debug -malloc_dump
+                -output ${KERGS_MEMCHECK_DIR}/dump_fclib_input.h5)
+set_tests_properties(malloc_dump_confine5_nlgs PROPERTIES FIXTURES_SETUP dump_confine5_export)
+set_tests_properties(malloc_dump_fclib_input PROPERTIES FIXTURES_REQUIRED dump_confine5_export)
 kergs_test(NAME malloc_dump_confine5_nlgsjac NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none
                 -solver_type nlgsjac -predictor_type linear -partition_check_every 1 -partition_imbalance_tol 1.0)
@@ -47,3 +53,8 @@ kergs_memcheck(confine5_nlgsjac_2 2 kergs_exe -options_file cases/confine5.opts 
 kergs_memcheck(confine500_2 2 kergs_exe -options_file cases/confine500.opts -solver_type nlgs -solver_max_it 150 -solver_tol 1e-4 -steps 3 -quiet -output ${KERGS_MEMCHECK_DIR}/vg_confine500.h5)
 # the io test: results and samples written and read back, every refused sample (error paths), FCLib export
 kergs_memcheck(io_1 1 test_io -dir ${KERGS_MEMCHECK_DIR}/io)
+# -fclib_input reading confine5's export of the test above (libfclib's reader loaded with dlopen), Newton and NLGS
+kergs_memcheck(fclib_input_newton 1 kergs_exe -fclib_input ${KERGS_MEMCHECK_DIR}/vg_confine5.fclib.h5 -solver_type newton -solver_max_it 1000
+               -output ${KERGS_MEMCHECK_DIR}/vg_fclib_input.h5)
+set_tests_properties(memcheck_confine5_nlgs PROPERTIES FIXTURES_SETUP vg_confine5_export)
+set_tests_properties(memcheck_fclib_input_newton PROPERTIES FIXTURES_REQUIRED vg_confine5_export)

@@ -48,6 +48,12 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseW(KergsOperators);
 /* W with both triangles stored, (MPI)BAIJ with block size ncomp ((MPI)AIJ when ncomp = 1), for the users that need
    whole rows (a new matrix: MatDestroy it) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetFullW(KergsOperators, Mat *);
+/* A contact problem given as data, not assembled from a scene (an FCLib file): W (symmetric, rows and columns ordered
+   contact by contact, ncomp components each) in compressed rows over the whole problem, and q = v^d, both given whole on
+   every rank; this rank takes nlocal contacts, rank after rank. Builds W (upper block triangle, as AssembleW), v^d, and
+   r = 0, v = v^d; no H nor DOF vectors (KergsOperatorsGetH gives NULL). Collective. */
+PETSC_EXTERN PetscErrorCode KergsOperatorsSetProblem(KergsOperators, PetscInt nlocal, PetscInt ncomp, const PetscInt rowptr[],
+                                                     const PetscInt colind[], const PetscReal val[], const PetscReal q[]);
 /* r <- impulses stored in the contacts; contacts <- r (after a solve; the local velocities stay in ops->v) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetImpulses(KergsOperators, KergsContacts);
 PETSC_EXTERN PetscErrorCode KergsOperatorsSetImpulses(KergsOperators, KergsContacts);

@@ -44,4 +44,18 @@ PETSC_EXTERN PetscErrorCode KergsStepperGetPartition(KergsStepper, KergsPartitio
 /* Over the run so far: steps whose solve did not converge, and the largest interpenetration seen */
 PETSC_EXTERN PetscErrorCode KergsStepperGetRunSummary(KergsStepper, PetscInt *nonconverged, PetscReal *max_violation);
 
+/* -fclib_input FILE: one FCLib problem (kergs/fclib.h) solved by the solver of the options instead of a scene's time loop,
+   its statistics recorded as one step's (-output) and printed as one summary line (src/step/fclib_run.c). SetFromOptions
+   reads -fclib_input, the solver's and the results' options and the file, and checks the paths; the types that need the
+   scene's H_f are refused. Solve: the exit status is KERGS_EXIT_NOT_CONVERGED with -error_on_nonconvergence when the solve
+   did not converge, otherwise KERGS_EXIT_DONE. */
+typedef struct _p_KergsFCLibRun *KergsFCLibRun;
+PETSC_EXTERN PetscErrorCode      KergsFCLibRunCreate(MPI_Comm, KergsFCLibRun *);
+PETSC_EXTERN PetscErrorCode      KergsFCLibRunSetFromOptions(KergsFCLibRun);
+PETSC_EXTERN PetscErrorCode      KergsFCLibRunGetSolver(KergsFCLibRun, KergsSolver *);
+PETSC_EXTERN PetscErrorCode      KergsFCLibRunSolve(KergsFCLibRun, KergsExitStatus *);
+PETSC_EXTERN PetscErrorCode      KergsFCLibRunDestroy(KergsFCLibRun *);
+/* With -help: list the options of -fclib_input runs. Collective. */
+PETSC_EXTERN PetscErrorCode KergsFCLibRunPrintHelp(MPI_Comm);
+
 #endif

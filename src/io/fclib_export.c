@@ -24,21 +24,28 @@
 typedef int (*FCLibWriteLocalFn)(struct fclib_local *, const char *);
 typedef int (*FCLibWriteSolutionFn)(struct fclib_solution *, const char *);
 
-/* Load libfclib once (rank 0 only); msg is set when it or one of its functions is missing. */
-static void FCLibLoad(FCLibWriteLocalFn *write_local, FCLibWriteSolutionFn *write_solution, char msg[], size_t len)
+/* A function of libfclib, loaded once (rank 0 only; also for src/io/fclib_import.c); msg is set when the library or the
+   function is missing. */
+void KergsFCLibSymbol(const char name[], void **fn, char msg[], size_t len)
 {
   static void *handle  = NULL; /* never closed: unloading an HDF5 library at run time is not safe */
   const char  *names[] = {KERGS_FCLIB_LIBRARY, "libfclib.so.0"};
 
+  *fn = NULL;
   for (size_t k = 0; !handle && k < sizeof(names) / sizeof(names[0]); k++) handle = dlopen(names[k], RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
   if (!handle) {
     snprintf(msg, len, "Cannot load libfclib (%s): %s", KERGS_FCLIB_LIBRARY, dlerror());
     return;
   }
-  *(void **)write_local    = dlsym(handle, "fclib_write_local");
-  *(void **)write_solution = dlsym(handle, "fclib_write_solution");
-  if (!*write_local || !*write_solution)
-    snprintf(msg, len, "libfclib (%s) lacks fclib_write_local or fclib_write_solution", KERGS_FCLIB_LIBRARY);
+  *fn = dlsym(handle, name);
+  if (!*fn) snprintf(msg, len, "libfclib (%s) lacks %s", KERGS_FCLIB_LIBRARY, name);
+}
+
+/* Load libfclib's writers; msg is set when one is missing. */
+static void FCLibLoad(FCLibWriteLocalFn *write_local, FCLibWriteSolutionFn *write_solution, char msg[], size_t len)
+{
+  KergsFCLibSymbol("fclib_write_local", (void **)write_local, msg, len);
+  if (!msg[0]) KergsFCLibSymbol("fclib_write_solution", (void **)write_solution, msg, len);
 }
 
 /* The exported problem on rank 0: na contacts, m = 2 na unknowns, W in compressed columns (FCLib nz = -1). */

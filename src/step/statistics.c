@@ -60,7 +60,7 @@ static PetscErrorCode MeasureViolation(KergsStepper st, PetscReal *mean, PetscRe
 }
 
 /* The solve's statistics: common figures, then the type's own figures and texts. */
-static PetscErrorCode RecordSolve(KergsResults res, const KergsSolveStats *ss)
+PetscErrorCode KergsStepperRecordSolve(KergsResults res, const KergsSolveStats *ss)
 {
   PetscFunctionBeginUser;
   PetscCall(KergsResultsRecord(res, "iterations", (PetscReal)ss->iterations));
@@ -131,7 +131,7 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   PetscCall(KergsResultsRecord(res, "baseline_memory", st->baseline_rss));
   PetscCall(KergsResultsRecord(res, "nnz_Hf", nnz_Hf));
   PetscCall(KergsResultsRecord(res, "nnz_W", nnz_W));
-  PetscCall(RecordSolve(res, ss));
+  PetscCall(KergsStepperRecordSolve(res, ss));
   PetscCall(RecordPartition(res, &pm));
   PetscCall(KergsResultsEndStep(res));
   if (!st->quiet)

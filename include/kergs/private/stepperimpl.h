@@ -54,6 +54,8 @@ struct _p_KergsStepper {
    step's summary line (src/step/statistics.c). */
 PETSC_INTERN PetscErrorCode KergsStepperRecordStep(KergsStepper, const KergsSolveStats *, PetscLogDouble detect_seconds,
                                                    PetscLogDouble assemble_seconds);
+/* The solve's figures (common ones, then the type's own figures and texts) into the current row. */
+PETSC_INTERN PetscErrorCode KergsStepperRecordSolve(KergsResults, const KergsSolveStats *);
 /* Batch use (src/step/batch.c, docs/running.md). */
 /* What the time loop learns between two steps, the same on every rank (one reduction): a signal caught on some rank
    (0: none), a non-finite state (and the smallest grain id at fault, -1: a wall), a checkpoint due by rank 0's clock. */

@@ -1,0 +1,251 @@
+#!/usr/bin/python3
+"""kergs -fclib_input (docs/solver.md, "Solving FCLib problems"), tested through the executable.
+
+  check_fclib_input.py TEST --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
+
+TEST is one of:
+  solve     kergs exports step 5 of confine500 (friction 0.3, and frictionless), solved by Newton to 1e-10, then reads the
+            files back: Newton from r = 0 reaches 1e-10 and NLGS 1e-8 (natural residual), statistics in the results file;
+            started from the stored solution the import is the run's problem (Newton stops at once, same impulses, same
+            residual); frictionless (a unique solution here) Newton from r = 0 finds the run's impulses to 1e-8 on 1 and
+            2 ranks, NLGS to its tolerance
+  global    a global problem (M diagonal, H of full column rank, f, w, mu) written with h5py around a known exact solution
+            (contacts open, sticking, slipping either way): started there Newton stops at once (W = H^T M^-1 H and
+            q = H^T M^-1 f + w built right), and from r = 0 Newton and NLGS find it (W is positive definite: one solution);
+            an off-diagonal M is refused
+  bad       a missing file, a text file, an HDF5 file that is no FCLib problem, a 3D problem, a NaN in q, a short
+            dataset, a non-symmetric W, -fclib_start solution without a solution, a kernel-regularised type: each
+            refused with a message naming the fault, no crash
+Exit status 0 when every check holds, 1 otherwise."""
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
+failures = []
+
+
+def check(ok, what):
+    print(("ok   " if ok else "FAIL ") + what, flush=True)
+    if not ok:
+        failures.append(what)
+    return ok
+
+
+class Kergs:
+    def __init__(self, a):
+        self.kergs, self.mpiexec, self.dir = os.path.abspath(a.kergs), a.mpiexec, os.path.abspath(a.dir)
+
+    def run(self, ranks, *args):
+        cmd = [self.mpiexec, "-n", str(ranks), self.kergs] + [str(x) for x in args]
+        return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+
+    def path(self, name):
+        return os.path.join(self.dir, name)
+
+    def export(self, name, *extra):
+        """Step 5 of confine500 solved by Newton to 1e-10, exported."""
+        out = self.path(name)
+        p = self.run(1, "-options_file", CONFINE500, "-steps", 5, "-fclib_step", 5, "-fclib_output", out, "-output_none", "-quiet",
+                     "-solver_type", "newton", "-solver_tol", 1e-10, *extra)
+        if not check(p.returncode == 0 and os.path.exists(out), f"kergs exports step 5 of confine500 {' '.join(map(str, extra))} to {name}"):
+            print(p.stdout[-2000:], p.stderr[-2000:])
+        return out
+
+    def solve(self, fclib, results, ranks=1, *args):
+        p = self.run(ranks, "-fclib_input", fclib, "-output", results, *args)
+        if p.returncode != 0:
+            print(p.stdout[-3000:], p.stderr[-3000:])
+            return p, None
+        with h5py.File(results, "r") as f:
+            stats = {k: float(f["stats"][k][-1]) for k in f["stats"]}
+            stats["solver_type"] = f["stats"].attrs["solver_type"].decode()
+        return p, stats
+
+
+def test_solve(k):
+    friction = k.export("c500.fclib.h5")
+    frictionless = k.export("c500_frictionless.fclib.h5", "-friction", 0)
+    with h5py.File(friction, "r") as f:
+        nc = len(f["fclib_local/vectors/mu"])
+        assert_some_friction = float(np.max(f["fclib_local/vectors/mu"][()]))
+    check(nc > 500 and assert_some_friction == 0.3, f"the frictional export holds {nc} contacts with mu 0.3")
+
+    # from r = 0 (Siconos's start): the residual reached, whatever solution is found (with friction it need not be unique)
+    p, s = k.solve(friction, k.path("newton.h5"), 1, "-solver_type", "newton", "-solver_tol", 1e-10, "-solver_max_it", 1000)
+    if check(s is not None, "newton solves the frictional problem from r = 0"):
+        check(s["residual"] <= 1e-10 and s["converged"] == 1, f"newton: natural residual {s['residual']:.3g} <= 1e-10, converged")
+        check(s["contacts"] == nc and s["active"] == nc, "newton: every contact of the file is a contact of the solve")
+        check(s["solve_seconds"] > 0 and s["iterations"] >= 1 and s["solver_type"] == "newton", "newton: time, iterations, type recorded")
+        check(p.stdout.count("fclib c500 contacts") == 1 and " residual " in p.stdout, "newton: one summary line")
+    p, s = k.solve(friction, k.path("nlgs.h5"), 1, "-solver_type", "nlgs", "-solver_criterion", "natural", "-solver_tol", 1e-8,
+                   "-solver_max_it", 100000)
+    if check(s is not None, "nlgs solves the frictional problem from r = 0"):
+        check(s["residual"] <= 1e-8 and s["converged"] == 1, f"nlgs: natural residual {s['residual']:.3g} <= 1e-8 after {s['iterations']:.0f} sweeps")
+
+    # from the stored solution: the run's very problem (W, q, mu read exactly), so newton has nothing to do
+    p, s = k.solve(friction, k.path("newton_start.h5"), 1, "-solver_type", "newton", "-solver_tol", 1e-10, "-fclib_start", "solution")
+    if check(s is not None, "newton from the file's solution"):
+        check(s["iterations"] == 0 and s["residual"] <= 1e-10, f"the run's solution solves the imported problem: residual {s['residual']:.3g}, "
+              f"{s['iterations']:.0f} Newton steps")
+        check(s["reference_impulse_difference"] == 0.0, "and the impulses are the run's")
+
+    # frictionless: the solve from r = 0 finds the run's impulses
+    for ranks in (1, 2):
+        p, s = k.solve(frictionless, k.path(f"newton_frictionless_{ranks}.h5"), ranks, "-solver_type", "newton", "-solver_tol", 1e-10,
+                       "-solver_max_it", 1000)
+        if check(s is not None, f"newton solves the frictionless problem on {ranks} rank(s)"):
+            check(s["residual"] <= 1e-10, f"newton, {ranks} rank(s): natural residual {s['residual']:.3g} <= 1e-10")
+            check(s["reference_impulse_difference"] <= 1e-8 and s["reference_velocity_difference"] <= 1e-8,
+                  f"newton, {ranks} rank(s): impulses {s['reference_impulse_difference']:.3g} and velocities "
+                  f"{s['reference_velocity_difference']:.3g} from the run's (relative) <= 1e-8")
+    p, s = k.solve(frictionless, k.path("nlgs_frictionless.h5"), 1, "-solver_type", "nlgs", "-solver_criterion", "natural", "-solver_tol",
+                   1e-8, "-solver_max_it", 100000)
+    if check(s is not None, "nlgs solves the frictionless problem"):
+        check(s["residual"] <= 1e-8 and s["reference_impulse_difference"] <= 1e-4,
+              f"nlgs: residual {s['residual']:.3g} <= 1e-8, impulses {s['reference_impulse_difference']:.3g} from the run's <= 1e-4")
+
+
+def write_global(path, rng, offdiag=False):
+    """A 2D global FCLib problem with 4 contacts around a known solution r*, u* = W r* + q; returns them."""
+    n, nc = 10, 4
+    m = 2 * nc
+    H = rng.standard_normal((n, m))
+    Mdiag = rng.uniform(1.0, 3.0, n)
+    M = np.diag(Mdiag)
+    if offdiag:
+        M[0, 1] = M[1, 0] = 0.1
+    mu = np.array([0.3, 0.5, 0.2, 0.4])
+    # per contact (normal, tangential): open, stick, slip with u_t > 0, slip with u_t < 0
+    r = np.array([0.0, 0.0, 1.0, 0.1, 2.0, -0.2 * 2.0, 0.5, 0.4 * 0.5])
+    u = np.array([0.7, 0.0, 0.0, 0.0, 0.0, 0.3, 0.0, -0.8])
+    f = rng.standard_normal(n)
+    W = H.T @ np.diag(1 / Mdiag) @ H
+    w = u - W @ r - H.T @ (f / Mdiag)
+    with h5py.File(path, "w") as h:
+        g = h.create_group("fclib_global")
+        g["spacedim"] = np.array([2], dtype=np.int32)
+        for name, A in (("M", M), ("H", H)):
+            cols = [np.nonzero(A[:, j])[0] for j in range(A.shape[1])]  # compressed columns (nz = -1)
+            p = np.concatenate([[0], np.cumsum([len(c) for c in cols])]).astype(np.int32)
+            i = np.concatenate(cols).astype(np.int32)
+            x = np.concatenate([A[c, j] for j, c in enumerate(cols)])
+            for key, val in (("m", A.shape[0]), ("n", A.shape[1]), ("nz", -1), ("nzmax", len(x))):
+                g[f"{name}/{key}"] = np.array([val], dtype=np.int32)
+            g[f"{name}/p"], g[f"{name}/i"], g[f"{name}/x"] = p, i, x
+        g["vectors/f"], g["vectors/w"], g["vectors/mu"] = f, w, mu
+        h["solution/r"], h["solution/u"] = r, u
+        h["solution/v"] = np.linalg.solve(M, H @ r + f)
+    return r, u
+
+
+def test_global(k):
+    rng = np.random.default_rng(11)
+    path = k.path("global.fclib.h5")
+    write_global(path, rng)
+    p, s = k.solve(path, k.path("global_start.h5"), 1, "-solver_type", "newton", "-solver_tol", 1e-12, "-fclib_start", "solution")
+    if check(s is not None, "newton from the known solution of the global problem"):
+        check(s["iterations"] == 0 and s["residual"] <= 1e-13, f"the known solution solves the problem kergs built: residual {s['residual']:.3g}")
+    for solver, extra in (("newton", ["-solver_tol", 1e-12]), ("nlgs", ["-solver_criterion", "natural", "-solver_tol", 1e-12, "-solver_max_it", 100000])):
+        p, s = k.solve(path, k.path(f"global_{solver}.h5"), 1, "-solver_type", solver, *extra)
+        if check(s is not None, f"{solver} solves the global problem from r = 0"):
+            check(s["residual"] <= 1e-12 and s["reference_impulse_difference"] <= 1e-9,
+                  f"{solver}: residual {s['residual']:.3g}, the known impulses to {s['reference_impulse_difference']:.3g} (<= 1e-9)")
+    bad = k.path("global_offdiag.fclib.h5")
+    write_global(bad, rng, offdiag=True)
+    refused(k, "global problem with an off-diagonal M", ["M has an off-diagonal entry", "diagonal M"], "-fclib_input", bad, "-output",
+            k.path("offdiag.h5"))
+
+
+def refused(k, what, regex_words, *args):
+    p = k.run(1, *args)
+    out = p.stdout + p.stderr
+    crashed = any(w in out for w in ("Segmentation", "SIGSEGV", "Caught signal", "core dumped"))
+    ok = p.returncode != 0 and not crashed and all(w in out for w in regex_words)
+    if not check(ok, f"{what}: refused, the message says {regex_words}"):
+        print(out[-2500:])
+
+
+def copy_with(k, src, name, edit):
+    dst = k.path(name)
+    shutil.copyfile(src, dst)
+    with h5py.File(dst, "r+") as f:
+        edit(f)
+    return dst
+
+
+def test_bad(k):
+    good = k.export("good.fclib.h5")
+    out = ["-output", k.path("bad.h5")]
+    refused(k, "missing file", ["no_such.fclib.h5", "No such file"], "-fclib_input", k.path("no_such.fclib.h5"), *out)
+    text = k.path("text.fclib.h5")
+    with open(text, "w") as f:
+        f.write("not hdf5\n")
+    refused(k, "text file", ["text.fclib.h5", "not an HDF5 file"], "-fclib_input", text, *out)
+    other = k.path("other.h5")
+    with h5py.File(other, "w") as f:
+        f["stats/residual"] = np.zeros(3)
+    refused(k, "HDF5 file without FCLib groups", ["other.h5", "not an FCLib problem"], "-fclib_input", other, *out)
+
+    def set_3d(f):
+        f["fclib_local/spacedim"][0] = 3
+
+    refused(k, "3D problem", ["3D problem", "spacedim 2"], "-fclib_input", copy_with(k, good, "three_d.fclib.h5", set_3d), *out)
+
+    def set_nan(f):
+        f["fclib_local/vectors/q"][7] = np.nan
+
+    refused(k, "NaN in q", ["q has a non-finite entry", "at 7"], "-fclib_input", copy_with(k, good, "nan.fclib.h5", set_nan), *out)
+
+    def shorten_mu(f):
+        mu = f["fclib_local/vectors/mu"][()]
+        del f["fclib_local/vectors/mu"]
+        f["fclib_local/vectors/mu"] = mu[:-1]
+
+    refused(k, "short dataset", ["fclib_local/vectors/mu has", "expected"], "-fclib_input", copy_with(k, good, "short.fclib.h5", shorten_mu), *out)
+
+    def break_symmetry(f):
+        p, i = f["fclib_local/W/p"][()], f["fclib_local/W/i"][()]
+        for e in range(p[0], p[1]):  # an off-diagonal entry of column 0
+            if i[e] != 0:
+                f["fclib_local/W/x"][e] = f["fclib_local/W/x"][e] + 1.0
+                return
+
+    refused(k, "non-symmetric W", ["not symmetric"], "-fclib_input", copy_with(k, good, "asym.fclib.h5", break_symmetry), *out)
+
+    def drop_solution(f):
+        del f["solution"]
+
+    nosol = copy_with(k, good, "nosol.fclib.h5", drop_solution)
+    refused(k, "-fclib_start solution without one", ["holds no solution"], "-fclib_input", nosol, "-fclib_start", "solution", *out)
+    refused(k, "kernel-regularised type", ["-solver_type nlgsjac needs", "nlgs or newton"], "-fclib_input", good, "-solver_type", "nlgsjac",
+            *out)
+    refused(k, "unknown option", ["unknown option -steps"], "-fclib_input", good, "-steps", 3, *out)
+    p = k.run(1, "-fclib_input", nosol, "-output", k.path("nosol.h5"), "-solver_type", "newton", "-solver_max_it", 1000)
+    check(p.returncode == 0 and "against the file's solution" not in p.stdout, "a file without a solution is solved, no comparison")
+    check(not os.path.exists(k.path("bad.h5")), "no results file is left by a refused input")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("test", choices=("solve", "global", "bad"))
+    ap.add_argument("--kergs", required=True)
+    ap.add_argument("--mpiexec", default="mpiexec")
+    ap.add_argument("--dir", required=True)
+    a = ap.parse_args()
+    os.makedirs(a.dir, exist_ok=True)
+    k = Kergs(a)
+    {"solve": test_solve, "global": test_global, "bad": test_bad}[a.test](k)
+    print(f"{len(failures)} failure(s)" if failures else "every check holds")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
