@@ -1,0 +1,12 @@
+# kergs at the extremes (docs/running.md, "Stability at the extremes"): tests/extremes.py runs the executable on the
+# table of cases of each group and reads the results files with h5py (Debian's python3). Label extremes:
+# ctest -L extremes (under 5 minutes on 2 cores).
+#   watch     the failures kergs must see: a blow-up (confine500 -dt 0.1: exit 2), grains outside the container at
+#             start (exit 1, the grain and the wall named)
+foreach(g watch)
+  add_test(NAME extremes_${g}
+           COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/extremes.py ${g} --kergs $<TARGET_FILE:kergs_exe> --mpiexec ${MPIEXEC_EXECUTABLE}
+                   --dir ${CMAKE_CURRENT_BINARY_DIR}/extremes_${g}
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(extremes_${g} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 300 LABELS extremes)
+endforeach()

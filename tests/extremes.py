@@ -1,0 +1,162 @@
+#!/usr/bin/python3
+"""kergs at the extremes (docs/running.md, "Stability at the extremes"), through the executable.
+
+  extremes.py GROUP --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
+
+Every case is a row of CASES: a scene (options), the exit status kergs must give, and for a run that must go through
+its properties, read from the results file (h5py):
+  - every number finite (positions, velocities, impulses, statistics);
+  - no grain lost: the same grains at the end as at the start, none behind a wall;
+  - interpenetration bounded: the largest interpenetration at most BOUND_FACTOR x (largest relative speed x dt) plus
+    the documented floor (OVERLAP_FLOOR of the smallest radius, what a solver stopped at its tolerance leaves);
+  - a step the solver did not converge on is reported: marked in /stats/converged, counted on the summary line.
+A run that must fail must exit with its documented status and print the message naming what happened.
+GROUP selects the rows (the ctest names extremes_GROUP); "all" runs every row."""
+import argparse
+import os
+import re
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
+CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
+BOUND_FACTOR = 2.0  # interpenetration <= BOUND_FACTOR * max relative speed * dt + OVERLAP_FLOOR * smallest radius
+OVERLAP_FLOOR = 0.05  # the default -initial_overlap_tol: what kergs accepts in a packing
+failures = []
+
+
+def check(ok, what):
+    print(("ok   " if ok else "FAIL ") + what, flush=True)
+    if not ok:
+        failures.append(what)
+    return ok
+
+
+def column(n, r, gap, mu, dt):
+    """A column of n disks of radius r standing on the floor of a box of width 2r, gaps `gap` between them."""
+    xs = []
+    for i in range(n):
+        xs += [r, r + gap + i * (2 * r + gap)]
+    h = n * (2 * r + gap) + 2 * r
+    return ["-scene_name", "column", "-gravity", "0,-9.81", "-friction", mu, "-dt", dt, "-disks_source", "list",
+            "-disks_x", ",".join("%.17g" % x for x in xs), "-disks_radius", r, "-box", "0,0,%g,%g" % (2 * r, h),
+            "-box_open_top", "-solver_criterion", "natural", "-solver_tol", 1e-8, "-solver_max_it", 5000]
+
+
+def crystal(nx, ny, r, strain):
+    """A square crystal of nx x ny touching disks in a closed box whose right wall squeezes it (all contacts at once)."""
+    return ["-scene_name", "crystal", "-gravity", "0,-9.81", "-friction", 0.3, "-disks_source", "lattice", "-lattice_type", "square",
+            "-lattice_n", "%d,%d" % (nx, ny), "-lattice_radius", r, "-lattice_origin", "%g,%g" % (r, r),
+            "-box", "0,0,%.17g,%.17g" % (2 * r * nx, 2 * r * ny), "-wall_box_right_velocity", "%g,0" % (-strain)]
+
+
+# name: (group, ranks, options, expected status, message regex or None)
+CASES = {
+    # -- the watch: failures kergs must see and report --------------------------------------------------------------
+    "blowup_dt": ("watch", 1, ["-options_file", CONFINE500, "-dt", 0.1, "-steps", 30], 2,
+                  r"blow-up in step \d+: grain \d+ left the container"),
+    "outside_start": ("watch", 2, ["-options_file", CONFINE5, "-disks_x", "-0.6,0.5,1.5,0.53,2.5,0.5,3.5,0.53,4.5,0.5"], 1,
+                      r"Grain 0 starts outside the container: its centre is behind wall left"),
+    "outside_box": ("watch", 1, ["-options_file", CONFINE500, "-box", "0,0,0.4,1.2"], 1,
+                    r"starts outside the container: its centre is behind wall box_right"),
+}
+
+
+class Kergs:
+    def __init__(self, a):
+        self.kergs, self.mpiexec, self.dir = os.path.abspath(a.kergs), a.mpiexec, os.path.abspath(a.dir)
+
+    def run(self, name, ranks, args):
+        out = os.path.join(self.dir, name + ".h5")
+        cmd = [self.mpiexec, "-n", str(ranks), self.kergs] + [str(x) for x in args] + ["-quiet", "-output", out, "-output_every", "1000000"]
+        p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+        with open(os.path.join(self.dir, name + ".log"), "w") as f:
+            f.write(" ".join(cmd) + "\n" + p.stdout + p.stderr)
+        return p, out
+
+
+def finite_file(path):
+    """Every float dataset of the results file finite."""
+    bad = []
+    with h5py.File(path, "r") as f:
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset) and obj.dtype.kind == "f" and obj.size and not np.all(np.isfinite(obj[()])):
+                bad.append(name)
+        f.visititems(visit)
+    return bad
+
+
+def properties(name, path, stdout, bound_factor=BOUND_FACTOR):
+    """The properties every run that goes through must have."""
+    bad = finite_file(path)
+    check(not bad, f"{name}: every number finite{' (not: ' + ', '.join(bad[:3]) + ')' if bad else ''}")
+    with h5py.File(path, "r") as f:
+        snaps = [f["snapshots"][k] for k in sorted(f["snapshots"].keys())]
+        first, last = snaps[0], snaps[-1]
+        check(np.array_equal(np.sort(first["id"][()]), np.sort(last["id"][()])), f"{name}: no grain lost (same grain ids at the end)")
+        st = f["stats"]
+        dt = float(st["time"][0]) if st["time"].size else 0.0
+        if "step" in st and st["step"].size > 1:
+            dt = float(st["time"][1] - st["time"][0])
+        rmin = float(np.min(first["radius"][()]))
+        # the largest speed relative to anything: twice the fastest grain or wall over the run
+        vmax = max(float(np.max(np.linalg.norm(s["v"][()], axis=1))) if s["v"].shape[0] else 0.0 for s in snaps)
+        if "wall_velocity" in st:
+            vmax = max(vmax, float(np.max(np.abs(st["wall_velocity"][()]))))
+        m = re.search(r"fastest grain ([0-9.e+-]+)", stdout)
+        if m:
+            vmax = max(vmax, float(m.group(1)))
+        vrel = 2 * vmax
+        worst = float(np.max(st["max_violation"][()])) if st["max_violation"].size else 0.0
+        bound = bound_factor * vrel * dt + OVERLAP_FLOOR * rmin
+        check(worst <= bound, f"{name}: largest interpenetration {worst:.3g} <= {bound_factor} x relative speed {vrel:.3g} x dt {dt:.3g} "
+              f"+ {OVERLAP_FLOOR} x smallest radius = {bound:.3g}")
+        conv = st["converged"][()]
+        nnot = int(np.sum(conv == 0))
+        m = re.search(r"(\d+) not converged", stdout)
+        check(m is not None and int(m.group(1)) == nnot,
+              f"{name}: steps not converged reported ({nnot} in /stats/converged, summary says {m.group(1) if m else '?'})")
+        return st["kinetic_energy"][()].copy() if "kinetic_energy" in st else None
+
+
+def run_case(k, name, row):
+    group, ranks, args, status, regex = row
+    p, out = k.run(name, ranks, args)
+    text = p.stdout + p.stderr
+    ok = check(p.returncode == status, f"{name}: exit status {status} (got {p.returncode})")
+    if regex:
+        check(re.search(regex, text) is not None, f"{name}: the message says /{regex}/")
+    if status in (0, 2, 5) and ok and os.path.exists(out):
+        if status == 0:
+            properties(name, out, p.stdout)
+        else:
+            with h5py.File(out, "r") as f:
+                check(f.attrs.get("end") is not None and len(f["snapshots"]) >= 2,
+                      f"{name}: the results file is closed with its end and last snapshot ({f.attrs.get('end')})")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("group")
+    ap.add_argument("--kergs", required=True)
+    ap.add_argument("--mpiexec", default="mpiexec")
+    ap.add_argument("--dir", required=True)
+    a = ap.parse_args()
+    os.makedirs(a.dir, exist_ok=True)
+    k = Kergs(a)
+    rows = {n: r for n, r in CASES.items() if a.group in ("all", r[0])}
+    if not rows:
+        sys.exit(f"no case in group {a.group}")
+    for name, row in rows.items():
+        run_case(k, name, row)
+    print(f"{a.group}: {len(failures)} failure(s)")
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()
