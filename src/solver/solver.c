@@ -117,38 +117,46 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
 
 /* Active contacts (eq. 2, KergsContactIsActive: the same decision as the assembly of W over active pairs). An
    inactive contact's impulse is 0 at the solution: its warm start is set to 0 too, so that the first sweep does not
-   feel an impulse the law is about to cancel (and W over active pairs gives the same iterates as the whole W). */
+   feel an impulse the law is about to cancel (and W over active pairs gives the same iterates as the whole W).
+   The predictive gap rule writes Signorini on the end-of-step gap, v_n >= -g~/(theta dt) for g~ > 0: its offset is added
+   here, once per step, to v^d's normal component, so that every type, its law, its natural residual and the FCLib
+   export solve the same problem, u = W r + v^d + offset with 0 <= u_n _|_ r_n >= 0. */
 PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
-  PetscScalar   *r;
+  PetscScalar   *r, *q;
   KergsContact  *c;
   KergsActivity  act;
   KergsDofLayout layout;
   PetscInt       n, nc;
-  Vec            rv;
+  Vec            rv, vd;
   Mat            W;
 
   PetscFunctionBeginUser;
   PetscCall(KergsContactsGetLocal(contacts, &n, &c));
   PetscCall(KergsContactsGetActivity(contacts, scene, &act));
   PetscCall(KergsOperatorsGetLayout(ops, &layout));
-  PetscCall(KergsOperatorsGetContactVectors(ops, &rv, NULL, NULL));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &rv, NULL, &vd));
   PetscCall(KergsOperatorsGetW(ops, &W, NULL));
   nc = layout.ncomp;
   if (n > s->nalloc) {
-    PetscCall(PetscFree2(s->mu, s->active));
+    PetscCall(PetscFree3(s->mu, s->active, s->gapvel));
     s->nalloc = PetscMax(n, 2 * s->nalloc);
-    PetscCall(PetscMalloc2(s->nalloc, &s->mu, s->nalloc, &s->active));
+    PetscCall(PetscMalloc3(s->nalloc, &s->mu, s->nalloc, &s->active, s->nalloc, &s->gapvel));
   }
   PetscCall(VecGetArray(rv, &r));
+  PetscCall(VecGetArray(vd, &q));
   for (PetscInt k = 0; k < n; k++) {
     s->active[k] = KergsContactIsActive(&act, &c[k]);
     s->mu[k]     = c[k].mu;
+    s->gapvel[k] = s->active[k] ? KergsContactGapVelocity(&act, &c[k]) : 0.0;
+    q[k * nc] += s->gapvel[k];
     if (!s->active[k])
       for (PetscInt j = 0; j < nc; j++) r[k * nc + j] = 0.0;
   }
+  PetscCall(VecRestoreArray(vd, &q));
   PetscCall(VecRestoreArray(rv, &r));
   PetscCall(KergsSweepSetUp(s->sweep, W, nc, s->mu, s->active));
+  PetscCall(KergsSweepSetGapVelocities(s->sweep, act.rule == KERGS_GAP_PREDICTIVE ? s->gapvel : NULL));
   PetscFunctionReturn(0);
 }
 
@@ -259,7 +267,7 @@ PetscErrorCode KergsSolverDestroy(KergsSolver *s)
   if (!*s) PetscFunctionReturn(0);
   if ((*s)->ops.destroy) PetscCall((*(*s)->ops.destroy)(*s));
   PetscCall(KergsSweepDestroy(&(*s)->sweep));
-  PetscCall(PetscFree2((*s)->mu, (*s)->active));
+  PetscCall(PetscFree3((*s)->mu, (*s)->active, (*s)->gapvel));
   PetscCall(PetscFree(*s));
   PetscFunctionReturn(0);
 }

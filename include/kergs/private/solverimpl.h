@@ -37,6 +37,7 @@ struct _p_KergsSolver {
                                      assembles the whole W (otherwise W couples the active contacts only) */
   PetscReal *mu;                  /* per local contact */
   PetscBool *active;              /* per local contact */
+  PetscReal *gapvel;              /* per local contact: the gap rule's normal velocity offset added to v^d (predictive) */
   PetscInt   nalloc;
 };
 
