@@ -48,23 +48,81 @@ def column(n, r, gap, mu, dt):
             "-box_open_top", "-solver_criterion", "natural", "-solver_tol", 1e-8, "-solver_max_it", 5000]
 
 
-def crystal(nx, ny, r, strain):
-    """A square crystal of nx x ny touching disks in a closed box whose right wall squeezes it (all contacts at once)."""
-    return ["-scene_name", "crystal", "-gravity", "0,-9.81", "-friction", 0.3, "-disks_source", "lattice", "-lattice_type", "square",
-            "-lattice_n", "%d,%d" % (nx, ny), "-lattice_radius", r, "-lattice_origin", "%g,%g" % (r, r),
-            "-box", "0,0,%.17g,%.17g" % (2 * r * nx, 2 * r * ny), "-wall_box_right_velocity", "%g,0" % (-strain)]
+TC = (1.0 / 9.81) ** 0.5  # characteristic time sqrt(d/g) of disks of diameter 1
 
 
-# name: (group, ranks, options, expected status, message regex or None)
+def crystal(nx, ny, r, mu=0.3):
+    """A square crystal of nx x ny touching disks filling a closed box exactly, under gravity: every contact at once
+    (a hyperstatic network: W singular)."""
+    return ["-scene_name", "crystal", "-gravity", "0,-9.81", "-friction", mu, "-disks_source", "lattice", "-lattice_type", "square",
+            "-lattice_n", "%d,%d" % (nx, ny), "-lattice_radius", r, "-lattice_origin", "%.17g,%.17g" % (r, r),
+            "-box", "0,0,%.17g,%.17g" % (2 * r * nx, 2 * r * ny)]
+
+
+def drop(mu, wall=0.0):
+    """A loose hexagonal lattice of 24 disks (radius 0.5, spacing 1.25) falling into a box 9 wide; the right wall moves
+    inward at `wall` m/s."""
+    return ["-scene_name", "drop", "-gravity", "0,-9.81", "-friction", mu, "-disks_source", "lattice", "-lattice_type", "hex",
+            "-lattice_n", "6,4", "-lattice_radius", 0.5, "-lattice_spacing", 1.25, "-lattice_origin", "0.6,0.6", "-box", "0,0,9,10",
+            "-box_open_top", "-wall_box_right_velocity", "%g,0" % -wall, "-solver_max_it", 2000]
+
+
+def heavy_on_light(rsmall, density_big):
+    """A big disk (radius 0.5, density `density_big`) resting on a small one (radius rsmall) on the floor, between two
+    frictionless walls that centre it: a chain whose mass ratio is density_big / rsmall^2 / 4."""
+    return ["-scene_name", "heavy_on_light", "-gravity", "0,-9.81", "-friction", 0, "-materials", 2, "-material_density",
+            "1,%g" % density_big, "-disks_source", "list", "-disks_x", "0.5,%.17g,0.5,%.17g" % (rsmall, 2 * rsmall + 0.5),
+            "-disks_radius", "%.17g,0.5" % rsmall, "-disks_material", "0,1", "-box", "0,0,1,3", "-box_open_top"]
+
+
+def one_grain(g):
+    return ["-scene_name", "one", "-gravity", "0,%g" % g, "-disks_source", "list", "-disks_x", "0.5,2", "-disks_radius", 0.5,
+            "-disks_velocity", "0.3,0", "-box", "-1,0,3,5", "-box_open_top"]
+
+
+# name: (group, ranks, options, expected status, message regex or None[, {"not_converged": whether some step must be
+# reported not converged}])
 CASES = {
     # -- the watch: failures kergs must see and report --------------------------------------------------------------
     "blowup_dt": ("watch", 1, ["-options_file", CONFINE500, "-dt", 0.1, "-steps", 30], 2,
                   r"blow-up in step \d+: grain \d+ left the container"),
     "outside_start": ("watch", 2, ["-options_file", CONFINE5, "-disks_x", "-0.6,0.5,1.5,0.53,2.5,0.5,3.5,0.53,4.5,0.5"], 1,
                       r"Grain 0 starts outside the container: its centre is behind wall left"),
+    # the divergence rule's report (a natural residual above -solver_divergence_tol 5 steps in a row): forced here by a
+    # tolerance no single sweep meets, which is how a diverging kernel solver's residuals (2 to 50 on the radius-ratio-100
+    # pile, docs/running.md) are caught
+    "diverged": ("watch", 1, ["-options_file", CONFINE5, "-solver_max_it", 1, "-solver_divergence_tol", 1e-12], 5,
+                 r"the contact solver diverged: natural residual above -solver_divergence_tol 1e-12 in 5 steps in a row, up to step 5"),
     "outside_box": ("watch", 1, ["-options_file", CONFINE500, "-box", "0,0,0.4,1.2"], 1,
                     r"starts outside the container: its centre is behind wall box_right"),
+    # -- time steps from 1e-7 to 1e-1 of the characteristic time ----------------------------------------------------
+    "dt_1e-7": ("steps", 1, crystal(4, 4, 0.5) + ["-dt", 1e-7 * TC, "-steps", 5], 0, None),
+    "dt_1e-4": ("steps", 1, drop(0.3) + ["-dt", 1e-4 * TC, "-steps", 5], 0, None),
+    "dt_1e-1": ("steps", 1, drop(0.3) + ["-dt", 1e-1 * TC, "-steps", 20], 0, None),
+    "dt_1e-1_crystal": ("steps", 1, crystal(4, 4, 0.5) + ["-dt", 1e-1 * TC, "-steps", 10], 0, None),
+    # -- friction 0, 0.3, 10 ------------------------------------------------------------------------------------------
+    "mu_0": ("friction", 1, drop(0) + ["-dt", 5e-3, "-steps", 60], 0, None),
+    "mu_0.3": ("friction", 2, drop(0.3) + ["-dt", 5e-3, "-steps", 60], 0, None),
+    "mu_10": ("friction", 1, drop(10) + ["-dt", 5e-3, "-steps", 60], 0, None),
+    # -- radius ratio 1 to 100, mass ratio 1 to 1e6: a heavy disk on a light one ----------------------------------------
+    # (NLGS on this chain converges at a rate 1 - m_small/m_big per sweep: at mass ratio 1e6 it stops at its cap and
+    # must say so; Newton solves it)
+    "ratio_1": ("ratios", 1, heavy_on_light(0.5, 1) + ["-dt", 1e-3, "-steps", 10, "-disks_x", "0.5,0.5,0.5,1.5"], 0, None),
+    "ratio_100_nlgs": ("ratios", 1, heavy_on_light(0.005, 1e2) + ["-dt", 1e-3, "-steps", 10], 0, None, {"not_converged": True}),
+    "ratio_100_newton": ("ratios", 1, heavy_on_light(0.005, 1e2) + ["-dt", 1e-3, "-steps", 10, "-solver_type", "newton"], 0, None,
+                         {"not_converged": False}),
+    # -- wall speeds from creeping to impact ------------------------------------------------------------------------------
+    "wall_creep": ("walls", 1, drop(0.3, 1e-6) + ["-dt", 5e-3, "-steps", 20], 0, None),
+    "wall_impact": ("walls", 1, drop(0.3, 20.0) + ["-dt", 1e-3, "-steps", 80], 0, None),
+    # -- one grain, no contact, every contact at once -------------------------------------------------------------------
+    "one_grain": ("bodies", 1, one_grain(-9.81) + ["-dt", 1e-2, "-steps", 100], 0, None),
+    "no_contact": ("bodies", 2, one_grain(0) + ["-dt", 1e-2, "-steps", 20], 0, None),
 }
+# the crystal with every solver type (nlkergs stores W~ densely: small enough here)
+for _t in ("nlgs", "nlgsjac", "nlkergs", "newton"):
+    CASES["crystal_" + _t] = ("crystal", 1, crystal(4, 4, 0.5) + ["-dt", 1e-3, "-steps", 5, "-solver_type", _t], 0, None)
+    CASES["crystal_predictive_" + _t] = ("crystal", 1, crystal(4, 4, 0.5) + ["-dt", 1e-3, "-steps", 5, "-solver_type", _t,
+                                                                           "-gap_rule", "predictive"], 0, None)
 
 
 class Kergs:
@@ -154,7 +212,8 @@ def test_column(k):
 
 
 def run_case(k, name, row):
-    group, ranks, args, status, regex = row
+    group, ranks, args, status, regex = row[:5]
+    expect = row[5] if len(row) > 5 else {}
     p, out = k.run(name, ranks, args)
     text = p.stdout + p.stderr
     ok = check(p.returncode == status, f"{name}: exit status {status} (got {p.returncode})")
@@ -163,6 +222,11 @@ def run_case(k, name, row):
     if status in (0, 2, 5) and ok and os.path.exists(out):
         if status == 0:
             properties(name, out, p.stdout)
+            if "not_converged" in expect:
+                with h5py.File(out, "r") as f:
+                    nnot = int(np.sum(f["stats/converged"][()] == 0))
+                check((nnot > 0) == expect["not_converged"],
+                      f"{name}: {'some' if expect['not_converged'] else 'no'} step reported not converged (got {nnot})")
         else:
             with h5py.File(out, "r") as f:
                 check(f.attrs.get("end") is not None and len(f["snapshots"]) >= 2,
