@@ -93,6 +93,13 @@ CASES = {
     # pile, docs/running.md) are caught
     "diverged": ("watch", 1, ["-options_file", CONFINE5, "-solver_max_it", 1, "-solver_divergence_tol", 1e-12], 5,
                  r"the contact solver diverged: natural residual above -solver_divergence_tol 1e-12 in 5 steps in a row, up to step 5"),
+    # a genuine divergence: NLGS-Jac on the radius-ratio-100 pile of issue 10 under the predictive rule, the watch's
+    # other rules off (they stop it at step 149 otherwise): its natural residual exceeds 1 from step 198
+    "diverged_nlgsjac": ("watch", 1, ["-scene_name", "r100", "-gravity", "0,-9.81", "-friction", 0.3, "-dt", 1e-3, "-steps", 250,
+                                      "-disks_source", "random", "-random_n", 500, "-random_box", "0,0,1,6", "-random_radius",
+                                      "0.0005,0.05", "-random_seed", 2013, "-box", "0,0,1,7", "-box_open_top", "-solver_type", "nlgsjac",
+                                      "-gap_rule", "predictive", "-blowup_overlap", 0, "-blowup_energy", 0], 5,
+                         r"the contact solver diverged: natural residual above -solver_divergence_tol 1\.? in 5 steps in a row, up to step 202"),
     "outside_box": ("watch", 1, ["-options_file", CONFINE500, "-box", "0,0,0.4,1.2"], 1,
                     r"starts outside the container: its centre is behind wall box_right"),
     # -- time steps from 1e-7 to 1e-1 of the characteristic time ----------------------------------------------------
