@@ -51,6 +51,7 @@ PetscErrorCode KergsSolverCreate(MPI_Comm comm, KergsSolver *solver)
   s->tol          = 1e-4;
   s->residual_tol = 5e-2;
   s->velocity_tol = 1e-2;
+  s->shifted_id   = -1; /* no v^d holds gap offsets yet */
   s->criterion    = KERGS_CRITERION_QUAD;
   PetscCall(KergsSweepCreate(comm, &s->sweep));
   *solver = s;
@@ -130,6 +131,8 @@ PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsConta
   PetscInt       n, nc;
   Vec            rv, vd;
   Mat            W;
+  PetscInt64     id;
+  PetscBool      shifted;
 
   PetscFunctionBeginUser;
   PetscCall(KergsContactsGetLocal(contacts, &n, &c));
@@ -143,18 +146,21 @@ PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsConta
     s->nalloc = PetscMax(n, 2 * s->nalloc);
     PetscCall(PetscMalloc3(s->nalloc, &s->mu, s->nalloc, &s->active, s->nalloc, &s->gapvel));
   }
+  PetscCall(PetscObjectGetId((PetscObject)vd, &id));
+  shifted = (PetscBool)(id == s->shifted_id); /* each assembly creates a new v^d (KergsOperatorsAssembleH) */
   PetscCall(VecGetArray(rv, &r));
   PetscCall(VecGetArray(vd, &q));
   for (PetscInt k = 0; k < n; k++) {
     s->active[k] = KergsContactIsActive(&act, &c[k]);
     s->mu[k]     = c[k].mu;
     s->gapvel[k] = s->active[k] ? KergsContactGapVelocity(&act, &c[k]) : 0.0;
-    q[k * nc] += s->gapvel[k];
+    if (!shifted) q[k * nc] += s->gapvel[k];
     if (!s->active[k])
       for (PetscInt j = 0; j < nc; j++) r[k * nc + j] = 0.0;
   }
   PetscCall(VecRestoreArray(vd, &q));
   PetscCall(VecRestoreArray(rv, &r));
+  s->shifted_id = id;
   PetscCall(KergsSweepSetUp(s->sweep, W, nc, s->mu, s->active));
   PetscCall(KergsSweepSetGapVelocities(s->sweep, act.rule == KERGS_GAP_PREDICTIVE ? s->gapvel : NULL));
   PetscFunctionReturn(0);

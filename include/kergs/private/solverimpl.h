@@ -38,7 +38,9 @@ struct _p_KergsSolver {
   PetscReal *mu;                  /* per local contact */
   PetscBool *active;              /* per local contact */
   PetscReal *gapvel;              /* per local contact: the gap rule's normal velocity offset added to v^d (predictive) */
-  PetscInt   nalloc;
+  PetscInt64 shifted_id;          /* the v^d (its object id) that already holds them: a second set-up on the same problem
+                                     does not add them twice */
+  PetscInt nalloc;
 };
 
 /* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */
