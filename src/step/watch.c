@@ -191,7 +191,7 @@ PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[],
 
 /* After a step's statistics: decide whether the run blew up or its solver diverged; st->failure says what (empty:
    neither) and st->failure_status the exit status. The same on every rank: every figure is global. */
-PetscErrorCode KergsStepperWatch(KergsStepper st, PetscReal residual)
+static PetscErrorCode WatchStep(KergsStepper st, PetscReal residual)
 {
   const KergsWall *walls;
   PetscInt         step, grain, wall;
@@ -267,5 +267,14 @@ PetscErrorCode KergsStepperEnergyFloor(KergsStepper st)
   for (PetscInt i = 0; i < D.nowned; i++) e += D.mass[i] * (gn * D.radius[i] + 0.5 * vw * vw);
   PetscCall(MPIU_Allreduce(&e, &st->energy_floor, 1, MPIU_REAL, MPIU_SUM, st->comm));
   st->energy_floor *= 1e-6;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsStepperWatch(KergsStepper st, PetscReal residual)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(KERGS_Watch, 0, 0, 0, 0));
+  PetscCall(WatchStep(st, residual));
+  PetscCall(PetscLogEventEnd(KERGS_Watch, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
