@@ -156,6 +156,22 @@ def finite_file(path):
     return bad
 
 
+def outside(snap):
+    """Grain ids whose centre is behind a wall of the snapshot within the wall's extent (a line anywhere)."""
+    x, ids = snap["x"][()], snap["id"][()]
+    walls, infinite = snap["walls"][()], snap["wall_infinite"][()]
+    lost = set()
+    for w, inf in zip(walls, infinite):
+        a, b = w[:2], w[2:]
+        ab = b - a
+        n = np.array([-ab[1], ab[0]]) / np.linalg.norm(ab)
+        s = (x - a) @ n
+        along = (x - a) @ ab
+        behind = (s < 0) & (bool(inf) | ((along >= 0) & (along <= ab @ ab)))
+        lost.update(int(i) for i in ids[behind])
+    return sorted(lost)
+
+
 def properties(name, path, stdout, bound_factor=BOUND_FACTOR):
     """The properties every run that goes through must have."""
     bad = finite_file(path)
@@ -163,7 +179,9 @@ def properties(name, path, stdout, bound_factor=BOUND_FACTOR):
     with h5py.File(path, "r") as f:
         snaps = [f["snapshots"][k] for k in sorted(f["snapshots"].keys())]
         first, last = snaps[0], snaps[-1]
-        check(np.array_equal(np.sort(first["id"][()]), np.sort(last["id"][()])), f"{name}: no grain lost (same grain ids at the end)")
+        out = outside(last)
+        check(np.array_equal(np.sort(first["id"][()]), np.sort(last["id"][()])) and not out,
+              f"{name}: no grain lost (same grain ids at the end, none behind a wall{': ' + str(out[:5]) if out else ''})")
         st = f["stats"]
         dt = float(st["time"][0]) if st["time"].size else 0.0
         if "step" in st and st["step"].size > 1:
