@@ -168,7 +168,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&st->step_start));
-  PetscCall(KergsStepperEnergy(st, &st->ek_start));
+  PetscCall(KergsStepperEnergy(st, &st->ek_start, NULL));
   st->sent_start = petsc_send_len + petsc_isend_len;
   PetscCall(KergsSceneGetStep(sc, &step, NULL, NULL));
   /* initial partition before the first detection, then checks every -partition_check_every steps, with the
@@ -217,7 +217,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
     PetscCall(PetscTime(&t4));
     st->io_seconds = t4 - t3;
   }
-  PetscCall(KergsStepperEnergy(st, &st->ek_end));
+  PetscCall(KergsStepperEnergy(st, &st->ek_end, &st->vmax_end));
   PetscCall(KergsStepperRecordStep(st, &ss, t1 - t0, t2 - t1));
   PetscCall(KergsStepperWatch(st, ss.residual));
   PetscFunctionReturn(0);

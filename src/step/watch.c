@@ -135,14 +135,14 @@ PetscErrorCode KergsStepperCheckContainer(KergsStepper st)
           grain, walls[wall].name);
 }
 
-/* Kinetic energy of the disks and of the free walls. Collective. */
-PetscErrorCode KergsStepperEnergy(KergsStepper st, PetscReal *ek)
+/* Kinetic energy of the disks and of the free walls, and the fastest disk's speed. Collective. */
+PetscErrorCode KergsStepperEnergy(KergsStepper st, PetscReal *ek, PetscReal *vmax)
 {
   const KergsWall *walls;
   PetscInt         nwalls;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsSceneKineticEnergy(st->scene, ek, NULL));
+  PetscCall(KergsSceneKineticEnergy(st->scene, ek, vmax));
   PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
   for (PetscInt w = 0; w < nwalls; w++)
     if (walls[w].kind == KERGS_WALL_FREE) *ek += 0.5 * walls[w].mass * (PetscSqr(walls[w].v[0]) + PetscSqr(walls[w].v[1]));
@@ -186,6 +186,26 @@ PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[],
         for (PetscInt d = 0; d < KERGS_DIM; d++)
           wk += dt * walls[w].force[d] * (theta * walls[w].v[d] + (1 - theta) * wvold[KERGS_DIM * w + d]);
   PetscCall(MPIU_Allreduce(&wk, work, 1, MPIU_REAL, MPIU_SUM, st->comm));
+  PetscFunctionReturn(0);
+}
+
+/* Once per run: two grains approaching at twice the fastest speed close more than the alert distance in a step, so a
+   contact may be met before detection sees it (the rules then act on a late, deep contact). A warning, not a failure. */
+static PetscErrorCode WatchAlert(KergsStepper st, PetscInt step)
+{
+  PetscReal dt, alert;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetTimeStep(st->scene, &dt, NULL));
+  PetscCall(KergsSceneGetContactRule(st->scene, &alert, NULL));
+  if (st->warned_alert || !(2 * st->vmax_end * dt > alert)) PetscFunctionReturn(0);
+  st->warned_alert = PETSC_TRUE;
+  PetscCall(PetscPrintf(st->comm,
+                        "kergs: warning: after step %" PetscInt_FMT
+                        " grains move up to %.3g a step (fastest %.3g m/s), and two of them may "
+                        "close by twice that, more than the alert distance %.3g: contacts may be met before they are detected (raise "
+                        "-alert or lower -dt)\n",
+                        step, (double)(st->vmax_end * dt), (double)st->vmax_end, (double)alert));
   PetscFunctionReturn(0);
 }
 
@@ -235,6 +255,7 @@ static PetscErrorCode WatchStep(KergsStepper st, PetscReal residual)
     st->failure_kind   = "kinetic energy";
     PetscFunctionReturn(0);
   }
+  PetscCall(WatchAlert(st, step));
   st->diverged_steps = st->divergence_tol > 0 && !(residual <= st->divergence_tol) ? st->diverged_steps + 1 : 0;
   if (st->diverged_steps >= st->divergence_steps) {
     PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),

@@ -57,6 +57,8 @@ struct _p_KergsStepper {
   PetscInt        diverged_steps;   /* diverged steps in a row so far */
   PetscReal       ek_start, ek_end; /* kinetic energy (disks and free walls) at the start and the end of the latest step */
   PetscReal       work;             /* work of gravity and walls during the latest step */
+  PetscReal       vmax_end;         /* the fastest disk's speed at the end of the latest step */
+  PetscBool       warned_alert;     /* the warning that grains outrun the alert distance was printed */
   PetscReal       energy_floor;     /* the scene's energy scale times 1e-6: kinetic energies below it are rounding */
   char            failure[512];     /* what went wrong in the latest step (empty: nothing) */
   KergsExitStatus failure_status;   /* and the exit status it gives */
@@ -96,7 +98,7 @@ PETSC_INTERN PetscErrorCode KergsStepperProgress(KergsStepper, PetscBool force);
 PETSC_INTERN PetscErrorCode KergsStepperWatchOptions(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperFindOutside(KergsStepper, PetscInt *grain, PetscInt *wall);
 PETSC_INTERN PetscErrorCode KergsStepperCheckContainer(KergsStepper);
-PETSC_INTERN PetscErrorCode KergsStepperEnergy(KergsStepper, PetscReal *ek);
+PETSC_INTERN PetscErrorCode KergsStepperEnergy(KergsStepper, PetscReal *ek, PetscReal *vmax);
 PETSC_INTERN PetscErrorCode KergsStepperExternalWork(KergsStepper, const PetscReal vold[], const PetscReal wvold[], PetscReal *work);
 PETSC_INTERN PetscErrorCode KergsStepperEnergyFloor(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperWatch(KergsStepper, PetscReal residual);
