@@ -2,7 +2,8 @@
 # table of cases of each group and reads the results files with h5py (Debian's python3). Label extremes:
 # ctest -L extremes (under 5 minutes on 2 cores).
 #   watch     the failures kergs must see: a blow-up (confine500 -dt 0.1: exit 2), grains outside the container at
-#             start (exit 1, the grain and the wall named), a diverging nlgsjac (exit 5)
+#             start (exit 1, the grain and the wall named), a diverging nlgsjac and a kernel projector
+#             that misses ker H_f (exit 5)
 #   column    -gap_rule predictive: a column of 50 disks at gaps of 1e-10 and 1e-9 at rest within two steps (nlgs,
 #             newton), where the paper's rule lets the top disk fall freely
 #   steps     time steps 1e-7, 1e-4 and 1e-1 of the characteristic time sqrt(d/g) (a crystal at rest, a falling lattice)

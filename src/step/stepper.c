@@ -219,7 +219,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   }
   PetscCall(KergsStepperEnergy(st, &st->ek_end, &st->vmax_end));
   PetscCall(KergsStepperRecordStep(st, &ss, t1 - t0, t2 - t1));
-  PetscCall(KergsStepperWatch(st, ss.residual));
+  PetscCall(KergsStepperWatch(st, &ss));
   PetscFunctionReturn(0);
 }
 

@@ -211,8 +211,9 @@ static PetscErrorCode WatchAlert(KergsStepper st, PetscInt step)
 
 /* After a step's statistics: decide whether the run blew up or its solver diverged; st->failure says what (empty:
    neither) and st->failure_status the exit status. The same on every rank: every figure is global. */
-static PetscErrorCode WatchStep(KergsStepper st, PetscReal residual)
+static PetscErrorCode WatchStep(KergsStepper st, const KergsSolveStats *ss)
 {
+  const PetscReal  residual = ss->residual;
   const KergsWall *walls;
   PetscInt         step, grain, wall;
   PetscReal        explained;
@@ -256,6 +257,13 @@ static PetscErrorCode WatchStep(KergsStepper st, PetscReal residual)
     PetscFunctionReturn(0);
   }
   PetscCall(WatchAlert(st, step));
+  if (ss->failed) { /* decided from global figures by the type: the same on every rank */
+    PetscCall(
+        PetscSNPrintf(st->failure, sizeof(st->failure), "the contact solver failed in step %" PetscInt_FMT ": %s", step, ss->failure));
+    st->failure_status = KERGS_EXIT_SOLVER_FAILED;
+    st->failure_kind   = "contact solver failed";
+    PetscFunctionReturn(0);
+  }
   st->diverged_steps = st->divergence_tol > 0 && !(residual <= st->divergence_tol) ? st->diverged_steps + 1 : 0;
   if (st->diverged_steps >= st->divergence_steps) {
     PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
@@ -291,11 +299,11 @@ PetscErrorCode KergsStepperEnergyFloor(KergsStepper st)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsStepperWatch(KergsStepper st, PetscReal residual)
+PetscErrorCode KergsStepperWatch(KergsStepper st, const KergsSolveStats *ss)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(KERGS_Watch, 0, 0, 0, 0));
-  PetscCall(WatchStep(st, residual));
+  PetscCall(WatchStep(st, ss));
   PetscCall(PetscLogEventEnd(KERGS_Watch, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }

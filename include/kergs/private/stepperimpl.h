@@ -101,7 +101,7 @@ PETSC_INTERN PetscErrorCode KergsStepperCheckContainer(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperEnergy(KergsStepper, PetscReal *ek, PetscReal *vmax);
 PETSC_INTERN PetscErrorCode KergsStepperExternalWork(KergsStepper, const PetscReal vold[], const PetscReal wvold[], PetscReal *work);
 PETSC_INTERN PetscErrorCode KergsStepperEnergyFloor(KergsStepper);
-PETSC_INTERN PetscErrorCode KergsStepperWatch(KergsStepper, PetscReal residual);
+PETSC_INTERN PetscErrorCode KergsStepperWatch(KergsStepper, const KergsSolveStats *);
 
 /* Peak resident memory of the run so far, in bytes, summed over ranks */
 PETSC_INTERN PetscErrorCode KergsStepperPeakMemory(MPI_Comm, PetscReal *bytes);
