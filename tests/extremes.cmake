@@ -10,7 +10,8 @@
 #   friction  mu = 0, 0.3 (2 ranks), 10 on a falling lattice
 #   ratios    radius ratio 1 and 100 with mass ratio up to 1e6: a heavy disk on a light one (nlgs must report its
 #             steps not converged; newton solves them)
-#   walls     a wall creeping (1e-6 m/s) and one hitting the lattice at 20 m/s
+#   walls     a wall creeping (1e-6 m/s) and one hitting the lattice at 20 m/s; grains leaving a hopper through its
+#             opening (not lost)
 #   bodies    one grain falling, bouncing off the floor; one grain without any contact (no gravity, 2 ranks)
 #   crystal   a square crystal filling a closed box (every contact at once, W singular) with every solver type, under
 #             the paper and the predictive gap rules

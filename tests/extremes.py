@@ -125,6 +125,11 @@ CASES = {
                          {"not_converged": False}),
     # -- wall speeds from creeping to impact ------------------------------------------------------------------------------
     "wall_creep": ("walls", 1, drop(0.3, 1e-6) + ["-dt", 5e-3, "-steps", 20], 0, None),
+    # grains leaving a hopper through its opening fall below the meeting point of its walls' lines: not lost
+    "hopper": ("walls", 1, ["-scene_name", "hopper", "-gravity", "0,-9.81", "-friction", 0.3, "-disks_source", "list", "-disks_x",
+                            "0.5,1.3,0.44,1.4,0.56,1.5", "-disks_radius", 0.03, "-walls", "left,right", "-wall_left_a", "0,2",
+                            "-wall_left_b", "0.45,1", "-wall_right_a", "0.55,1", "-wall_right_b", "1,2", "-dt", 2e-3, "-steps", 200], 0,
+               None),
     "wall_impact": ("walls", 1, drop(0.3, 20.0) + ["-dt", 1e-3, "-steps", 80], 0, None),
     # -- one grain, no contact, every contact at once -------------------------------------------------------------------
     "one_grain": ("bodies", 1, one_grain(-9.81) + ["-dt", 1e-2, "-steps", 100], 0, None),

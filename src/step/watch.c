@@ -44,31 +44,10 @@ static void WatchWallNormal(const KergsWall *w, PetscReal n[])
   n[1] = len > 0 ? dx / len : 0.0;
 }
 
-/* Whether the walls bound a convex region: every wall's endpoints lie on the inner side of every other wall's line
-   (to rounding). Then the container is the intersection of the walls' inner half-planes. */
-static PetscBool WatchConvex(PetscInt nwalls, const KergsWall walls[])
-{
-  for (PetscInt i = 0; i < nwalls; i++) {
-    PetscReal n[KERGS_DIM], len = 0;
-    WatchWallNormal(&walls[i], n);
-    for (PetscInt d = 0; d < KERGS_DIM; d++) len += PetscSqr(walls[i].b[d] - walls[i].a[d]);
-    len = PetscSqrtReal(len);
-    for (PetscInt j = 0; j < nwalls; j++) {
-      const PetscReal *p[2] = {walls[j].a, walls[j].b};
-      if (j == i) continue;
-      for (PetscInt e = 0; e < 2; e++) {
-        PetscReal s = 0;
-        for (PetscInt d = 0; d < KERGS_DIM; d++) s += n[d] * (p[e][d] - walls[i].a[d]);
-        if (s < -1e-9 * PetscMax(len, 1.0)) return PETSC_FALSE;
-      }
-    }
-  }
-  return PETSC_TRUE;
-}
-
-/* The wall whose back side holds the centre x, or -1. Convex walls: behind its line anywhere. Otherwise behind the
-   wall within its extent (a segment's span, a line's whole length). */
-static PetscInt WatchBehindWall(PetscInt nwalls, const KergsWall walls[], PetscBool convex, const PetscReal x[])
+/* The wall whose back side holds the centre x within the wall's extent (a segment's span, a line anywhere), or -1.
+   Spans, not the walls' half-planes: grains leaving a hopper through its opening pass below the meeting point of its
+   walls' lines without leaving the container. */
+static PetscInt WatchBehindWall(PetscInt nwalls, const KergsWall walls[], const PetscReal x[])
 {
   for (PetscInt w = 0; w < nwalls; w++) {
     PetscReal n[KERGS_DIM], s = 0, along = 0, len2 = 0;
@@ -79,7 +58,7 @@ static PetscInt WatchBehindWall(PetscInt nwalls, const KergsWall walls[], PetscB
       along += ab * (x[d] - walls[w].a[d]);
       len2 += ab * ab;
     }
-    if (s < 0 && (convex || walls[w].infinite || (along >= 0 && along <= len2))) return w;
+    if (s < 0 && (walls[w].infinite || (along >= 0 && along <= len2))) return w;
   }
   return -1;
 }
@@ -91,14 +70,12 @@ PetscErrorCode KergsStepperFindOutside(KergsStepper st, PetscInt *grain, PetscIn
   KergsDisks       D;
   const KergsWall *walls;
   PetscInt         nwalls, mine = PETSC_MAX_INT, mywall = -1, g, w;
-  PetscBool        convex;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetDisks(st->scene, &D));
   PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
-  convex = WatchConvex(nwalls, walls);
   for (PetscInt i = 0; i < D.nowned; i++) {
-    const PetscInt k = WatchBehindWall(nwalls, walls, convex, &D.x[KERGS_DIM * i]);
+    const PetscInt k = WatchBehindWall(nwalls, walls, &D.x[KERGS_DIM * i]);
     if (PetscIsInfOrNanReal(D.x[KERGS_DIM * i]) || PetscIsInfOrNanReal(D.x[KERGS_DIM * i + 1])) continue; /* the poll's to report */
     if (k >= 0 && D.id[i] < mine) {
       mine   = D.id[i];
