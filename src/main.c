@@ -143,7 +143,7 @@ static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
 
 /* Exit status (docs/running.md, KergsExitStatus): 0 done; 1 an error (its message says what); 2 a blow-up; 3 done with
    steps that did not converge under -error_on_nonconvergence; 4 stopped by SIGTERM, SIGINT or SIGUSR1 (checkpoint
-   written, files closed). */
+   written, files closed); 5 the contact solver diverged. */
 int main(int argc, char **argv)
 {
   KergsExitStatus status = KERGS_EXIT_DONE;

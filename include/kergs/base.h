@@ -16,8 +16,9 @@
 PETSC_EXTERN PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO;
 /* Communication between ranks: the ghost impulses of each sweep, the velocities gathered after each step. */
 PETSC_EXTERN PetscLogEvent KERGS_Exchange;
-/* The kernel projector (factorization, diagonal blocks of Z, applications), the predictor, the partition. */
-PETSC_EXTERN PetscLogEvent  KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition;
+/* The kernel projector (factorization, diagonal blocks of Z, applications), the predictor, the partition, the watch
+   (src/step/watch.c: blow-ups and solver failures). */
+PETSC_EXTERN PetscLogEvent  KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition, KERGS_Watch;
 PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
 
 /* Collective: personalised exchange of records of `size` bytes. send[] holds sendcount[q] records for rank q, grouped

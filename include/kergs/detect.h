@@ -77,11 +77,16 @@ PETSC_EXTERN PetscErrorCode KergsContactsRestore(KergsContacts, PetscInt n, cons
    one contact, owned or foreign. */
 typedef struct {
   KergsGapRule     rule;
-  PetscReal        lead; /* (1 - theta) dt */
-  const PetscReal *v;    /* disk velocities (local indices) */
+  PetscReal        lead;     /* (1 - theta) dt */
+  PetscReal        theta_dt; /* theta dt */
+  const PetscReal *v;        /* disk velocities (local indices) */
   const KergsWall *walls;
 } KergsActivity;
 PETSC_EXTERN PetscErrorCode KergsContactsGetActivity(KergsContacts, KergsScene, KergsActivity *);
 PETSC_EXTERN PetscBool      KergsContactIsActive(const KergsActivity *, const KergsContact *);
+/* The predictive rule's normal velocity offset of an active contact, max(g~, 0) / (theta dt) with the LMGC90 g~ (0 for
+   the other rules): Signorini is written on v_n + offset >= 0, so that the gap at the end of the step,
+   g~ + theta dt v_n, stays >= 0 while an open contact may close during the step. */
+PETSC_EXTERN PetscReal KergsContactGapVelocity(const KergsActivity *, const KergsContact *);
 
 #endif

@@ -52,6 +52,8 @@ typedef struct {
   PetscReal   factor_seconds;  /* elimination, assembly and factorization of H_f H_f^T */
   PetscReal   diag_seconds;    /* diagonal blocks of Z */
   PetscReal   check_error;     /* |H_f P x| / |H_f x| on a pseudo-random x */
+  PetscReal   check_tol;       /* -kernel_check_tol */
+  PetscBool   check_failed;    /* check_error > check_tol even with MUMPS: the projector misses ker H_f (a failed solve) */
   const char *package;         /* factorization package used (cholmod, mumps) */
 } KergsKernelStats;
 PETSC_EXTERN PetscErrorCode KergsKernelGetStats(KergsKernel, KergsKernelStats *);

@@ -18,8 +18,9 @@ typedef enum {
 PETSC_EXTERN const char *const KergsWallKinds[];
 
 typedef enum {
-  KERGS_GAP_PAPER, /* predicted gap g~ = g^- (Alart 2013) */
-  KERGS_GAP_LMGC90 /* g~ = g^- + (1 - theta) dt v_n^- (LMGC90) */
+  KERGS_GAP_PAPER,     /* predicted gap g~ = g^- (Alart 2013) */
+  KERGS_GAP_LMGC90,    /* g~ = g^- + (1 - theta) dt v_n^- (LMGC90) */
+  KERGS_GAP_PREDICTIVE /* every contact within the alert distance, Signorini on the end-of-step gap: v_n >= -g~+ / (theta dt) */
 } KergsGapRule;
 PETSC_EXTERN const char *const KergsGapRules[];
 

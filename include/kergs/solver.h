@@ -48,6 +48,9 @@ typedef struct {
   KergsNamedValue extra[KERGS_SOLVE_MAXEXTRA];
   PetscInt        ntext; /* the type's own texts (predictor type, ...) */
   KergsNamedText  text[KERGS_SOLVE_MAXTEXT];
+  PetscBool       failed; /* the type could not build what its solve needs (a kernel projector that misses ker H_f): the
+                             step is not converged and the time loop stops after it with status 5 */
+  char failure[256];      /* what failed, when failed */
 } KergsSolveStats;
 /* Add a named figure or text to the statistics of a solve (for the types). */
 PETSC_EXTERN PetscErrorCode KergsSolveStatsAdd(KergsSolveStats *, const char name[], PetscReal value);

@@ -13,11 +13,13 @@ typedef struct _p_KergsStepper *KergsStepper;
 /* How a run ended: the exit status of the kergs executable (docs/running.md). An error (bad input, I/O, a full disk,
    an internal error) ends the run through PETSc's error handling with status 1. */
 typedef enum {
-  KERGS_EXIT_DONE          = 0, /* every step of -steps, or at rest (-stop_at_rest) */
-  KERGS_EXIT_ERROR         = 1, /* an error: the message names its cause */
-  KERGS_EXIT_BLOWUP        = 2, /* a grain's position or velocity became infinite or NaN: the run stopped after that step */
+  KERGS_EXIT_DONE   = 0,        /* every step of -steps, or at rest (-stop_at_rest) */
+  KERGS_EXIT_ERROR  = 1,        /* an error: the message names its cause */
+  KERGS_EXIT_BLOWUP = 2,        /* a blow-up (a non-finite state, a grain out of the container, an interpenetration beyond
+                                   -blowup_overlap, kinetic energy beyond -blowup_energy): the run stopped after that step */
   KERGS_EXIT_NOT_CONVERGED = 3, /* done, but some step did not converge, with -error_on_nonconvergence */
-  KERGS_EXIT_SIGNAL        = 4  /* stopped by SIGTERM, SIGINT or SIGUSR1 after finishing the step: checkpoint written, files closed */
+  KERGS_EXIT_SIGNAL        = 4, /* stopped by SIGTERM, SIGINT or SIGUSR1 after finishing the step: checkpoint written, files closed */
+  KERGS_EXIT_SOLVER_FAILED = 5  /* the contact solver diverged (-solver_divergence_tol): the run stopped after that step */
 } KergsExitStatus;
 
 PETSC_EXTERN PetscErrorCode KergsStepperCreate(MPI_Comm, KergsStepper *);

@@ -27,6 +27,10 @@ PETSC_EXTERN PetscErrorCode KergsSweepCreate(MPI_Comm, KergsSweep *);
    the pointers mu and active (owned by the caller, read at every sweep). Calling it again resets first; if W's values change, call it
    again. */
 PETSC_EXTERN PetscErrorCode KergsSweepSetUp(KergsSweep, Mat W, PetscInt ncomp, const PetscReal *mu, const PetscBool *active);
+/* The predictive gap rule's normal velocity offsets already added to v^d's normal components (per contact, the
+   caller's array, NULL: none), so that the velocity error's scale is the free velocity without them (a contact far
+   open would otherwise make every other error look small). After KergsSweepSetUp. */
+PETSC_EXTERN PetscErrorCode KergsSweepSetGapVelocities(KergsSweep, const PetscReal *gapvel);
 /* The diagonal blocks W_aa of the local contacts, n blocks of ncomp x ncomp row-major, into blocks (the caller's). */
 PETSC_EXTERN PetscErrorCode KergsSweepGetDiagonalBlocks(KergsSweep, PetscReal *blocks);
 /* One sweep: r (local array, updated in place) for v = W r + vd (+ extra). Collective.

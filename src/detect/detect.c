@@ -542,23 +542,40 @@ PetscErrorCode KergsContactsGetActivity(KergsContacts ct, KergsScene scene, Kerg
   PetscCall(KergsSceneGetContactRule(scene, NULL, &act->rule));
   PetscCall(KergsSceneGetTimeStep(scene, &dt, &theta));
   PetscCall(KergsSceneGetWalls(scene, NULL, &act->walls));
-  act->lead = (1.0 - theta) * dt;
-  act->v    = D.v;
+  act->lead     = (1.0 - theta) * dt;
+  act->theta_dt = theta * dt;
+  act->v        = D.v;
   PetscFunctionReturn(0);
+}
+
+/* g~ = g^- + (1 - theta) dt v_n^-, v_n^- = n.(V_a - V_b) (the normal row of H^T has no rotation term) */
+static PetscReal PredictedGap(const KergsActivity *act, const KergsContact *c)
+{
+  const PetscReal *va = &act->v[KERGS_DIM * c->a];
+  const PetscReal *vb = c->kind == KERGS_CONTACT_DISK_DISK ? &act->v[KERGS_DIM * c->b] : act->walls[c->b].v;
+  PetscReal        vn = 0.0;
+
+  if (act->lead == 0.0) return c->gap;
+  for (PetscInt d = 0; d < KERGS_DIM; d++) vn += c->n[d] * (va[d] - vb[d]);
+  return c->gap + act->lead * vn;
 }
 
 PetscBool KergsContactIsActive(const KergsActivity *act, const KergsContact *c)
 {
-  PetscReal g = c->gap;
-
-  if (act->rule == KERGS_GAP_LMGC90) {
-    const PetscReal *va = &act->v[KERGS_DIM * c->a];
-    const PetscReal *vb = c->kind == KERGS_CONTACT_DISK_DISK ? &act->v[KERGS_DIM * c->b] : act->walls[c->b].v;
-    PetscReal        vn = 0.0; /* the normal row of H^T has no rotation term */
-    for (PetscInt d = 0; d < KERGS_DIM; d++) vn += c->n[d] * (va[d] - vb[d]);
-    g += act->lead * vn;
+  switch (act->rule) {
+  case KERGS_GAP_PREDICTIVE:
+    return PETSC_TRUE; /* every detected contact: closer than the alert distance */
+  case KERGS_GAP_LMGC90:
+    return (PetscBool)(PredictedGap(act, c) <= 0.0);
+  default:
+    return (PetscBool)(c->gap <= 0.0);
   }
-  return (PetscBool)(g <= 0.0);
+}
+
+PetscReal KergsContactGapVelocity(const KergsActivity *act, const KergsContact *c)
+{
+  if (act->rule != KERGS_GAP_PREDICTIVE || !(act->theta_dt > 0)) return 0.0;
+  return PetscMax(PredictedGap(act, c), 0.0) / act->theta_dt;
 }
 
 PetscErrorCode KergsContactsGetLocal(KergsContacts ct, PetscInt *n, KergsContact **c)

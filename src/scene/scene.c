@@ -6,7 +6,7 @@
 #include <petscviewer.h>
 
 const char *const KergsWallKinds[] = {"driven", "free", "KergsWallKind", "KERGS_WALL_", NULL};
-const char *const KergsGapRules[]  = {"paper", "lmgc90", "KergsGapRule", "KERGS_GAP_", NULL};
+const char *const KergsGapRules[]  = {"paper", "lmgc90", "predictive", "KergsGapRule", "KERGS_GAP_", NULL};
 
 #define KERGS_WALL_PREFIX_LEN 128
 
@@ -548,8 +548,11 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
   PetscCall(PetscOptionsReal("-theta", "Theta of the theta-method, in (0,1] (Algorithm 1)", NULL, scene->theta, &scene->theta, NULL));
   PetscCall(PetscOptionsBool("-disks_lock_rotation", "Disks translate only: no rotational DOFs even with friction (sliding blocks)", NULL,
                              scene->lock_rotation, &scene->lock_rotation, NULL));
-  PetscCall(PetscOptionsEnum("-gap_rule", "Predicted gap: paper (g~ = g-) or lmgc90 (g~ = g- + (1-theta) dt vn-)", NULL, KergsGapRules,
-                             (PetscEnum)scene->gaprule, (PetscEnum *)&scene->gaprule, NULL));
+  PetscCall(PetscOptionsEnum(
+      "-gap_rule",
+      "Active contacts: paper (g~ = g- <= 0), lmgc90 (g~ = g- + (1-theta) dt vn- <= 0), predictive (every contact within the "
+      "alert distance, v_n >= -max(g~, 0) / (theta dt): may close during the step, never further)",
+      NULL, KergsGapRules, (PetscEnum)scene->gaprule, (PetscEnum *)&scene->gaprule, NULL));
   PetscCall(PetscOptionsReal(
       "-alert", "Alert distance >= 0: potential contacts have gap < alert (default 0.1 * mean radius, once the disks are known)", NULL,
       scene->alert, &scene->alert, alert_set));
@@ -818,8 +821,8 @@ static PetscErrorCode SceneCheckNumerics(KergsScene scene)
              scene->name, (double)scene->alert);
   PetscCheck(Finite(scene->ghost_skin), comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -ghost_skin %g is not finite", scene->name,
              (double)scene->ghost_skin);
-  PetscCheck(scene->gaprule == KERGS_GAP_PAPER || scene->gaprule == KERGS_GAP_LMGC90, comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "Scene %s: unknown gap rule %d", scene->name, (int)scene->gaprule);
+  PetscCheck(scene->gaprule == KERGS_GAP_PAPER || scene->gaprule == KERGS_GAP_LMGC90 || scene->gaprule == KERGS_GAP_PREDICTIVE, comm,
+             PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: unknown gap rule %d", scene->name, (int)scene->gaprule);
   for (PetscInt d = 0; d < KERGS_DIM; d++)
     PetscCheck(Finite(scene->gravity[d]), comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -gravity is not finite", scene->name);
   PetscFunctionReturn(0);

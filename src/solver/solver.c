@@ -52,6 +52,7 @@ PetscErrorCode KergsSolverCreate(MPI_Comm comm, KergsSolver *solver)
   s->tol          = 1e-4;
   s->residual_tol = 5e-2;
   s->velocity_tol = 1e-2;
+  s->shifted_id   = -1; /* no v^d holds gap offsets yet */
   s->criterion    = KERGS_CRITERION_QUAD;
   PetscCall(KergsSweepCreate(comm, &s->sweep));
   *solver = s;
@@ -119,38 +120,51 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
 
 /* Active contacts (eq. 2, KergsContactIsActive: the same decision as the assembly of W over active pairs). An
    inactive contact's impulse is 0 at the solution: its warm start is set to 0 too, so that the first sweep does not
-   feel an impulse the law is about to cancel (and W over active pairs gives the same iterates as the whole W). */
+   feel an impulse the law is about to cancel (and W over active pairs gives the same iterates as the whole W).
+   The predictive gap rule writes Signorini on the end-of-step gap, v_n >= -g~/(theta dt) for g~ > 0: its offset is added
+   here, once per step, to v^d's normal component, so that every type, its law, its natural residual and the FCLib
+   export solve the same problem, u = W r + v^d + offset with 0 <= u_n _|_ r_n >= 0. */
 PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
-  PetscScalar   *r;
+  PetscScalar   *r, *q;
   KergsContact  *c;
   KergsActivity  act;
   KergsDofLayout layout;
   PetscInt       n, nc;
-  Vec            rv;
+  Vec            rv, vd;
   Mat            W;
+  PetscInt64     id;
+  PetscBool      shifted;
 
   PetscFunctionBeginUser;
   PetscCall(KergsContactsGetLocal(contacts, &n, &c));
   PetscCall(KergsContactsGetActivity(contacts, scene, &act));
   PetscCall(KergsOperatorsGetLayout(ops, &layout));
-  PetscCall(KergsOperatorsGetContactVectors(ops, &rv, NULL, NULL));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &rv, NULL, &vd));
   PetscCall(KergsOperatorsGetW(ops, &W, NULL));
   nc = layout.ncomp;
   if (n > s->nalloc) {
-    PetscCall(PetscFree2(s->mu, s->active));
+    PetscCall(PetscFree3(s->mu, s->active, s->gapvel));
     s->nalloc = PetscMax(n, 2 * s->nalloc);
-    PetscCall(PetscMalloc2(s->nalloc, &s->mu, s->nalloc, &s->active));
+    PetscCall(PetscMalloc3(s->nalloc, &s->mu, s->nalloc, &s->active, s->nalloc, &s->gapvel));
   }
+  PetscCall(PetscObjectGetId((PetscObject)vd, &id));
+  shifted = (PetscBool)(id == s->shifted_id); /* each assembly creates a new v^d (KergsOperatorsAssembleH) */
   PetscCall(VecGetArray(rv, &r));
+  PetscCall(VecGetArray(vd, &q));
   for (PetscInt k = 0; k < n; k++) {
     s->active[k] = KergsContactIsActive(&act, &c[k]);
     s->mu[k]     = c[k].mu;
+    s->gapvel[k] = s->active[k] ? KergsContactGapVelocity(&act, &c[k]) : 0.0;
+    if (!shifted) q[k * nc] += s->gapvel[k];
     if (!s->active[k])
       for (PetscInt j = 0; j < nc; j++) r[k * nc + j] = 0.0;
   }
+  PetscCall(VecRestoreArray(vd, &q));
   PetscCall(VecRestoreArray(rv, &r));
+  s->shifted_id = id;
   PetscCall(KergsSweepSetUp(s->sweep, W, nc, s->mu, s->active));
+  PetscCall(KergsSweepSetGapVelocities(s->sweep, act.rule == KERGS_GAP_PREDICTIVE ? s->gapvel : NULL));
   PetscFunctionReturn(0);
 }
 
@@ -307,7 +321,7 @@ PetscErrorCode KergsSolverDestroy(KergsSolver *s)
   if ((*s)->ops.destroy) PetscCall((*(*s)->ops.destroy)(*s));
   PetscCall(KergsSolverMonitorCancel(*s));
   PetscCall(KergsSweepDestroy(&(*s)->sweep));
-  PetscCall(PetscFree2((*s)->mu, (*s)->active));
+  PetscCall(PetscFree3((*s)->mu, (*s)->active, (*s)->gapvel));
   PetscCall(PetscFree(*s));
   PetscFunctionReturn(0);
 }

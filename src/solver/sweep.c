@@ -645,6 +645,13 @@ PetscErrorCode KergsSweepRun(KergsSweep s, Vec r, Vec vd, const PetscReal *extra
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsSweepSetGapVelocities(KergsSweep s, const PetscReal *gapvel)
+{
+  PetscFunctionBeginUser;
+  s->gapvel = gapvel;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSweepResiduals(KergsSweep s, Vec r, Vec vd, Vec v, KergsResiduals *res)
 {
   const PetscInt     nc = s->ncomp;
@@ -668,7 +675,7 @@ PetscErrorCode KergsSweepResiduals(KergsSweep s, Vec r, Vec vd, Vec v, KergsResi
     for (c = 0; c < nc; c++) {
       e2 += e[c] * e[c];
       sums[1] += rl[a * nc + c] * rl[a * nc + c];
-      q2 += PetscSqr(PetscRealPart(vdl[a * nc + c]));
+      q2 += PetscSqr(PetscRealPart(vdl[a * nc + c]) - (c == 0 && s->gapvel ? s->gapvel[a] : 0.0));
       wr2 += PetscSqr(PetscRealPart(vl[a * nc + c] - vdl[a * nc + c]));
     }
     sums[0] += e2;

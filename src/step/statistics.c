@@ -17,15 +17,16 @@ PetscErrorCode KergsStepperPeakMemory(MPI_Comm comm, PetscReal *bytes)
 }
 
 /* Interpenetration at the end of the step, from the exact gaps of this step's active contact pairs at the new
-   positions: mean over active contacts of max(0, -g+), and the largest. Global. */
-static PetscErrorCode MeasureViolation(KergsStepper st, PetscReal *mean, PetscReal *max, PetscInt *nactive)
+   positions: mean over active contacts of max(0, -g+), the largest, and the largest relative to the smaller radius of
+   the pair (the watch's -blowup_overlap). Global. */
+static PetscErrorCode MeasureViolation(KergsStepper st, PetscReal *mean, PetscReal *max, PetscReal *maxrel, PetscInt *nactive)
 {
   KergsDisks       D;
   const KergsWall *walls;
   const PetscBool *active;
   KergsContact    *c;
   PetscInt         n, lact = 0;
-  PetscReal        loc[2] = {0, 0}, glob[2], lmax = 0, gmax;
+  PetscReal        loc[2] = {0, 0}, glob[2], lmax[2] = {0, 0}, gmax[2];
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetDisks(st->scene, &D));
@@ -48,13 +49,15 @@ static PetscErrorCode MeasureViolation(KergsStepper st, PetscReal *mean, PetscRe
     }
     lact++;
     loc[0] += PetscMax(0.0, -g);
-    lmax = PetscMax(lmax, -g);
+    lmax[0] = PetscMax(lmax[0], -g);
+    lmax[1] = PetscMax(lmax[1], -g / (c[k].kind == KERGS_CONTACT_DISK_DISK ? PetscMin(c[k].ra, c[k].rb) : c[k].ra));
   }
   loc[1] = (PetscReal)lact;
   PetscCall(MPIU_Allreduce(loc, glob, 2, MPIU_REAL, MPI_SUM, st->comm));
-  PetscCall(MPIU_Allreduce(&lmax, &gmax, 1, MPIU_REAL, MPI_MAX, st->comm));
+  PetscCall(MPIU_Allreduce(lmax, gmax, 2, MPIU_REAL, MPIU_MAX, st->comm));
   *mean    = glob[1] > 0 ? glob[0] / glob[1] : 0.0;
-  *max     = gmax;
+  *max     = gmax[0];
+  *maxrel  = gmax[1];
   *nactive = (PetscInt)glob[1];
   PetscFunctionReturn(0);
 }
@@ -91,9 +94,9 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   KergsResults           res = st->results;
   KergsPartitionMeasures pm;
   KergsSolverType        type;
-  PetscReal              mean = 0, max = 0, times[4] = {tdetect, tassemble, st->io_seconds, 0}, tmax[4], peak, sent, nnz_Hf, nnz_W, time;
-  PetscInt               nactive = 0, step, ncontacts;
-  PetscLogDouble         now;
+  PetscReal mean = 0, max = 0, maxrel = 0, times[4] = {tdetect, tassemble, st->io_seconds, 0}, tmax[4], peak, sent, nnz_Hf, nnz_W, time;
+  PetscInt  nactive = 0, step, ncontacts;
+  PetscLogDouble now;
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&now));
@@ -101,7 +104,7 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   /* point-to-point and personalised collective bytes (PETSc's MPI logging; reductions are counted, not sized) */
   sent = (PetscReal)(petsc_send_len + petsc_isend_len - st->sent_start);
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sent, 1, MPIU_REAL, MPIU_SUM, st->comm));
-  PetscCall(MeasureViolation(st, &mean, &max, &nactive));
+  PetscCall(MeasureViolation(st, &mean, &max, &maxrel, &nactive));
   PetscCall(MPIU_Allreduce(times, tmax, 4, MPIU_REAL, MPI_MAX, st->comm));
   PetscCall(KergsStepperPeakMemory(st->comm, &peak));
   PetscCall(KergsSceneGetStep(st->scene, &step, &time, NULL));
@@ -115,6 +118,7 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   st->last_sweeps        = ss->iterations;
   st->last_residual      = ss->residual;
   st->last_max_violation = max;
+  st->last_max_relative  = maxrel;
   PetscCall(KergsResultsRecordText(res, "solver_type", type));
   PetscCall(KergsResultsRecord(res, "step", (PetscReal)step));
   PetscCall(KergsResultsRecord(res, "time", time));
@@ -122,6 +126,9 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   PetscCall(KergsResultsRecord(res, "active", (PetscReal)nactive));
   PetscCall(KergsResultsRecord(res, "mean_violation", mean));
   PetscCall(KergsResultsRecord(res, "max_violation", max));
+  PetscCall(KergsResultsRecord(res, "max_relative_violation", maxrel));
+  PetscCall(KergsResultsRecord(res, "kinetic_energy", st->ek_end));
+  PetscCall(KergsResultsRecord(res, "external_work", st->work));
   PetscCall(KergsResultsRecord(res, "detect_seconds", tmax[0]));
   PetscCall(KergsResultsRecord(res, "assemble_seconds", tmax[1]));
   PetscCall(KergsResultsRecord(res, "io_seconds", tmax[2]));

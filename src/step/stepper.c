@@ -11,10 +11,14 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
   PetscCall(PetscNew(&st));
-  st->comm            = comm;
-  st->fclib_step      = -1;
-  st->checkpoint_step = -1;
-  st->overlap_tol     = 5e-2; /* a settled NSCD sample keeps interpenetrations of about 1% of a radius */
+  st->comm             = comm;
+  st->fclib_step       = -1;
+  st->checkpoint_step  = -1;
+  st->overlap_tol      = 5e-2; /* a settled NSCD sample keeps interpenetrations of about 1% of a radius */
+  st->blowup_overlap   = 0.5;  /* fifty times what a settled sample keeps */
+  st->blowup_energy    = 2.0;
+  st->divergence_tol   = 1.0; /* |e| > |r|: r = 0 would be as close to the law */
+  st->divergence_steps = 5;
   PetscCall(KergsStepperPeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));
   PetscCall(KergsContactsCreate(comm, &st->contacts));
@@ -63,6 +67,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(KergsResultsSetSceneName(st->results, name)); /* default -output: results/<scene>.h5 */
   PetscCall(KergsResultsSetFromOptions(st->results));
   PetscCall(KergsPartitionSetFromOptions(st->partition));
+  PetscCall(KergsStepperWatchOptions(st));
   PetscOptionsBegin(st->comm, NULL, "Time stepping options", NULL);
   PetscCall(PetscOptionsReal("-stop_at_rest",
                              "Stop once every disk is slower than this speed, after the packing has moved faster (0: run all -steps)", "",
@@ -164,6 +169,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&st->step_start));
+  PetscCall(KergsStepperEnergy(st, &st->ek_start, NULL));
   st->sent_start = petsc_send_len + petsc_isend_len;
   PetscCall(KergsSceneGetStep(sc, &step, NULL, NULL));
   /* initial partition before the first detection, then checks every -partition_check_every steps, with the
@@ -196,6 +202,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   }
   PetscCall(SaveVelocities(sc, &vold, &wold, &wvold));
   PetscCall(KergsOperatorsUpdateVelocities(st->ops, sc));
+  PetscCall(KergsStepperExternalWork(st, vold, wvold, &st->work));
   if (!keepH) PetscCall(KergsOperatorsReleaseH(st->ops));
   PetscCall(KergsSceneAdvance(sc, vold, wold, wvold));
   PetscCall(PetscFree3(vold, wold, wvold));
@@ -212,7 +219,9 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
     PetscCall(PetscTime(&t4));
     st->io_seconds = t4 - t3;
   }
+  PetscCall(KergsStepperEnergy(st, &st->ek_end, &st->vmax_end));
   PetscCall(KergsStepperRecordStep(st, &ss, t1 - t0, t2 - t1));
+  PetscCall(KergsStepperWatch(st, &ss));
   PetscFunctionReturn(0);
 }
 
@@ -221,7 +230,10 @@ static const char *EndText(KergsStepper st, PetscBool rest, char buf[], size_t l
 {
   switch (st->status) {
   case KERGS_EXIT_BLOWUP:
-    return "blow-up: non-finite state";
+  case KERGS_EXIT_SOLVER_FAILED:
+    (void)PetscSNPrintf(buf, len, "%s: %s", st->status == KERGS_EXIT_BLOWUP ? "blow-up" : "solver failure",
+                        st->failure_kind ? st->failure_kind : "non-finite state");
+    return buf;
   case KERGS_EXIT_SIGNAL:
     (void)PetscSNPrintf(buf, len, "stopped by %s", KergsSignalName(st->signal));
     return buf;
@@ -244,6 +256,9 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
 
   PetscFunctionBeginUser;
   st->status = KERGS_EXIT_DONE;
+  PetscCall(KergsSceneGetStep(sc, &step, NULL, &nsteps));
+  if (step == 0) PetscCall(KergsStepperCheckContainer(st)); /* before any file is written */
+  PetscCall(KergsStepperEnergyFloor(st));
   PetscCall(KergsStepperCatchSignals(PETSC_TRUE));
   PetscCall(KergsResultsOpen(st->results));
   PetscCall(KergsResultsGetState(st->results, &rs));
@@ -279,6 +294,11 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
     if (step >= nsteps || rest) break;
     PetscCall(KergsStepperStep(st));
     PetscCall(KergsSceneGetStep(sc, &step, NULL, NULL));
+    if (st->failure[0]) { /* the watch's verdict, the same on every rank; no checkpoint of a broken state */
+      st->status = st->failure_status;
+      PetscCall(PetscPrintf(st->comm, "kergs: %s\n", st->failure));
+      break;
+    }
     if (st->rest_speed > 0) {
       /* at rest: every grain slower than the threshold, once the packing has been set in motion */
       PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));

@@ -40,6 +40,7 @@ struct _p_KergsKernel {
   PetscInt           kept_dofs, kept_comps; /* sizes of the reduced problem: rows of A, rows of Hr */
   PetscInt          *kept_offset;           /* per local contact: local index of its first component in xr, -1 if peeled */
   PetscReal          check_error;           /* this step's |H_f P x| / |H_f x| on a pseudo-random x */
+  PetscBool          check_failed;          /* check_error above -kernel_check_tol even with MUMPS: this step's projector misses ker H_f */
   PetscReal          cond_estimate;         /* CHOLMOD only: |A|_1 |A^-1 v|_1 / |v|_1 for a pseudo-random v (0 otherwise) */
   PetscBool          fell_back;             /* CHOLMOD was chosen but MUMPS used this step (CHOLMOD rejected, or A singular by its sizes) */
   PetscBool          nnz_known;             /* nnz_factor was reported by the package (MUMPS INFOG(29)) */

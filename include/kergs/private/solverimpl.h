@@ -49,9 +49,12 @@ struct _p_KergsSolver {
   PetscBool      held; /* an iteration's monitor call is held back */
   PetscInt       held_it;
   PetscReal      held_criterion, held_residual, held_seconds;
-  PetscReal     *mu;     /* per local contact */
-  PetscBool     *active; /* per local contact */
-  PetscInt       nalloc;
+  PetscReal     *mu;         /* per local contact */
+  PetscBool     *active;     /* per local contact */
+  PetscReal     *gapvel;     /* per local contact: the gap rule's normal velocity offset added to v^d (predictive) */
+  PetscInt64     shifted_id; /* the v^d (its object id) that already holds them: a second set-up on the same problem
+                                does not add them twice */
+  PetscInt nalloc;
 };
 
 /* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */

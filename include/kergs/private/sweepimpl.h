@@ -15,14 +15,15 @@ struct _p_KergsSweep {
   const PetscScalar *aa, *ba;           /* their values, ncomp*ncomp per block, each block column by column */
   PetscReal         *Wdiag;             /* whole storage: n blocks of ncomp x ncomp, W_alpha,alpha row-major (NULL with upper storage, which
                                            the sweep reads in place); see KergsSweepGetDiagonalBlocks */
-  PetscReal *mu;                        /* per contact (the caller's array; NULL: frictionless) */
-  PetscBool *active;                    /* per contact: predicted gap <= 0 (the caller's array; NULL: all active) */
-  Vec        rghost;                    /* off-process impulses, ordered as Ao's (block) columns */
-  VecScatter ghost_scatter;
-  PetscInt   norows, *orows; /* several ranks: the local contacts coupled to other ranks' (sorted) */
-  PetscReal *corr;           /* several ranks: per coupled row, the other ranks' W r (fixed in a sweep) */
-  PetscInt  *dsplit;         /* per local contact a: [start, end) of its own block W_aa in aj (skipped by the sweep); NULL with
-                                upper storage, where W_aa is the first block of row a */
+  PetscReal       *mu;                  /* per contact (the caller's array; NULL: frictionless) */
+  PetscBool       *active;              /* per contact: predicted gap <= 0 (the caller's array; NULL: all active) */
+  const PetscReal *gapvel;              /* per contact: the gap rule's normal velocity offset inside v^d (NULL: none) */
+  Vec              rghost;              /* off-process impulses, ordered as Ao's (block) columns */
+  VecScatter       ghost_scatter;
+  PetscInt         norows, *orows; /* several ranks: the local contacts coupled to other ranks' (sorted) */
+  PetscReal       *corr;           /* several ranks: per coupled row, the other ranks' W r (fixed in a sweep) */
+  PetscInt        *dsplit;         /* per local contact a: [start, end) of its own block W_aa in aj (skipped by the sweep); NULL with
+                                      upper storage, where W_aa is the first block of row a */
   /* upper storage only */
   PetscReal     *acc;           /* per local component: sum_{beta < alpha local} W_beta,alpha^T r_beta (new), within a sweep */
   Vec            blower;        /* W's layout: the lower ranks' coupling B^T r, scattered back (added) from them */

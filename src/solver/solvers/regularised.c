@@ -133,6 +133,14 @@ PetscErrorCode KergsRegularisedStats(KergsRegularised *reg, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "factor_seconds", k.factor_seconds));
   PetscCall(KergsSolveStatsAdd(st, "diag_seconds", k.diag_seconds));
   PetscCall(KergsSolveStatsAdd(st, "predict_seconds", reg->predict_seconds));
+  if (k.check_failed) {
+    st->failed    = PETSC_TRUE;
+    st->converged = PETSC_FALSE;
+    PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
+                            "the kernel projector (%s) misses ker H_f: |H_f P x| / |H_f x| = %g > -kernel_check_tol %g; try another "
+                            "-kernel_null_pivot_tol",
+                            k.package, (double)k.check_error, (double)k.check_tol));
+  }
   PetscFunctionReturn(0);
 }
 

@@ -1,0 +1,286 @@
+/* kergs stepper: the run's watch (docs/running.md, "Blow-ups and solver failures"). Before the first step: no grain
+   outside the container. After every step: no grain left the container, no interpenetration beyond -blowup_overlap of
+   the smaller radius, no kinetic energy that the work of gravity, of the driven walls and of the free walls' forces
+   cannot explain (-blowup_energy), and no solver whose natural residual stays above -solver_divergence_tol. Every
+   figure it decides on is reduced over the ranks first, so that every rank stops after the same step. */
+#include <kergs/private/stepperimpl.h>
+
+PetscErrorCode KergsStepperWatchOptions(KergsStepper st)
+{
+  PetscFunctionBeginUser;
+  PetscOptionsBegin(st->comm, NULL, "Blow-up and solver failure detection (docs/running.md)", NULL);
+  PetscCall(PetscOptionsReal(
+      "-blowup_overlap", "Stop with status 2 once an interpenetration exceeds this fraction of the smaller radius of the pair (0: never)",
+      "", st->blowup_overlap, &st->blowup_overlap, NULL));
+  PetscCall(PetscOptionsReal("-blowup_energy",
+                             "Stop with status 2 once a step's kinetic energy exceeds this multiple of what the energy at its start and "
+                             "the work of gravity and walls explain (0: never)",
+                             "", st->blowup_energy, &st->blowup_energy, NULL));
+  PetscCall(PetscOptionsReal("-solver_divergence_tol",
+                             "A step whose natural residual exceeds this has diverged (0: never); -solver_divergence_steps in a row stop "
+                             "the run with status 5",
+                             "", st->divergence_tol, &st->divergence_tol, NULL));
+  PetscCall(PetscOptionsInt("-solver_divergence_steps", "Diverged steps in a row that stop the run with status 5", "", st->divergence_steps,
+                            &st->divergence_steps, NULL));
+  PetscOptionsEnd();
+  PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-solver_divergence_steps"));
+  PetscCheck(st->blowup_overlap >= 0 && !PetscIsInfOrNanReal(st->blowup_overlap), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-blowup_overlap %g must be a non-negative fraction of a radius (0: never)", (double)st->blowup_overlap);
+  PetscCheck(st->blowup_energy == 0 || (st->blowup_energy >= 1 && !PetscIsInfOrNanReal(st->blowup_energy)), st->comm,
+             PETSC_ERR_ARG_OUTOFRANGE, "-blowup_energy %g must be at least 1 (or 0: never)", (double)st->blowup_energy);
+  PetscCheck(st->divergence_tol >= 0 && !PetscIsInfOrNanReal(st->divergence_tol), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_divergence_tol %g must be non-negative (0: never)", (double)st->divergence_tol);
+  PetscCheck(st->divergence_steps >= 1, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_divergence_steps %" PetscInt_FMT " must be at least 1",
+             st->divergence_steps);
+  PetscFunctionReturn(0);
+}
+
+/* A wall's unit inward normal (the left normal of a -> b) */
+static void WatchWallNormal(const KergsWall *w, PetscReal n[])
+{
+  const PetscReal dx = w->b[0] - w->a[0], dy = w->b[1] - w->a[1], len = PetscSqrtReal(dx * dx + dy * dy);
+
+  n[0] = len > 0 ? -dy / len : 0.0;
+  n[1] = len > 0 ? dx / len : 0.0;
+}
+
+/* The wall whose back side holds the centre x within the wall's extent (a segment's span, a line anywhere), or -1.
+   Spans, not the walls' half-planes: grains leaving a hopper through its opening pass below the meeting point of its
+   walls' lines without leaving the container. */
+static PetscInt WatchBehindWall(PetscInt nwalls, const KergsWall walls[], const PetscReal x[])
+{
+  for (PetscInt w = 0; w < nwalls; w++) {
+    PetscReal n[KERGS_DIM], s = 0, along = 0, len2 = 0;
+    WatchWallNormal(&walls[w], n);
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      const PetscReal ab = walls[w].b[d] - walls[w].a[d];
+      s += n[d] * (x[d] - walls[w].a[d]);
+      along += ab * (x[d] - walls[w].a[d]);
+      len2 += ab * ab;
+    }
+    if (s < 0 && (walls[w].infinite || (along >= 0 && along <= len2))) return w;
+  }
+  return -1;
+}
+
+/* The smallest grain id (over all ranks) whose centre is outside the container, and the wall it is behind; id -1:
+   none. Collective. */
+PetscErrorCode KergsStepperFindOutside(KergsStepper st, PetscInt *grain, PetscInt *wall)
+{
+  KergsDisks       D;
+  const KergsWall *walls;
+  PetscInt         nwalls, mine = PETSC_MAX_INT, mywall = -1, g, w;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(st->scene, &D));
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  for (PetscInt i = 0; i < D.nowned; i++) {
+    const PetscInt k = WatchBehindWall(nwalls, walls, &D.x[KERGS_DIM * i]);
+    if (PetscIsInfOrNanReal(D.x[KERGS_DIM * i]) || PetscIsInfOrNanReal(D.x[KERGS_DIM * i + 1])) continue; /* the poll's to report */
+    if (k >= 0 && D.id[i] < mine) {
+      mine   = D.id[i];
+      mywall = k;
+    }
+  }
+  PetscCall(MPIU_Allreduce(&mine, &g, 1, MPIU_INT, MPI_MIN, st->comm));
+  w = g == mine ? mywall : -1;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &w, 1, MPIU_INT, MPI_MAX, st->comm));
+  *grain = g == PETSC_MAX_INT ? -1 : g;
+  *wall  = w;
+  PetscFunctionReturn(0);
+}
+
+/* Before the first step: every grain's centre inside the container (an error naming the first grain outside). */
+PetscErrorCode KergsStepperCheckContainer(KergsStepper st)
+{
+  const KergsWall *walls;
+  KergsDisks       D;
+  PetscInt         grain, wall;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsStepperFindOutside(st, &grain, &wall));
+  if (grain < 0) PetscFunctionReturn(0);
+  PetscCall(KergsSceneGetWalls(st->scene, NULL, &walls));
+  PetscCall(KergsSceneGetDisks(st->scene, &D));
+  for (PetscInt i = 0; i < D.nowned; i++)
+    if (D.id[i] == grain)
+      PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grain %" PetscInt_FMT " at (%g, %g) is behind wall %s\n", grain,
+                            (double)D.x[KERGS_DIM * i], (double)D.x[KERGS_DIM * i + 1], walls[wall].name));
+  SETERRQ(st->comm, PETSC_ERR_USER_INPUT,
+          "Grain %" PetscInt_FMT " starts outside the container: its centre is behind wall %s (position printed above); move it, or the "
+          "wall",
+          grain, walls[wall].name);
+}
+
+/* Kinetic energy of the disks and of the free walls, and the fastest disk's speed. Collective. */
+PetscErrorCode KergsStepperEnergy(KergsStepper st, PetscReal *ek, PetscReal *vmax)
+{
+  const KergsWall *walls;
+  PetscInt         nwalls;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneKineticEnergy(st->scene, ek, vmax));
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  for (PetscInt w = 0; w < nwalls; w++)
+    if (walls[w].kind == KERGS_WALL_FREE) *ek += 0.5 * walls[w].mass * (PetscSqr(walls[w].v[0]) + PetscSqr(walls[w].v[1]));
+  PetscFunctionReturn(0);
+}
+
+/* The work done on the bodies during the step, after the velocity update (V+ in place, V- given): gravity on the
+   disks, dt g.(theta v+ + (1 - theta) v-) m; the driven walls' impulses times their velocities; the free walls'
+   applied forces times their displacements. Collective. */
+PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[], const PetscReal wvold[], PetscReal *work)
+{
+  KergsDisks       D;
+  const KergsWall *walls;
+  KergsContact    *c;
+  PetscReal        g[KERGS_DIM], dt, theta, wk = 0;
+  PetscInt         nwalls, n;
+  PetscBool        frictional;
+  PetscMPIInt      rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(st->comm, &rank));
+  PetscCall(KergsSceneGetDisks(st->scene, &D));
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  PetscCall(KergsSceneGetGravity(st->scene, g));
+  PetscCall(KergsSceneGetTimeStep(st->scene, &dt, &theta));
+  PetscCall(KergsSceneGetModel(st->scene, &frictional, NULL));
+  PetscCall(KergsContactsGetLocal(st->contacts, &n, &c));
+  for (PetscInt i = 0; i < D.nowned; i++)
+    for (PetscInt d = 0; d < KERGS_DIM; d++)
+      wk += dt * D.mass[i] * g[d] * (theta * D.v[KERGS_DIM * i + d] + (1 - theta) * vold[KERGS_DIM * i + d]);
+  for (PetscInt k = 0; k < n; k++) {
+    const KergsWall *w;
+    if (c[k].kind != KERGS_CONTACT_DISK_WALL) continue;
+    w = &walls[c[k].b];
+    if (w->kind != KERGS_WALL_DRIVEN) continue;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) wk += (c[k].r[0] * c[k].n[d] + (frictional ? c[k].r[1] * c[k].t[d] : 0.0)) * w->v[d];
+  }
+  if (rank == 0) /* the walls are replicated: counted once */
+    for (PetscInt w = 0; w < nwalls; w++)
+      if (walls[w].kind == KERGS_WALL_FREE)
+        for (PetscInt d = 0; d < KERGS_DIM; d++)
+          wk += dt * walls[w].force[d] * (theta * walls[w].v[d] + (1 - theta) * wvold[KERGS_DIM * w + d]);
+  PetscCall(MPIU_Allreduce(&wk, work, 1, MPIU_REAL, MPIU_SUM, st->comm));
+  PetscFunctionReturn(0);
+}
+
+/* Once per run: two grains approaching at twice the fastest speed close more than the alert distance in a step, so a
+   contact may be met before detection sees it (the rules then act on a late, deep contact). A warning, not a failure. */
+static PetscErrorCode WatchAlert(KergsStepper st, PetscInt step)
+{
+  PetscReal dt, alert;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetTimeStep(st->scene, &dt, NULL));
+  PetscCall(KergsSceneGetContactRule(st->scene, &alert, NULL));
+  if (st->warned_alert || !(2 * st->vmax_end * dt > alert)) PetscFunctionReturn(0);
+  st->warned_alert = PETSC_TRUE;
+  PetscCall(PetscPrintf(st->comm,
+                        "kergs: warning: after step %" PetscInt_FMT
+                        " grains move up to %.3g a step (fastest %.3g m/s), and two of them may "
+                        "close by twice that, more than the alert distance %.3g: contacts may be met before they are detected (raise "
+                        "-alert or lower -dt)\n",
+                        step, (double)(st->vmax_end * dt), (double)st->vmax_end, (double)alert));
+  PetscFunctionReturn(0);
+}
+
+/* After a step's statistics: decide whether the run blew up or its solver diverged; st->failure says what (empty:
+   neither) and st->failure_status the exit status. The same on every rank: every figure is global. */
+static PetscErrorCode WatchStep(KergsStepper st, const KergsSolveStats *ss)
+{
+  const PetscReal  residual = ss->residual;
+  const KergsWall *walls;
+  PetscInt         step, grain, wall;
+  PetscReal        explained;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetStep(st->scene, &step, NULL, NULL));
+  PetscCall(KergsSceneGetWalls(st->scene, NULL, &walls));
+  st->failure[0] = 0;
+  if (PetscIsInfOrNanReal(st->ek_end)) PetscFunctionReturn(0); /* a non-finite state: the poll names the grain */
+  PetscCall(KergsStepperFindOutside(st, &grain, &wall));
+  if (grain >= 0) {
+    PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
+                            "blow-up in step %" PetscInt_FMT ": grain %" PetscInt_FMT " left the container (its centre is behind wall %s)",
+                            step, grain, walls[wall].name));
+    st->failure_status = KERGS_EXIT_BLOWUP;
+    st->failure_kind   = "grain out of the container";
+    PetscFunctionReturn(0);
+  }
+  if (st->blowup_overlap > 0 && st->last_max_relative > st->blowup_overlap) {
+    PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
+                            "blow-up in step %" PetscInt_FMT
+                            ": an interpenetration of %.3g reaches %.3g times the smaller radius of its pair "
+                            "(-blowup_overlap %g)",
+                            step, (double)st->last_max_violation, (double)st->last_max_relative, (double)st->blowup_overlap));
+    st->failure_status = KERGS_EXIT_BLOWUP;
+    st->failure_kind   = "interpenetration";
+    PetscFunctionReturn(0);
+  }
+  /* the energy at the start plus the work done: what the kinetic energy at the end can be, if no contact created
+     energy (contacts of the law dissipate or keep it); the floor, the scene's own energy scale, keeps rounding at rest
+     from counting */
+  explained = st->ek_start + PetscAbsReal(st->work) + st->energy_floor;
+  if (st->blowup_energy > 0 && st->ek_end > st->blowup_energy * explained) {
+    PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
+                            "blow-up in step %" PetscInt_FMT
+                            ": the kinetic energy went from %.3g to %.3g, with %.3g of work done by gravity "
+                            "and walls (-blowup_energy %g)",
+                            step, (double)st->ek_start, (double)st->ek_end, (double)st->work, (double)st->blowup_energy));
+    st->failure_status = KERGS_EXIT_BLOWUP;
+    st->failure_kind   = "kinetic energy";
+    PetscFunctionReturn(0);
+  }
+  PetscCall(WatchAlert(st, step));
+  if (ss->failed) { /* decided from global figures by the type: the same on every rank */
+    PetscCall(
+        PetscSNPrintf(st->failure, sizeof(st->failure), "the contact solver failed in step %" PetscInt_FMT ": %s", step, ss->failure));
+    st->failure_status = KERGS_EXIT_SOLVER_FAILED;
+    st->failure_kind   = "contact solver failed";
+    PetscFunctionReturn(0);
+  }
+  st->diverged_steps = st->divergence_tol > 0 && !(residual <= st->divergence_tol) ? st->diverged_steps + 1 : 0;
+  if (st->diverged_steps >= st->divergence_steps) {
+    PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
+                            "the contact solver diverged: natural residual above -solver_divergence_tol %g in %" PetscInt_FMT
+                            " steps in a row, up to step %" PetscInt_FMT " (last %.3g)",
+                            (double)st->divergence_tol, st->diverged_steps, step, (double)residual));
+    st->failure_status = KERGS_EXIT_SOLVER_FAILED;
+    st->failure_kind   = "contact solver diverged";
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The scene's energy scale: lifting every grain by its radius against gravity, plus every grain moving at the
+   fastest wall program's speed. Collective. */
+PetscErrorCode KergsStepperEnergyFloor(KergsStepper st)
+{
+  KergsDisks       D;
+  const KergsWall *walls;
+  PetscInt         nwalls;
+  PetscReal        g[KERGS_DIM], gn, vw = 0, e = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(st->scene, &D));
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  PetscCall(KergsSceneGetGravity(st->scene, g));
+  gn = PetscSqrtReal(g[0] * g[0] + g[1] * g[1]);
+  for (PetscInt w = 0; w < nwalls; w++)
+    for (PetscInt k = 0; k < walls[w].nprog; k++)
+      vw = PetscMax(vw, PetscSqrtReal(PetscSqr(walls[w].prog_v[k][0]) + PetscSqr(walls[w].prog_v[k][1])));
+  for (PetscInt i = 0; i < D.nowned; i++) e += D.mass[i] * (gn * D.radius[i] + 0.5 * vw * vw);
+  PetscCall(MPIU_Allreduce(&e, &st->energy_floor, 1, MPIU_REAL, MPIU_SUM, st->comm));
+  st->energy_floor *= 1e-6;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsStepperWatch(KergsStepper st, const KergsSolveStats *ss)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(KERGS_Watch, 0, 0, 0, 0));
+  PetscCall(WatchStep(st, ss));
+  PetscCall(PetscLogEventEnd(KERGS_Watch, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
