@@ -26,7 +26,8 @@ typedef struct {
   PetscReal sigma;           /* the proximal coefficient of this step (absolute) */
   PetscInt  nactive;         /* local active contacts */
   /* options */
-  PetscReal sigma_factor; /* -solver_tresca_sigma: sigma / mean W_nn */
+  PetscReal sigma_factor; /* -solver_tresca_sigma: sigma / mean W_nn, at least */
+  PetscReal sigma_alpha;  /* -solver_tresca_sigma_alpha: sigma / mean W_nn = alpha * natural residual, when larger */
   PetscReal inner_rtol;   /* -solver_tresca_inner_rtol: inner tolerance relative to the natural residual */
   /* figures of the last solve */
   PetscInt       outer, tao_its, tao_failed;
@@ -188,7 +189,8 @@ static PetscErrorCode IsFrictionless(KergsSolver s, PetscInt n, PetscInt nc, Pet
 
 /* One QP with the thresholds of x (the current impulses), from x: the linear term v^d - sigma x (proximal centre x),
    the gradient tolerance gatol (velocity units), the solve, and its figures. */
-static PetscErrorCode SolveQP(KergsSolver s, Tresca *tr, PetscInt n, PetscInt nc, Vec vd, PetscReal gatol, PetscBool *solved)
+static PetscErrorCode SolveQP(KergsSolver s, Tresca *tr, PetscInt n, PetscInt nc, Vec vd, PetscReal sigma, PetscReal gatol,
+                              PetscBool *solved)
 {
   PetscInt           its;
   TaoConvergedReason reason;
@@ -197,6 +199,10 @@ static PetscErrorCode SolveQP(KergsSolver s, Tresca *tr, PetscInt n, PetscInt nc
 
   PetscFunctionBeginUser;
   PetscCall(SetBounds(s, tr, n, nc));
+  if (sigma != tr->sigma) { /* H = W + sigma I: only its diagonal changes */
+    PetscCall(MatShift(tr->H, sigma - tr->sigma));
+    tr->sigma = sigma;
+  }
   PetscCall(VecGetSubVector(vd, tr->is, &sub));
   PetscCall(VecCopy(sub, tr->c));
   PetscCall(VecRestoreSubVector(vd, tr->is, &sub));
@@ -251,11 +257,13 @@ static PetscErrorCode SolverSolve_Tresca(KergsSolver s, KergsScene scene, KergsC
     const PetscReal before = res;
     PetscReal       gatol;
     PetscBool       solved;
+    /* sigma follows the residual down (with -solver_tresca_sigma_alpha), as newton's proximal term does */
+    const PetscReal sigma = PetscMax(tr->sigma_factor, tr->sigma_alpha * res) * tr->wmean;
     PetscCall(VecNorm(r, NORM_2, &rnorm));
     if (rnorm == 0) rnorm = 1.0;
     gatol = 0.1 * s->tol * rnorm * tr->wmean;
     if (!frictionless) gatol = PetscMax(gatol, tr->inner_rtol * res * rnorm * tr->wmean);
-    PetscCall(SolveQP(s, tr, n, nc, vd, gatol, &solved));
+    PetscCall(SolveQP(s, tr, n, nc, vd, sigma, gatol, &solved));
     tr->outer++;
     PetscCall(VecISCopy(r, tr->is, SCATTER_FORWARD, tr->x)); /* inactive components stay 0 */
     PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &res));
@@ -264,7 +272,7 @@ static PetscErrorCode SolverSolve_Tresca(KergsSolver s, KergsScene scene, KergsC
        (the same Tresca iteration) again, re-centred at the answer and tighter (by at most 100 per round) */
     for (PetscInt k = 0; frictionless && solved && res > s->tol && k < 5; k++) {
       gatol *= PetscMax(0.1 * s->tol / res, 1e-2);
-      PetscCall(SolveQP(s, tr, n, nc, vd, gatol, &solved));
+      PetscCall(SolveQP(s, tr, n, nc, vd, sigma, gatol, &solved));
       PetscCall(VecISCopy(r, tr->is, SCATTER_FORWARD, tr->x));
       PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &res));
     }
@@ -300,11 +308,17 @@ static PetscErrorCode SolverSetFromOptions_Tresca(PetscOptionItems *PetscOptions
   PetscCall(PetscOptionsReal("-solver_tresca_sigma",
                              "Proximal term sigma |r - r^k|^2 / 2 of each QP, sigma relative to the mean W_nn (0: none; W is singular)", "",
                              tr->sigma_factor, &tr->sigma_factor, NULL));
+  PetscCall(
+      PetscOptionsReal("-solver_tresca_sigma_alpha",
+                       "Proximal sigma / mean W_nn = alpha * natural residual where larger than -solver_tresca_sigma (0: fixed sigma)", "",
+                       tr->sigma_alpha, &tr->sigma_alpha, NULL));
   PetscCall(PetscOptionsReal("-solver_tresca_inner_rtol", "QP tolerance relative to the natural residual of the original problem", "",
                              tr->inner_rtol, &tr->inner_rtol, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(tr->sigma_factor >= 0 && !PetscIsInfOrNanReal(tr->sigma_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_tresca_sigma %g must be non-negative", (double)tr->sigma_factor);
+  PetscCheck(tr->sigma_alpha >= 0 && !PetscIsInfOrNanReal(tr->sigma_alpha), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_tresca_sigma_alpha %g must be non-negative", (double)tr->sigma_alpha);
   PetscCheck(tr->inner_rtol > 0 && PetscIsNormalReal(tr->inner_rtol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_tresca_inner_rtol %g must be positive", (double)tr->inner_rtol);
   /* the Tao type (and every -solver_tresca_tao_* option) read once here, for -help and the unused-option check; each
@@ -325,8 +339,9 @@ static PetscErrorCode SolverView_Tresca(KergsSolver s, PetscViewer viewer)
   Tresca *tr = (Tresca *)s->data;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "Tresca fixed point, QPs by TAO %s, proximal sigma %g mean W_nn, inner rtol %g\n", tr->taotype,
-                                   (double)tr->sigma_factor, (double)tr->inner_rtol));
+  PetscCall(PetscViewerASCIIPrintf(viewer,
+                                   "Tresca fixed point, QPs by TAO %s, proximal sigma max(%g, %g residual) mean W_nn, inner rtol %g\n",
+                                   tr->taotype, (double)tr->sigma_factor, (double)tr->sigma_alpha, (double)tr->inner_rtol));
   if (tr->tao) PetscCall(TaoView(tr->tao, viewer));
   PetscFunctionReturn(0);
 }
