@@ -149,7 +149,7 @@ static PetscErrorCode TestOneContact(void)
     const char *what, *opts;
   } cases[] = {
       {"one contact, open (the disk leaves the floor)",
-       ONE_DISK "-friction 0.5 -disks_x 0,0.1 -disks_v 0,5 -walls floor -wall_floor_a -5,0 -wall_floor_b 5,0"},
+       ONE_DISK "-friction 0.5 -disks_x 0,0.1 -disks_velocity 0,5 -walls floor -wall_floor_a -5,0 -wall_floor_b 5,0"},
       {"one contact, stick (the disk rests on the floor)",
        ONE_DISK "-friction 0.5 -disks_x 0,0.0999999 -walls floor -wall_floor_a -5,0 -wall_floor_b 5,0"},
       {"one contact, frictionless (the disk rests on the floor)",

@@ -3,6 +3,8 @@
      nlgs     Algorithm 2 (plain NLGS on W)
      nlkergs  Algorithm 3 (NLKerGS-P) on an explicitly stored W~ = W + omega N N^T: small problems, verification
      nlgsjac  Algorithm 6 (NLGS-Jac): Gauss-Seidel on W, Jacobi on the dense part omega N N^T, never stored
+     newton   semismooth Newton on the Alart-Curnier function, proximal outer iterations
+     tresca   Tresca fixed point, each Tresca problem a bound-constrained QP solved by PETSc TAO
    Options: -solver_max_it (paper: 150), -solver_tol, -solver_criterion quad|maxm|natural; the regularised types
    add -solver_omega, -solver_omega_factor, the kernel's (-kernel_*) and the predictor's (-predictor_*). */
 #ifndef KERGS_SOLVER_H
@@ -15,6 +17,7 @@ typedef const char *KergsSolverType;
 #define KERGS_SOLVER_NLKERGS "nlkergs"
 #define KERGS_SOLVER_NLGSJAC "nlgsjac"
 #define KERGS_SOLVER_NEWTON "newton"
+#define KERGS_SOLVER_TRESCA "tresca"
 
 typedef enum { KERGS_CRITERION_QUAD, KERGS_CRITERION_MAXM, KERGS_CRITERION_NATURAL } KergsCriterion;
 PETSC_EXTERN const char *const KergsCriteria[];

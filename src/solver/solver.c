@@ -37,6 +37,7 @@ static PetscErrorCode SolverRegisterAll(void)
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLKERGS, KergsSolverCreate_NLKerGS));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGSJAC, KergsSolverCreate_NLGSJac));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NEWTON, KergsSolverCreate_Newton));
+  PetscCall(KergsSolverRegister(KERGS_SOLVER_TRESCA, KergsSolverCreate_Tresca));
   PetscFunctionReturn(0);
 }
 

@@ -72,5 +72,6 @@ PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_Newton(KergsSolver);
+PETSC_INTERN PetscErrorCode KergsSolverCreate_Tresca(KergsSolver);
 
 #endif
