@@ -318,7 +318,7 @@ static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
     PetscFunctionReturn(0);
   }
   PetscCall(KSPSetType(nt->ksp, KSPGMRES));
-  PetscCall(KSPSetTolerances(nt->ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, 200));
+  PetscCall(KSPSetTolerances(nt->ksp, 1e-6, PETSC_DEFAULT, PETSC_DEFAULT, 200));
   PetscCall(PCSetType(pc, PCBJACOBI));
   PetscCall(KSPSetFromOptions(nt->ksp)); /* -solver_ksp_rtol and the like */
   PetscCall(KSPSetUp(nt->ksp));
