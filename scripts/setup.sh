@@ -9,6 +9,7 @@ KERGS_PACKAGES="$KERGS_PACKAGES clang-format" # tests/check_format.sh
 # tests/check_xdmf.py, scripts/render_xdmf.py: VTK's XDMF readers and offscreen rendering. Debian's python3-vtk9 is built
 # without the XDMF readers; python3-paraview ships a VTK that has them (it replaces python3-vtk9).
 KERGS_PACKAGES="$KERGS_PACKAGES python3-paraview xvfb xauth" # xvfb-run: rendering without a display
+KERGS_PACKAGES="$KERGS_PACKAGES lammps" # scripts/dem_compare: the soft-contact DEM it compares kergs with (lmp, GRANULAR)
 
 kergs_install() {
   local missing=""

@@ -1,0 +1,72 @@
+#!/usr/bin/python3
+"""scripts/dem_compare --quick: both codes ran (a kergs row and a LAMMPS row), every row has the reported fields with
+finite values, both force histories grow as the walls advance, they agree within a factor 10 on every interval after
+the first (the order of magnitude: in the first the walls have barely touched), LAMMPS's largest overlap is within a
+factor 2 of its target (kn is chosen from kergs's contact force for that), and the run takes under 60 s.
+
+  check_dem_compare.py --kergs build/kergs --dir WORKDIR
+Exit status 0 when every check holds, 1 otherwise."""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+FIELDS = ["code", "setting", "dt", "steps", "wall_seconds", "seconds_per_tc", "forces", "packing", "overlap_max"]
+failures = []
+
+
+def check(ok, what):
+    print(("ok   " if ok else "FAIL ") + what)
+    if not ok:
+        failures.append(what)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--kergs", required=True)
+    ap.add_argument("--dir", required=True)
+    a = ap.parse_args()
+    t0 = time.time()
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "dem_compare"), "--quick", "--kergs", a.kergs,
+                        "--out", a.dir], capture_output=True, text=True)
+    wall = time.time() - t0
+    check(p.returncode == 0, f"dem_compare --quick exits 0 (status {p.returncode}) {p.stderr[-1500:]}")
+    check(wall < 60, f"dem_compare --quick takes under 60 s ({wall:.1f} s)")
+    rows = [json.loads(l) for l in p.stdout.splitlines() if l.strip()]
+    with open(os.path.join(a.dir, "dem_compare.jsonl")) as f:
+        check([json.loads(l) for l in f] == rows, "dem_compare.jsonl holds the printed lines")
+    runs = [r for r in rows if "code" in r]
+    kergs = [r for r in runs if r["code"] == "kergs"]
+    lmp = [r for r in runs if r["code"] == "lammps"]
+    check(len(kergs) >= 1 and len(lmp) >= 1, f"a kergs run and a LAMMPS run ({len(kergs)}, {len(lmp)})")
+    check("summary" in rows[-1], "the last line is the summary")
+    for r in runs:
+        miss = [k for k in FIELDS if k not in r]
+        check(not miss, f"{r.get('code')} {r.get('setting')}: fields present (missing {miss})")
+        nums = [r[k] for k in FIELDS[2:] if k != "forces" and k in r]
+        nums += [f[k] for f in r.get("forces", []) for k in ("time", "top_y", "right_x")]
+        check(all(math.isfinite(v) for v in nums), f"{r.get('code')} {r.get('setting')}: finite values")
+        check(0.8 < r["packing"] < 0.92, f"{r['code']}: packing fraction of a dense hex lattice ({r['packing']:.4f})")
+        fy = [f["top_y"] for f in r["forces"]]
+        check(len(fy) == 5 and all(b > a_ for a_, b in zip(fy, fy[1:])) and fy[0] > 0,
+              f"{r['code']}: the top wall force grows as the wall advances ({fy})")
+    if kergs and lmp:
+        k, l = kergs[0], lmp[0]
+        check([round(f["time"], 9) for f in k["forces"]] == [round(f["time"], 9) for f in l["forces"]],
+              "the force histories are at the same times")
+        ratios = [max(abs(x[c]), abs(y[c])) / max(min(abs(x[c]), abs(y[c])), 1e-300)
+                  for x, y in list(zip(k["forces"], l["forces"]))[1:] for c in ("top_y", "right_x")]
+        check(max(ratios) < 10, f"kergs and LAMMPS wall forces agree within a factor 10 (worst {max(ratios):.2f})")
+        check(0.5 < l["overlap_max"] / l["overlap_target"] < 2,
+              f"LAMMPS overlap {l['overlap_max']:.2e} near its target {l['overlap_target']:.0e}")
+        check(0 < k["overlap_max"] < 0.05, f"kergs interpenetration bounded ({k['overlap_max']:.2e} of d)")
+    print("check_dem_compare: " + ("all checks hold" if not failures else f"{len(failures)} failed"))
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,6 @@
+# scripts/dem_compare --quick (tests/check_dem_compare.py): kergs and LAMMPS on the same compression, the JSON fields,
+# force histories of the same order of magnitude, under a minute. Needs Debian's lammps (scripts/setup.sh).
+add_test(NAME dem_compare_quick
+         COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_dem_compare.py --kergs $<TARGET_FILE:kergs_exe> --dir ${CMAKE_CURRENT_BINARY_DIR}/dem_compare_quick
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(dem_compare_quick PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 180 LABELS scripts)
