@@ -68,15 +68,24 @@ static inline PetscErrorCode Checkf(PetscBool ok, PetscReal got, PetscReal want,
   PetscFunctionReturn(0);
 }
 
-/* A fresh stepper on comm configured only by the given options (the options database is reset). */
+/* A fresh stepper on comm configured only by the given options (the options database is reset). An option that
+   nothing read is refused, as kergs refuses it: a misspelt option would otherwise leave a test checking another case. */
 static inline PetscErrorCode MakeStepperOn(MPI_Comm comm, const char *opts, KergsStepper *st)
 {
+  PetscInt n, unread;
+  char   **names, **values;
+
   PetscFunctionBeginUser;
   PetscCall(PetscOptionsClear(NULL));
   PetscCall(PetscOptionsInsertString(NULL, opts));
   PetscCall(PetscOptionsInsertString(NULL, "-output_none -quiet"));
   PetscCall(KergsStepperCreate(comm, st));
   PetscCall(KergsStepperSetFromOptions(*st));
+  PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
+  unread = n;
+  for (PetscInt i = 0; i < n; i++) PetscCall(PetscPrintf(comm, "test: option -%s was not read (options: %s)\n", names[i], opts));
+  PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
+  PetscCheck(unread == 0, comm, PETSC_ERR_USER_INPUT, "%" PetscInt_FMT " option(s) of a test's stepper not read: misspelt?", unread);
   PetscFunctionReturn(0);
 }
 
