@@ -30,20 +30,14 @@ import time
 import h5py
 import numpy as np
 
+from checks import check, failures
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
 # the batch tests run confine500 with the paper's NLGS (fast, many steps), not the scene's default newton
 PAPER500 = ["-options_file", CONFINE500, "-solver_type", "nlgs", "-solver_max_it", "150", "-solver_tol", "1e-4"]
 CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what, flush=True)
-    if not ok:
-        failures.append(what)
-    return ok
 
 
 class Kergs:

@@ -14,15 +14,10 @@ import subprocess
 import sys
 import time
 
+from checks import check, failures
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 FIELDS = ["code", "setting", "dt", "steps", "wall_seconds", "seconds_per_tc", "forces", "packing", "overlap_max"]
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        failures.append(what)
 
 
 def main():

@@ -26,17 +26,11 @@ import sys
 import h5py
 import numpy as np
 
+from checks import check, failures
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what, flush=True)
-    if not ok:
-        failures.append(what)
-    return ok
 
 
 class Kergs:

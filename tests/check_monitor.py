@@ -16,16 +16,11 @@ import sys
 
 import h5py
 
+from checks import check, failures
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
 LINE = re.compile(r"^step (\d+) iteration (\d+) criterion (\S+) residual (\S+) seconds (\S+)$")
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        failures.append(what)
 
 
 def parse(path):

@@ -27,18 +27,12 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
 from vtkmodules.vtkIOXdmf2 import vtkXdmfReader
 
+from checks import check, failures
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
 VTK_POLY_VERTEX, VTK_POLY_LINE = 2, 4  # the reader's cells for Xdmf's Polyvertex and Polyline
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what, flush=True)
-    if not ok:
-        failures.append(what)
-    return ok
 
 
 def read_xdmf(path):

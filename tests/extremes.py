@@ -21,20 +21,14 @@ import sys
 import h5py
 import numpy as np
 
+from checks import check, failures
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
 CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
 BOUND_FACTOR = 2.0  # interpenetration <= BOUND_FACTOR * max relative speed * dt + OVERLAP_FLOOR * smallest radius
 OVERLAP_FLOOR = 0.05  # the default -initial_overlap_tol: what kergs accepts in a packing
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what, flush=True)
-    if not ok:
-        failures.append(what)
-    return ok
 
 
 def column(n, r, gap, mu, dt):

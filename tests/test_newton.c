@@ -112,33 +112,6 @@ static PetscErrorCode TestJacobian(void)
 /* ------------------------------------------------------------------------------------------------ */
 /* Whole steps                                                                                      */
 
-/* Run nsteps of a scene; the largest Newton steps and the largest natural residual over the steps, and how many steps
-   converged. */
-static PetscErrorCode Run(const char *opts, PetscInt nsteps, KergsStepper *keep, PetscInt *maxits, PetscReal *maxres, PetscInt *nconverged)
-{
-  KergsStepper st;
-  PetscReal    its, res, conv;
-
-  PetscFunctionBeginUser;
-  PetscCall(MakeStepper(opts, &st));
-  *maxits = *nconverged = 0;
-  *maxres               = 0;
-  for (PetscInt s = 0; s < nsteps; s++) {
-    PetscCall(KergsStepperStep(st));
-    PetscCall(StatAt(st->results, "iterations", s, &its));
-    PetscCall(StatAt(st->results, "residual", s, &res));
-    PetscCall(StatAt(st->results, "converged", s, &conv));
-    *maxits = PetscMax(*maxits, (PetscInt)its);
-    *maxres = PetscMax(*maxres, res);
-    *nconverged += conv > 0.5;
-  }
-  if (keep)
-    *keep = st;
-  else
-    PetscCall(KergsStepperDestroy(&st));
-  PetscFunctionReturn(0);
-}
-
 #define ONE_DISK "-gravity 0,-10 -dt 1e-3 -disks_source list -disks_radius 0.1 -alert 0.01 -solver_type newton -solver_tol 1e-12 "
 
 /* One disk and one wall: open (moving away), resting (closing, stick), on a slope below and above tan = mu (stick,
@@ -170,7 +143,7 @@ static PetscErrorCode TestOneContact(void)
     KergsStepper st;
     char         opts[1024];
     PetscCall(PetscSNPrintf(opts, sizeof(opts), "%s -steps 5", cases[i].opts));
-    PetscCall(Run(opts, 5, &st, &maxits, &maxres, &nconv));
+    PetscCall(RunSteps(opts, 5, &st, &maxits, &maxres, &nconv));
     PetscCall(Checkf((PetscBool)(maxits <= 3 && nconv == 5), maxits, 3, "%s: Newton steps per time step (all converged)", cases[i].what));
     PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->v, KERGS_DIM, v));
     if (i == 1 || i == 2)
@@ -197,8 +170,8 @@ static PetscErrorCode TestWedged(void)
   PetscReal maxres;
 
   PetscFunctionBeginUser;
-  PetscCall(Run("-options_file cases/two_disks_wedged.opts -wall_right_velocity 0,0 -steps 20 -solver_type newton -solver_tol 1e-12", 20,
-                NULL, &maxits, &maxres, &nconv));
+  PetscCall(RunSteps("-options_file cases/two_disks_wedged.opts -wall_right_velocity 0,0 -steps 20 -solver_type newton -solver_tol 1e-12",
+                     20, NULL, &maxits, &maxres, &nconv));
   PetscCall(Check((PetscBool)(nconv == 20 && maxres <= 1e-12), "wedged pair, singular W: every step converges to 1e-12 (largest residual)",
                   maxres, 1e-12));
   PetscFunctionReturn(0);
@@ -217,8 +190,8 @@ static PetscErrorCode TestFrictionless(void)
   Mat            W;
 
   PetscFunctionBeginUser;
-  PetscCall(Run("-options_file cases/confine500.opts -friction 0 -steps 1 -keep_H -solver_type newton -solver_tol 1e-12", 1, &st, &maxits,
-                &maxres, &nconv));
+  PetscCall(RunSteps("-options_file cases/confine500.opts -friction 0 -steps 1 -keep_H -solver_type newton -solver_tol 1e-12", 1, &st,
+                     &maxits, &maxres, &nconv));
   PetscCall(Check((PetscBool)(nconv == 1), "frictionless confine500: newton converged to 1e-12", maxres, 1e-12));
   PetscCall(KergsOperatorsGetContactVectors(st->ops, NULL, NULL, &vd));
   PetscCall(KergsOperatorsGetW(st->ops, &W, NULL));
@@ -292,8 +265,8 @@ static PetscErrorCode TestLineSearch(void)
   PetscReal    maxres, bt = 0, b, maxres0;
 
   PetscFunctionBeginUser;
-  PetscCall(Run("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_max_it 500", 2, &st, &maxits,
-                &maxres, &nconv));
+  PetscCall(RunSteps("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_max_it 500", 2, &st,
+                     &maxits, &maxres, &nconv));
   for (PetscInt s = 0; s < 2; s++) {
     PetscCall(StatAt(st->results, "backtracks", s, &b));
     bt += b;
@@ -301,9 +274,9 @@ static PetscErrorCode TestLineSearch(void)
   PetscCall(KergsStepperDestroy(&st));
   PetscCall(Check((PetscBool)(bt > 0 && nconv == 2),
                   "confine500 (cold start): the line search cut some Newton steps (halvings), every step converged", bt, 1));
-  PetscCall(Run("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_max_it 500 "
-                "-solver_newton_max_backtracks 0",
-                2, NULL, &maxits0, &maxres0, &nconv0));
+  PetscCall(RunSteps("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_max_it 500 "
+                     "-solver_newton_max_backtracks 0",
+                     2, NULL, &maxits0, &maxres0, &nconv0));
   PetscCall(Check((PetscBool)(nconv0 < 2 || maxits0 > maxits),
                   "... without it (full steps), fewer steps converge or they take more Newton steps", maxits0, maxits));
   PetscFunctionReturn(0);

@@ -7,32 +7,6 @@ static const char help[] = "kergs tresca solver tests.\n";
 #include "testing.h"
 #include <string.h>
 
-/* Run nsteps of a scene; the largest iteration count and natural residual over the steps, and how many converged. */
-static PetscErrorCode Run(const char *opts, PetscInt nsteps, KergsStepper *keep, PetscInt *maxits, PetscReal *maxres, PetscInt *nconverged)
-{
-  KergsStepper st;
-  PetscReal    its, res, conv;
-
-  PetscFunctionBeginUser;
-  PetscCall(MakeStepper(opts, &st));
-  *maxits = *nconverged = 0;
-  *maxres               = 0;
-  for (PetscInt s = 0; s < nsteps; s++) {
-    PetscCall(KergsStepperStep(st));
-    PetscCall(StatAt(st->results, "iterations", s, &its));
-    PetscCall(StatAt(st->results, "residual", s, &res));
-    PetscCall(StatAt(st->results, "converged", s, &conv));
-    *maxits = PetscMax(*maxits, (PetscInt)its);
-    *maxres = PetscMax(*maxres, res);
-    *nconverged += conv > 0.5;
-  }
-  if (keep)
-    *keep = st;
-  else
-    PetscCall(KergsStepperDestroy(&st));
-  PetscFunctionReturn(0);
-}
-
 #define ONE_DISK "-gravity 0,-10 -dt 1e-3 -disks_source list -disks_radius 0.1 -alert 0.01 -solver_type tresca -solver_tol 1e-10 "
 
 /* One disk and one wall: open (moving away), resting (closing, stick), on a slope below and above tan = mu (stick,
@@ -62,7 +36,7 @@ static PetscErrorCode TestOneContact(const char *tao)
     KergsStepper st;
     char         opts[1024];
     PetscCall(PetscSNPrintf(opts, sizeof(opts), "%s -steps 5 -solver_tresca_tao_type %s", cases[i].opts, tao));
-    PetscCall(Run(opts, 5, &st, &maxits, &maxres, &nconv));
+    PetscCall(RunSteps(opts, 5, &st, &maxits, &maxres, &nconv));
     PetscCall(Checkf((PetscBool)(nconv == 5 && maxres <= 1e-10), maxres, 1e-10, "%s, one contact, %s: 5 steps converged (largest residual)",
                      tao, cases[i].what));
     PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->v, KERGS_DIM, v));
@@ -105,12 +79,12 @@ static PetscErrorCode TestFrictionless(const char *tao)
                           "-options_file cases/confine500.opts -friction 0 -steps 2 -solver_type tresca -solver_tol 1e-10 "
                           "-solver_tresca_tao_type %s",
                           tao));
-  PetscCall(Run(opts, 2, &a, &maxits, &maxres, &nconv));
+  PetscCall(RunSteps(opts, 2, &a, &maxits, &maxres, &nconv));
   PetscCall(
       Checkf((PetscBool)(nconv == 2 && maxres <= 1e-10), maxres, 1e-10, "frictionless confine500, %s: 2 steps converged (residual)", tao));
   PetscCall(Checkf((PetscBool)(maxits == 1), maxits, 1, "frictionless confine500, %s: one Tresca iteration per step", tao));
-  PetscCall(
-      Run("-options_file cases/confine500.opts -friction 0 -steps 2 -solver_type newton -solver_tol 1e-12", 2, &b, &itsb, &resb, &nconvb));
+  PetscCall(RunSteps("-options_file cases/confine500.opts -friction 0 -steps 2 -solver_type newton -solver_tol 1e-12", 2, &b, &itsb, &resb,
+                     &nconvb));
   PetscCall(Velocities(a, &va));
   PetscCall(Velocities(b, &vb));
   for (PetscInt i = 0; i < KERGS_DIM * a->scene->ndisks; i++) {

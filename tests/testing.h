@@ -106,6 +106,34 @@ static inline PetscErrorCode StatAt(KergsResults res, const char *name, PetscInt
   PetscFunctionReturn(0);
 }
 
+/* Run nsteps of a scene; the largest iteration count (sweeps, Newton steps, outer iterations) and the largest natural
+   residual over the steps, and how many steps converged. The stepper is kept in *keep when asked, else destroyed. */
+static inline PetscErrorCode RunSteps(const char *opts, PetscInt nsteps, KergsStepper *keep, PetscInt *maxits, PetscReal *maxres,
+                                      PetscInt *nconverged)
+{
+  KergsStepper st;
+  PetscReal    its, res, conv;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper(opts, &st));
+  *maxits = *nconverged = 0;
+  *maxres               = 0;
+  for (PetscInt s = 0; s < nsteps; s++) {
+    PetscCall(KergsStepperStep(st));
+    PetscCall(StatAt(st->results, "iterations", s, &its));
+    PetscCall(StatAt(st->results, "residual", s, &res));
+    PetscCall(StatAt(st->results, "converged", s, &conv));
+    *maxits = PetscMax(*maxits, (PetscInt)its);
+    *maxres = PetscMax(*maxres, res);
+    *nconverged += conv > 0.5;
+  }
+  if (keep)
+    *keep = st;
+  else
+    PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
 /* The Coulomb cone K = {(r_n, r_t): |r_t| <= mu r_n} (a half-line r_t = 0, r_n >= 0 when nc = 1): the Euclidean
    projection of z, written here from the geometry of the cone and its polar cone {mu |y_t| <= -y_n}, not taken
    from the library. */
