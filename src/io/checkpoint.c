@@ -386,7 +386,9 @@ static PetscErrorCode LoadAll(PetscViewer v, MPI_Comm comm, const char path[], c
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode ReadInt(PetscViewer v, const char path[], const char group[], const char name[], PetscInt *value)
+/* A root or group attribute the checkpoint must hold, of the given type; its absence names the file and attribute. */
+static PetscErrorCode ReadAttribute(PetscViewer v, const char path[], const char group[], const char name[], PetscDataType type,
+                                    void *value)
 {
   PetscBool has;
 
@@ -394,19 +396,21 @@ static PetscErrorCode ReadInt(PetscViewer v, const char path[], const char group
   PetscCall(PetscViewerHDF5HasAttribute(v, group, name, &has));
   PetscCheck(has, PetscObjectComm((PetscObject)v), PETSC_ERR_FILE_UNEXPECTED, "Checkpoint file %s has no attribute %s on %s", path, name,
              group);
-  PetscCall(PetscViewerHDF5ReadAttribute(v, group, name, PETSC_INT, NULL, value));
+  PetscCall(PetscViewerHDF5ReadAttribute(v, group, name, type, NULL, value));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ReadInt(PetscViewer v, const char path[], const char group[], const char name[], PetscInt *value)
+{
+  PetscFunctionBeginUser;
+  PetscCall(ReadAttribute(v, path, group, name, PETSC_INT, value));
   PetscFunctionReturn(0);
 }
 
 static PetscErrorCode ReadReal(PetscViewer v, const char path[], const char group[], const char name[], PetscReal *value)
 {
-  PetscBool has;
-
   PetscFunctionBeginUser;
-  PetscCall(PetscViewerHDF5HasAttribute(v, group, name, &has));
-  PetscCheck(has, PetscObjectComm((PetscObject)v), PETSC_ERR_FILE_UNEXPECTED, "Checkpoint file %s has no attribute %s on %s", path, name,
-             group);
-  PetscCall(PetscViewerHDF5ReadAttribute(v, group, name, PETSC_REAL, NULL, value));
+  PetscCall(ReadAttribute(v, path, group, name, PETSC_REAL, value));
   PetscFunctionReturn(0);
 }
 
