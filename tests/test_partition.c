@@ -282,12 +282,12 @@ static PetscErrorCode ReportPartition(const char *label, KergsStepper st)
   KergsPartition p = st->partition;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
-                        "     %s: partition %s (latest %s), %" PetscInt_FMT " repartitions, %" PetscInt_FMT
-                        " grains moved; edge cut %" PetscInt_FMT " of %" PetscInt_FMT " edges, imbalance %.4f, ghosts %" PetscInt_FMT
-                        ", ghost layers built %" PetscInt_FMT "\n",
-                        label, KergsPartitionTypes[p->type], KergsPartitionTypes[p->last_method], p->nrepartitions, p->nmoved,
-                        p->last.edgecut, p->last.edges, (double)p->last.imbalance, p->last.ghosts, st->scene->ghost_rebuilds));
+  PetscCall(PetscPrintf(
+      PETSC_COMM_WORLD,
+      "     %s: partition %s (latest %s), %" PetscInt_FMT " repartitions, %" PetscInt_FMT " grains moved; edge cut %" PetscInt_FMT
+      " of %" PetscInt_FMT " edges, imbalance %.4f, ghosts %" PetscInt_FMT ", ghost layers built %" PetscInt_FMT "\n",
+      label, KergsPartitionTypes[p->type], KergsPartitionTypes[p->state.last_method], p->state.nrepartitions, p->state.nmoved,
+      p->last.edgecut, p->last.edges, (double)p->last.imbalance, p->last.ghosts, st->scene->ghost_rebuilds));
   PetscFunctionReturn(0);
 }
 
@@ -350,10 +350,11 @@ static PetscErrorCode TestRenumberingKeepsPhysics(void)
   PetscCall(ReportLockstep("deposit, metis every step vs contiguous", &L, 50));
   PetscCall(ReportPartition("deposit, metis every step", tst));
   if (size > 1) {
-    PetscCall(Check((PetscBool)(tst->partition->nrepartitions == 49), "deposit: one repartition per step after the first",
-                    (PetscReal)tst->partition->nrepartitions, 49));
-    PetscCall(Check((PetscBool)(tst->partition->last_method == KERGS_PARTITION_METIS),
-                    "deposit: METIS once the packing has formed (1 = metis)", tst->partition->last_method == KERGS_PARTITION_METIS, 1));
+    PetscCall(Check((PetscBool)(tst->partition->state.nrepartitions == 49), "deposit: one repartition per step after the first",
+                    (PetscReal)tst->partition->state.nrepartitions, 49));
+    PetscCall(Check((PetscBool)(tst->partition->state.last_method == KERGS_PARTITION_METIS),
+                    "deposit: METIS once the packing has formed (1 = metis)", tst->partition->state.last_method == KERGS_PARTITION_METIS,
+                    1));
     /* the generator fills the box row by row: the contiguous split is a stack of layers, of small cut but
        unbalanced work once the lower layers are packed */
     PetscCall(Check((PetscBool)(tst->partition->last.imbalance <= 1.10), "deposit: METIS work imbalance within the default tolerance",
@@ -634,18 +635,18 @@ static PetscErrorCode TestThresholds(void)
                         cut_geometric, cut_metis, p->last.edges, (double)p->last.imbalance));
   if (size == 1) {
     PetscCall(StepTo(st, 21));
-    PetscCall(Check((PetscBool)(p->nrepartitions == 0 && p->nmoved == 0), "thresholds, 1 rank: never repartitioned",
-                    (PetscReal)p->nrepartitions, 0));
+    PetscCall(Check((PetscBool)(p->state.nrepartitions == 0 && p->state.nmoved == 0), "thresholds, 1 rank: never repartitioned",
+                    (PetscReal)p->state.nrepartitions, 0));
     PetscCall(KergsStepperDestroy(&st));
     PetscFunctionReturn(0);
   }
-  PetscCall(Check((PetscBool)(p->nrepartitions == 1 && p->last_method == KERGS_PARTITION_METIS),
-                  "thresholds: METIS replaces the geometric partition at step 10", (PetscReal)p->nrepartitions, 1));
+  PetscCall(Check((PetscBool)(p->state.nrepartitions == 1 && p->state.last_method == KERGS_PARTITION_METIS),
+                  "thresholds: METIS replaces the geometric partition at step 10", (PetscReal)p->state.nrepartitions, 1));
   PetscCall(Check((PetscBool)(cut_metis < cut_geometric), "thresholds: METIS edge cut below the geometric one", (PetscReal)cut_metis,
                   (PetscReal)cut_geometric));
   PetscCall(StepTo(st, 21));
-  PetscCall(
-      Check((PetscBool)(p->nrepartitions == 1), "thresholds: no repartition at step 20 (little change)", (PetscReal)p->nrepartitions, 1));
+  PetscCall(Check((PetscBool)(p->state.nrepartitions == 1), "thresholds: no repartition at step 20 (little change)",
+                  (PetscReal)p->state.nrepartitions, 1));
   /* every grain onto rank 0 */
   PetscCall(PetscMalloc2(n, &order, size, &counts));
   for (PetscInt k = 0; k < n; k++) order[k] = k;
@@ -655,15 +656,15 @@ static PetscErrorCode TestThresholds(void)
   PetscCall(StepTo(st, 30));
   imb_forced = p->last.imbalance;
   PetscCall(StepTo(st, 31));
-  PetscCall(Check((PetscBool)(p->nrepartitions == 2), "thresholds: imbalance (all on rank 0) repartitions at step 30",
-                  (PetscReal)p->nrepartitions, 2));
+  PetscCall(Check((PetscBool)(p->state.nrepartitions == 2), "thresholds: imbalance (all on rank 0) repartitions at step 30",
+                  (PetscReal)p->state.nrepartitions, 2));
   PetscCall(Check((PetscBool)(imb_forced > 1.5 && p->last.imbalance <= 1.10), "thresholds: imbalance back within 1.10", p->last.imbalance,
                   imb_forced));
   /* a cut that doubled since the last partition */
-  p->edgecut_base = p->last.edgecut / 2;
+  p->state.edgecut_base = p->last.edgecut / 2;
   PetscCall(StepTo(st, 41));
-  PetscCall(
-      Check((PetscBool)(p->nrepartitions == 3), "thresholds: grown edge cut repartitions at step 40", (PetscReal)p->nrepartitions, 3));
+  PetscCall(Check((PetscBool)(p->state.nrepartitions == 3), "thresholds: grown edge cut repartitions at step 40",
+                  (PetscReal)p->state.nrepartitions, 3));
   PetscCall(LayoutIsValid(st, &valid));
   PetscCall(Check(valid, "thresholds: valid layout at the end", valid, 1));
   PetscCall(ReportPartition("thresholds", st));
@@ -692,18 +693,18 @@ static PetscErrorCode TestMeasuredWork(void)
   PetscCall(StepTo(st, 11));               /* METIS replaced the geometric partition at step 10 (modelled work: deterministic) */
   p->work = KERGS_PARTITION_WORK_MEASURED; /* from here on, with the times set below */
   PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
-  before             = m.my_work;
-  p->compute_seconds = (rank == 0 ? 2e-9 : 1e-9) * m.my_work; /* rank 0: twice the time per unit */
+  before                   = m.my_work;
+  p->state.compute_seconds = (rank == 0 ? 2e-9 : 1e-9) * m.my_work; /* rank 0: twice the time per unit */
   PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
-  PetscCall(MPIU_Allreduce(&p->compute_seconds, &tmax, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
-  PetscCall(MPIU_Allreduce(&p->compute_seconds, &tsum, 1, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
+  PetscCall(MPIU_Allreduce(&p->state.compute_seconds, &tmax, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
+  PetscCall(MPIU_Allreduce(&p->state.compute_seconds, &tsum, 1, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
   PetscCall(Check((PetscBool)(PetscAbsReal(m.imbalance - tmax / (tsum / size)) < 1e-12), "measured work: imbalance of the times",
                   m.imbalance, tmax / (tsum / size)));
-  PetscCall(Check((PetscBool)(rank == 0 ? p->work_scale > 1.2 : p->work_scale < 1.0),
-                  "measured work: rank 0's factor above 1, the others' below", p->work_scale, rank == 0 ? 1.2 : 1.0));
+  PetscCall(Check((PetscBool)(rank == 0 ? p->state.work_scale > 1.2 : p->state.work_scale < 1.0),
+                  "measured work: rank 0's factor above 1, the others' below", p->state.work_scale, rank == 0 ? 1.2 : 1.0));
   PetscCall(KergsPartitionApply(p, st->scene, st->contacts));
   PetscCall(KergsContactsDetect(st->contacts, st->scene)); /* the contacts of the new layout */
-  p->compute_seconds = 0;                                  /* the old times describe the old ownership */
+  p->state.compute_seconds = 0;                            /* the old times describe the old ownership */
   PetscCall(KergsPartitionMeasure(p, st->scene, st->contacts, &m));
   after = m.my_work;
   if (rank == 0)
@@ -746,7 +747,7 @@ static PetscErrorCode TestGhostsNearOwned(void)
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &far, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &worst, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
-  PetscCall(Check((PetscBool)(far == 0 && st->partition->last_method == KERGS_PARTITION_METIS),
+  PetscCall(Check((PetscBool)(far == 0 && st->partition->state.last_method == KERGS_PARTITION_METIS),
                   "ghosts: each within reach of an owned disk (METIS parts)", worst, 1));
   PetscCall(ReportPartition("ghosts near owned", st));
   PetscCall(KergsStepperDestroy(&st));

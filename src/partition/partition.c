@@ -26,19 +26,19 @@ PetscErrorCode KergsPartitionCreate(MPI_Comm comm, KergsPartition *partition)
   PetscCall(KergsInitializePackage());
   PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(PetscNew(&p));
-  p->comm           = comm;
-  p->type           = size > 1 ? KERGS_PARTITION_METIS : KERGS_PARTITION_CONTIGUOUS;
-  p->imbalance_tol  = 1.10;
-  p->edgecut_growth = 1.25;
-  p->check_every    = 10;
-  p->metis_seed     = 2013;
-  p->metis_curve    = PETSC_TRUE;
-  p->edgecut_base   = -1;
-  p->last_method    = KERGS_PARTITION_CONTIGUOUS;
-  p->imbalance_base = 1.0;
-  p->work           = KERGS_PARTITION_WORK_MODEL;
-  p->work_scale     = 1.0;
-  *partition        = p;
+  p->comm                 = comm;
+  p->type                 = size > 1 ? KERGS_PARTITION_METIS : KERGS_PARTITION_CONTIGUOUS;
+  p->imbalance_tol        = 1.10;
+  p->edgecut_growth       = 1.25;
+  p->check_every          = 10;
+  p->metis_seed           = 2013;
+  p->metis_curve          = PETSC_TRUE;
+  p->state.edgecut_base   = -1;
+  p->state.last_method    = KERGS_PARTITION_CONTIGUOUS;
+  p->state.imbalance_base = 1.0;
+  p->work                 = KERGS_PARTITION_WORK_MODEL;
+  p->state.work_scale     = 1.0;
+  *partition              = p;
   PetscFunctionReturn(0);
 }
 
@@ -102,15 +102,7 @@ PetscErrorCode KergsPartitionDestroy(KergsPartition *p)
 PetscErrorCode KergsPartitionGetState(KergsPartition p, KergsPartitionState *s)
 {
   PetscFunctionBeginUser;
-  s->initialized     = p->initialized;
-  s->provisional     = p->provisional;
-  s->edgecut_base    = p->edgecut_base;
-  s->nrepartitions   = p->nrepartitions;
-  s->nmoved          = p->nmoved;
-  s->last_method     = p->last_method;
-  s->imbalance_base  = p->imbalance_base;
-  s->compute_seconds = p->compute_seconds;
-  s->work_scale      = p->work_scale;
+  *s = p->state;
   PetscFunctionReturn(0);
 }
 
@@ -118,28 +110,20 @@ PetscErrorCode KergsPartitionSetState(KergsPartition p, const KergsPartitionStat
 {
   PetscFunctionBeginUser;
   if (!s) { /* as KergsPartitionCreate leaves it */
-    p->initialized     = PETSC_FALSE;
-    p->provisional     = PETSC_FALSE;
-    p->edgecut_base    = -1;
-    p->nrepartitions   = 0;
-    p->nmoved          = 0;
-    p->last_method     = KERGS_PARTITION_CONTIGUOUS;
-    p->imbalance_base  = 1.0;
-    p->compute_seconds = 0.0;
-    p->work_scale      = 1.0;
+    p->state.initialized     = PETSC_FALSE;
+    p->state.provisional     = PETSC_FALSE;
+    p->state.edgecut_base    = -1;
+    p->state.nrepartitions   = 0;
+    p->state.nmoved          = 0;
+    p->state.last_method     = KERGS_PARTITION_CONTIGUOUS;
+    p->state.imbalance_base  = 1.0;
+    p->state.compute_seconds = 0.0;
+    p->state.work_scale      = 1.0;
     PetscFunctionReturn(0);
   }
   PetscCheck(s->last_method >= KERGS_PARTITION_CONTIGUOUS && s->last_method <= KERGS_PARTITION_METIS, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Partition state: unknown method %" PetscInt_FMT, s->last_method);
-  p->initialized     = s->initialized;
-  p->provisional     = s->provisional;
-  p->edgecut_base    = s->edgecut_base;
-  p->nrepartitions   = s->nrepartitions;
-  p->nmoved          = s->nmoved;
-  p->last_method     = s->last_method;
-  p->imbalance_base  = s->imbalance_base;
-  p->compute_seconds = s->compute_seconds;
-  p->work_scale      = s->work_scale;
+  p->state = *s;
   PetscFunctionReturn(0);
 }
 
@@ -152,7 +136,8 @@ PetscErrorCode KergsPartitionView(KergsPartition p, PetscViewer viewer)
   PetscCall(PetscViewerASCIIPushTab(viewer));
   PetscCall(PetscViewerASCIIPrintf(
       viewer, "%" PetscInt_FMT " repartitions after the initial one (latest: %s%s), %" PetscInt_FMT " grains moved in all, %.3g s\n",
-      p->nrepartitions, KergsPartitionTypes[p->last_method], p->provisional ? ", provisional" : "", p->nmoved, (double)p->seconds));
+      p->state.nrepartitions, KergsPartitionTypes[p->state.last_method], p->state.provisional ? ", provisional" : "", p->state.nmoved,
+      (double)p->seconds));
   PetscCall(PetscViewerASCIIPrintf(
       viewer, "latest measures: edge cut %" PetscInt_FMT " of %" PetscInt_FMT " edges, imbalance %.4g, ghosts %" PetscInt_FMT "\n",
       p->last.edgecut, p->last.edges, (double)p->last.imbalance, p->last.ghosts));
@@ -267,18 +252,18 @@ PetscErrorCode KergsPartitionMeasure(KergsPartition p, KergsScene sc, KergsConta
     m->work_mean += (PetscReal)buf[q];
   }
   m->work_mean /= size;
-  m->my_seconds = p->compute_seconds;
-  p->work_scale = 1.0;
+  m->my_seconds       = p->state.compute_seconds;
+  p->state.work_scale = 1.0;
   if (p->work == KERGS_PARTITION_WORK_MEASURED) {
-    const PetscReal model = m->work_mean * size;                                           /* total modelled work */
-    PetscReal       t[3]  = {p->compute_seconds, p->compute_seconds, -p->compute_seconds}; /* sum; max, -min */
+    const PetscReal model = m->work_mean * size;                                                             /* total modelled work */
+    PetscReal       t[3]  = {p->state.compute_seconds, p->state.compute_seconds, -p->state.compute_seconds}; /* sum; max, -min */
 
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &t[0], 1, MPIU_REAL, MPI_SUM, p->comm));
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &t[1], 2, MPIU_REAL, MPI_MAX, p->comm));
     if (-t[2] > 0 && model > 0) { /* every rank timed some sweeps */
-      m->work_max   = t[1];
-      m->work_mean  = t[0] / size;
-      p->work_scale = m->my_work > 0 ? (p->compute_seconds / m->my_work) / (t[0] / model) : 1.0;
+      m->work_max         = t[1];
+      m->work_mean        = t[0] / size;
+      p->state.work_scale = m->my_work > 0 ? (p->state.compute_seconds / m->my_work) / (t[0] / model) : 1.0;
     }
   }
   m->imbalance = m->work_mean > 0 ? m->work_max / m->work_mean : 1.0;
@@ -297,9 +282,9 @@ PetscErrorCode KergsPartitionObserve(KergsPartition p, KergsScene sc, KergsConta
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetStep(sc, &scstep, NULL, NULL));
-  p->compute_seconds = compute_seconds;
+  p->state.compute_seconds = compute_seconds;
   PetscCall(KergsPartitionMeasure(p, sc, ct, m));
-  m->repartitions = p->nrepartitions;
+  m->repartitions = p->state.nrepartitions;
   if (out) *out = *m;
   if (!p->view) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
@@ -312,8 +297,8 @@ PetscErrorCode KergsPartitionObserve(KergsPartition p, KergsScene sc, KergsConta
   PetscCall(PetscPrintf(p->comm,
                         "[partition] step %5" PetscInt_FMT ": %s, edge cut %" PetscInt_FMT " of %" PetscInt_FMT
                         " contact edges, imbalance %.4f, ghosts %" PetscInt_FMT ", repartitions %" PetscInt_FMT "\n",
-                        scstep, KergsPartitionTypes[p->last_method], m->edgecut, m->edges, (double)m->imbalance, m->ghosts,
-                        p->nrepartitions));
+                        scstep, KergsPartitionTypes[p->state.last_method], m->edgecut, m->edges, (double)m->imbalance, m->ghosts,
+                        p->state.nrepartitions));
   PetscFunctionReturn(0);
 }
 
@@ -478,7 +463,7 @@ static PetscErrorCode GatherGrainGraph(KergsPartition p, KergsScene sc, KergsCon
     mine[3 * k + 1] = cts[k].kind == KERGS_CONTACT_DISK_DISK ? D.gidx[cts[k].b] : -1;
     /* measured work: the model in tenths, times this rank's factor (time per modelled unit, relative to the mean) */
     mine[3 * k + 2] = p->work == KERGS_PARTITION_WORK_MEASURED
-                          ? PetscMax(1, (PetscInt)(10.0 * p->work_scale * ContactWork(&act, &cts[k]) + 0.5))
+                          ? PetscMax(1, (PetscInt)(10.0 * p->state.work_scale * ContactWork(&act, &cts[k]) + 0.5))
                           : ContactWork(&act, &cts[k]);
   }
   PetscCall(GatherGrains(sc, g));
@@ -966,11 +951,11 @@ static PetscErrorCode Repartition(KergsPartition p, KergsScene sc, KergsContacts
   PetscCall(ScatterNewIndices(sc, oldranges, order, &newidx));
   PetscCall(MigrateOwned(sc, ct, newidx, counts, &moved));
   PetscCall(PetscFree(newidx));
-  p->last_method    = out.method;
-  p->provisional    = (PetscBool)(p->type == KERGS_PARTITION_METIS && !out.metis_tried);
-  p->edgecut_base   = out.edgecut;
-  p->imbalance_base = out.imbalance;
-  p->nmoved += moved;
+  p->state.last_method    = out.method;
+  p->state.provisional    = (PetscBool)(p->type == KERGS_PARTITION_METIS && !out.metis_tried);
+  p->state.edgecut_base   = out.edgecut;
+  p->state.imbalance_base = out.imbalance;
+  p->state.nmoved += moved;
   PetscCall(PetscFree2(order, counts));
   PetscCall(PetscFree(oldranges));
   PetscCall(PetscLogEventEnd(KERGS_Partition, 0, 0, 0, 0));
@@ -1010,33 +995,33 @@ PetscErrorCode KergsPartitionUpdate(KergsPartition p, KergsScene sc, KergsContac
   if (repartitioned) *repartitioned = PETSC_FALSE;
   PetscCallMPI(MPI_Comm_size(p->comm, &size));
   if (size == 1 || p->type == KERGS_PARTITION_CONTIGUOUS) {
-    p->initialized = PETSC_TRUE;
+    p->state.initialized = PETSC_TRUE;
     PetscFunctionReturn(0);
   }
-  if (!p->initialized) { /* before the first detection: geometric (metis falls back to it without contacts) */
+  if (!p->state.initialized) { /* before the first detection: geometric (metis falls back to it without contacts) */
     PetscCall(Repartition(p, sc, ct));
-    p->initialized = PETSC_TRUE;
+    p->state.initialized = PETSC_TRUE;
     if (repartitioned) *repartitioned = PETSC_TRUE;
     PetscFunctionReturn(0);
   }
   if (p->check_every == 0 || scstep % p->check_every != 0) PetscFunctionReturn(0);
   PetscCall(KergsPartitionMeasure(p, sc, ct, &m));
-  if (p->edgecut_base < 0) p->edgecut_base = m.edgecut; /* the last partition saw no edges: its first measured cut */
+  if (p->state.edgecut_base < 0) p->state.edgecut_base = m.edgecut; /* the last partition saw no edges: its first measured cut */
   dense = (PetscBool)(2.0 * m.edges >= KERGS_PARTITION_MIN_DEGREE * D.ndisks && m.edges > 0 && D.ndisks >= size);
   /* an imbalance past the tolerance that is no worse than right after the last partition is what the partitioner
      could do (a few grains of uneven work): repartitioning again would change nothing, unless forced by tol = 1 */
-  unbalanced =
-      (PetscBool)(m.imbalance >= p->imbalance_tol * m.imbalance_bound && (p->imbalance_tol <= 1.0 || m.imbalance > p->imbalance_base));
-  due = (PetscBool)((p->provisional && dense) || unbalanced ||
-                    (PetscReal)m.edgecut > p->edgecut_growth * (PetscReal)PetscMax(p->edgecut_base, 1));
+  unbalanced = (PetscBool)(m.imbalance >= p->imbalance_tol * m.imbalance_bound &&
+                           (p->imbalance_tol <= 1.0 || m.imbalance > p->state.imbalance_base));
+  due        = (PetscBool)((p->state.provisional && dense) || unbalanced ||
+                    (PetscReal)m.edgecut > p->edgecut_growth * (PetscReal)PetscMax(p->state.edgecut_base, 1));
   if (!due) PetscFunctionReturn(0);
   PetscCall(PetscInfo(NULL,
                       "Scene %s step %" PetscInt_FMT ": repartition (imbalance %g, bound %g; edge cut %" PetscInt_FMT
                       ", after the last partition %" PetscInt_FMT "%s)\n",
-                      scname, scstep, (double)m.imbalance, (double)m.imbalance_bound, m.edgecut, p->edgecut_base,
-                      p->provisional ? "; provisional" : ""));
+                      scname, scstep, (double)m.imbalance, (double)m.imbalance_bound, m.edgecut, p->state.edgecut_base,
+                      p->state.provisional ? "; provisional" : ""));
   PetscCall(Repartition(p, sc, ct));
-  p->nrepartitions++;
+  p->state.nrepartitions++;
   if (repartitioned) *repartitioned = PETSC_TRUE;
   PetscFunctionReturn(0);
 }

@@ -15,18 +15,17 @@ struct _p_KergsPartition {
   PetscInt           metis_seed;     /* -partition_metis_seed */
   PetscBool          metis_curve;    /* -partition_metis_curve: Hilbert-curve edges in METIS's graph */
   KergsPartitionWork work;           /* -partition_work (default model) */
-  /* state */
-  PetscBool              initialized;     /* the initial partition was done */
-  PetscBool              provisional;     /* type metis, METIS not run yet: replace once the graph is dense enough */
-  PetscInt               edgecut_base;    /* edge cut right after the last partition (-1: unknown, set at the next check) */
-  PetscReal              imbalance_base;  /* imbalance right after the last partition, on the graph it was computed from */
-  PetscInt               nrepartitions;   /* partitions computed after the initial one */
-  PetscInt               nmoved;          /* grains that changed rank, summed over every partition */
-  PetscInt               last_method;     /* method of the latest partition (a KergsPartitionType) */
-  PetscLogDouble         seconds;         /* time spent partitioning and renumbering */
-  KergsPartitionMeasures last;            /* latest measures (KergsPartitionRecord) */
-  PetscReal              compute_seconds; /* this rank's time in the sweeps' arithmetic at the last step (KergsPartitionRecord) */
-  PetscReal              work_scale;      /* measured work: this rank's time per modelled unit over the mean (KergsPartitionMeasure) */
+  /* state: what a checkpoint keeps (KergsPartitionGetState)
+     initialized: the initial partition was done; provisional: type metis, METIS not run yet (replaced once the graph is
+     dense enough); edgecut_base: edge cut right after the last partition (-1: unknown, set at the next check);
+     imbalance_base: imbalance right after the last partition, on the graph it was computed from; nrepartitions:
+     partitions computed after the initial one; nmoved: grains that changed rank, summed over every partition;
+     last_method: method of the latest partition (a KergsPartitionType); compute_seconds: this rank's time in the
+     sweeps' arithmetic at the last step (KergsPartitionRecord); work_scale: measured work, this rank's time per
+     modelled unit over the mean (KergsPartitionMeasure) */
+  KergsPartitionState    state;
+  PetscLogDouble         seconds; /* time spent partitioning and renumbering */
+  KergsPartitionMeasures last;    /* latest measures (KergsPartitionRecord) */
 };
 
 #endif
