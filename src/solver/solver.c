@@ -336,7 +336,10 @@ PetscErrorCode KergsSolverPrintHelpAllTypes(MPI_Comm comm)
     PetscCall(KergsSolverCreate(comm, &s));
     PetscCall(KergsSolverSetType(s, SolverNames[t]));
     if (s->ops.setfromoptions) {
-      PetscOptionsBegin(comm, NULL, "Contact solver type options", NULL);
+      char title[64];
+      /* one title per type: PETSc prints the help of a (prefix, title) pair once only */
+      PetscCall(PetscSNPrintf(title, sizeof(title), "Contact solver type %s options", SolverNames[t]));
+      PetscOptionsBegin(comm, NULL, title, NULL);
       PetscOptionsHeadBegin(PetscOptionsObject, SolverNames[t]);
       PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
       PetscOptionsEnd();
