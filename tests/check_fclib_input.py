@@ -198,6 +198,13 @@ def test_bad(k):
 
     refused(k, "NaN in q", ["q has a non-finite entry", "at 7"], "-fclib_input", copy_with(k, good, "nan.fclib.h5", set_nan), *out)
 
+    def set_subnormal(f):  # kergs's own export of biaxial 20k's step 3 holds a q entry of 5e-317: finite, so accepted
+        f["fclib_local/vectors/q"][7] = 5e-317
+
+    p = k.run(1, "-fclib_input", copy_with(k, good, "subnormal.fclib.h5", set_subnormal), "-output", k.path("subnormal.h5"), "-solver_type",
+              "newton", "-solver_max_it", 1000)
+    check(p.returncode == 0, "a subnormal entry in q is a finite number: accepted")
+
     def shorten_mu(f):
         mu = f["fclib_local/vectors/mu"][()]
         del f["fclib_local/vectors/mu"]

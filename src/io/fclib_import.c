@@ -191,7 +191,7 @@ static PetscErrorCode ImportTriplets(const struct fclib_matrix *A, const char pa
     if ((*ti)[k] < 0 || (*ti)[k] >= A->m || (*tj)[k] < 0 || (*tj)[k] >= A->n)
       snprintf(msg, len, "%s: %s has an entry (%" PetscInt_FMT ", %" PetscInt_FMT ") outside its %d x %d", path, what, (*ti)[k], (*tj)[k],
                A->m, A->n);
-    else if (!PetscIsNormalReal((*tv)[k]) && (*tv)[k] != 0.0)
+    else if (PetscIsInfOrNanReal((*tv)[k]))
       snprintf(msg, len, "%s: %s has a non-finite entry %g at (%" PetscInt_FMT ", %" PetscInt_FMT ")", path, what, (double)(*tv)[k],
                (*ti)[k], (*tj)[k]);
   }
@@ -370,7 +370,7 @@ static PetscErrorCode ImportRead(const char path[], KergsFCLibProblem *p, char m
     }
   }
   for (PetscInt i = 0; i < p->m && !msg[0]; i++)
-    if (!PetscIsNormalReal(p->q[i]) && p->q[i] != 0.0)
+    if (PetscIsInfOrNanReal(p->q[i]))
       snprintf(msg, len, "%s: q has a non-finite entry %g at %" PetscInt_FMT, path, (double)p->q[i], i);
   for (PetscInt a = 0; a < p->ncontacts && !msg[0]; a++)
     if (!(p->mu[a] >= 0.0 && p->mu[a] < PETSC_INFINITY))
