@@ -370,8 +370,7 @@ static PetscErrorCode ImportRead(const char path[], KergsFCLibProblem *p, char m
     }
   }
   for (PetscInt i = 0; i < p->m && !msg[0]; i++)
-    if (PetscIsInfOrNanReal(p->q[i]))
-      snprintf(msg, len, "%s: q has a non-finite entry %g at %" PetscInt_FMT, path, (double)p->q[i], i);
+    if (PetscIsInfOrNanReal(p->q[i])) snprintf(msg, len, "%s: q has a non-finite entry %g at %" PetscInt_FMT, path, (double)p->q[i], i);
   for (PetscInt a = 0; a < p->ncontacts && !msg[0]; a++)
     if (!(p->mu[a] >= 0.0 && p->mu[a] < PETSC_INFINITY))
       snprintf(msg, len, "%s: friction coefficient mu of contact %" PetscInt_FMT " is %g", path, a, (double)p->mu[a]);
