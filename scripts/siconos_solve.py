@@ -190,7 +190,8 @@ def project_coulomb_cone(zn, zt, mu):
 
 
 def natural_residual(prob, r):
-    """(relative residual, ||e||, u): e = r - proj_K(r - rho u~), u~ = (u_n + mu |u_t|, u_t), rho = 1 / W_nn."""
+    """(relative residual, ||e||, u): e = r - proj_K(r - rho u~), u~ = (u_n + mu |u_t|, u_t), rho = 1 / W_nn; the residual
+    is ||e|| / max(||r||, ||p||), p = r - e (kergs's KergsLawNaturalResidualScaled): 1 at r = 0 unless e = 0."""
     W, q, mu = prob["W"], prob["q"], prob["mu"]
     u = W @ r + q
     if prob["nc"] == 0:
@@ -200,8 +201,8 @@ def natural_residual(prob, r):
     rn, rt, un, ut = r[0::2], r[1::2], u[0::2], u[1::2]
     pn, pt = project_coulomb_cone(rn - rho * (un + mu * np.abs(ut)), rt - rho * ut, mu)
     enorm = math.sqrt(float(np.sum((rn - pn) ** 2) + np.sum((rt - pt) ** 2)))
-    rnorm = float(np.linalg.norm(r))
-    return (enorm / max(rnorm, TINY) if rnorm > 0 else enorm), enorm, u
+    scale = max(float(np.linalg.norm(r)), math.sqrt(float(np.sum(pn**2) + np.sum(pt**2))))
+    return (enorm / scale if scale > 0 else 0.0), enorm, u
 
 
 def complementarity(prob, r, u):

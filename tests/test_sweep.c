@@ -87,6 +87,15 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   PetscCall(BuildColumn(comm, N, gdt, 3 * gdt, &W, &vd, &active));
   PetscCall(MatCreateVecs(W, &r, &v));
   PetscCall(KergsSweepSetUp(sweep, W, 1, NULL, active));
+  /* r = 0 on a loaded column is as far from the solution as it can be, however small the load: the residual is 1 (an
+     absolute |e| at r = 0 once let solvers stop there when a step's velocities were small) */
+  PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
+  PetscCall(Check((PetscBool)(PetscAbsReal(res - 1.0) < 1e-14), "column: natural residual 1 at r = 0", res, 1));
+  PetscCall(VecScale(vd, 1e-9));
+  PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
+  PetscCall(
+      Check((PetscBool)(PetscAbsReal(res - 1.0) < 1e-14), "column: natural residual 1 at r = 0 under a load 1e-9 times smaller", res, 1));
+  PetscCall(VecScale(vd, 1e9));
   PetscCall(SolveBySweeps("column", sweep, r, vd, NULL, NULL, 1e-10, 20000, &its, &quad0));
   PetscCall(KergsSweepNaturalResidual(sweep, r, vd, v, &res));
   PetscCall(VecGetOwnershipRange(r, &rstart, &rend));
@@ -108,7 +117,7 @@ static PetscErrorCode TestColumn(KergsSweep sweep)
   PetscCall(Check((PetscBool)(PetscAbsReal(quad0 - 1.0) < 1e-14), "column: the first sweep from r = 0 has quad = 1", quad0, 1));
   PetscCall(Check((PetscBool)(res < 1e-8), "column: natural residual", res, 1e-8));
   PetscCall(Check((PetscBool)(err < 1e-7 * rmax), "column: impulses = weights carried (|r - r_exact| / |r_exact|)", err / rmax, 1e-7));
-  /* all contacts open: vd >= 0 gives r = 0 and a natural residual of exactly 0 (absolute) */
+  /* all contacts open: vd >= 0 gives r = 0 and a natural residual of exactly 0 (e = 0) */
   PetscCall(VecAbs(vd));
   PetscCall(SolveBySweeps("column pulled apart", sweep, r, vd, NULL, NULL, 1e-10, 10, &its, &quad0));
   PetscCall(VecNorm(r, NORM_INFINITY, &err));

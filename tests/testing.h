@@ -173,7 +173,7 @@ static inline PetscErrorCode IndependentNaturalResidual(KergsStepper st, PetscRe
   Mat                W, Wfull;
   Vec                r, vd, v, diag;
   const PetscScalar *ra, *va, *da;
-  PetscReal          sums[2] = {0, 0};
+  PetscReal          sums[3] = {0, 0, 0};
   PetscInt           n, nc, nloc;
 
   PetscFunctionBeginUser;
@@ -213,13 +213,15 @@ static inline PetscErrorCode IndependentNaturalResidual(KergsStepper st, PetscRe
     for (PetscInt d = 0; d < nc; d++) {
       sums[0] += e[d] * e[d];
       sums[1] += rk[d] * rk[d];
+      sums[2] += (rk[d] - e[d]) * (rk[d] - e[d]); /* the law's image p = r - e */
     }
   }
   PetscCall(VecRestoreArrayRead(r, &ra));
   PetscCall(VecRestoreArrayRead(v, &va));
   PetscCall(VecRestoreArrayRead(diag, &da));
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
-  *residual = sums[1] > 0 ? PetscSqrtReal(sums[0] / sums[1]) : PetscSqrtReal(sums[0]);
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 3, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
+  /* |e| / max(|r|, |p|), 0 when both vanish (docs/solver.md) */
+  *residual = PetscMax(sums[1], sums[2]) > 0 ? PetscSqrtReal(sums[0] / PetscMax(sums[1], sums[2])) : 0.0;
   PetscCall(VecDestroy(&v));
   PetscCall(VecDestroy(&diag));
   PetscCall(MatDestroy(&Wfull));

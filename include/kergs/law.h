@@ -29,6 +29,15 @@ PETSC_EXTERN void      KergsLawNaturalMap(PetscInt ncomp, const PetscReal r[], c
                                           PetscBool active, PetscReal e[]);
 PETSC_EXTERN PetscReal KergsLawNaturalResidual2(PetscInt ncomp, const PetscReal r[], const PetscReal v[], PetscReal mu, PetscReal rho,
                                                 PetscBool active);
+/* The natural residual of a whole problem from sums over its contacts: e2 = sum |e|^2, r2 = sum |r|^2 and p2 = sum |p|^2
+   with p = r - e = proj_K(r - rho v~), the impulse the law maps r to. Returns |e| / max(|r|, |p|): relative, 0 when
+   e = 0, and 1 at r = 0 when e is not 0 (|p| = |e| there). Near a solution p and r agree, so it is |e| / |r|; an
+   absolute |e| at r = 0 had let a solver stop at r = 0 when the step's velocities were small. */
+static inline PetscReal KergsLawNaturalResidualScaled(PetscReal e2, PetscReal r2, PetscReal p2)
+{
+  const PetscReal scale = PetscSqrtReal(PetscMax(r2, p2));
+  return scale > 0 ? PetscSqrtReal(e2) / scale : 0.0;
+}
 
 /* The Alart-Curnier function of one contact (for Newton methods), with u = W r + b the local velocity, rho > 0:
      xi = r_n - rho u_n,  F_n = r_n - max(0, xi),  tau = mu max(0, xi),  F_t = r_t - proj_[-tau, tau](r_t - rho u_t)

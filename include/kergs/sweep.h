@@ -38,17 +38,20 @@ PETSC_EXTERN PetscErrorCode KergsSweepGetDiagonalBlocks(KergsSweep, PetscReal *b
    Wdiag_override (optional): n blocks of ncomp x ncomp used by the law instead of W_aa (NLGS-Jac: W_aa + Z_aa). */
 PETSC_EXTERN PetscErrorCode KergsSweepRun(KergsSweep, Vec r, Vec vd, const PetscReal *extra, const PetscReal *Wdiag_override,
                                           KergsSweepMeasures *);
-/* Natural-map residual sqrt(sum_a |r_a - proj(...)|^2) / max(|r|, tiny), with v = W r + vd; also returns v. Collective.
-   rho = 1 / W_aa,nn per contact (law.h). When r = 0 it is the absolute value (0 for the zero solution of an open problem). */
+/* Natural-map residual |e| / max(|r|, |p|) (KergsLawNaturalResidualScaled, law.h), e_a = r_a - p_a, p_a = proj(r_a - rho_a v_a),
+   with v = W r + vd; also returns v. Collective. rho = 1 / W_aa,nn per contact (law.h). 0 for the zero solution of an open
+   problem, 1 at r = 0 otherwise. */
 PETSC_EXTERN PetscErrorCode KergsSweepNaturalResidual(KergsSweep, Vec r, Vec vd, Vec v, PetscReal *res);
 /* How far r is from solving the original problem, with v = W r + vd (returned in v). Collective.
-   natural:  the natural-map residual above, |e| / |r|: relative, so that tolerances mean the same at any load.
+   natural:  the natural-map residual above, |e| / max(|r|, |p|): relative, so that tolerances mean the same at any load.
+   scale:    max(|r|, |p|), its denominator (impulse units): |e| = natural * scale, for solvers whose inner tolerances
+             are absolute.
    velocity: max_a |e_a| / rho_a over the largest velocity of an active contact (its free velocity v^d_a or the change
              W r produced): the law's worst violation in velocity, relative to the problem's velocities. Unlike the
              natural residual it does not shrink when r grows by a self-equilibrated part (ker W), which is how every
              solver's iterates run away on a problem without solution (the straight row of confine5_straight). */
 typedef struct {
-  PetscReal natural, velocity;
+  PetscReal natural, scale, velocity;
 } KergsResiduals;
 PETSC_EXTERN PetscErrorCode KergsSweepResiduals(KergsSweep, Vec r, Vec vd, Vec v, KergsResiduals *);
 /* This rank's time in the sweeps' arithmetic since KergsSweepSetUp, messages and reductions excluded (its share of the

@@ -656,7 +656,7 @@ PetscErrorCode KergsSweepResiduals(KergsSweep s, Vec r, Vec vd, Vec v, KergsResi
 {
   const PetscInt     nc = s->ncomp;
   const PetscScalar *rl, *vl, *vdl;
-  PetscReal          sums[2] = {0.0, 0.0}, maxes[2] = {0.0, 0.0};
+  PetscReal          sums[3] = {0.0, 0.0, 0.0}, maxes[2] = {0.0, 0.0};
   PetscInt           a, c;
 
   PetscFunctionBeginUser;
@@ -675,6 +675,7 @@ PetscErrorCode KergsSweepResiduals(KergsSweep s, Vec r, Vec vd, Vec v, KergsResi
     for (c = 0; c < nc; c++) {
       e2 += e[c] * e[c];
       sums[1] += rl[a * nc + c] * rl[a * nc + c];
+      sums[2] += PetscSqr(PetscRealPart(rl[a * nc + c]) - e[c]); /* |proj_K(r - rho v~)|^2 */
       q2 += PetscSqr(PetscRealPart(vdl[a * nc + c]) - (c == 0 && s->gapvel ? s->gapvel[a] : 0.0));
       wr2 += PetscSqr(PetscRealPart(vl[a * nc + c] - vdl[a * nc + c]));
     }
@@ -686,10 +687,10 @@ PetscErrorCode KergsSweepResiduals(KergsSweep s, Vec r, Vec vd, Vec v, KergsResi
   PetscCall(VecRestoreArrayRead(vd, &vdl));
   PetscCall(VecRestoreArrayRead(v, &vl));
   PetscCall(VecRestoreArrayRead(r, &rl));
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, s->comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 3, MPIU_REAL, MPIU_SUM, s->comm));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, maxes, 2, MPIU_REAL, MPIU_MAX, s->comm));
-  /* relative to |r|; absolute when r = 0, so that the zero solution of an all-open problem gives 0 */
-  res->natural  = sums[1] > 0 ? PetscSqrtReal(sums[0]) / PetscMax(PetscSqrtReal(sums[1]), 1e-300) : PetscSqrtReal(sums[0]);
+  res->natural  = KergsLawNaturalResidualScaled(sums[0], sums[1], sums[2]);
+  res->scale    = PetscSqrtReal(PetscMax(sums[1], sums[2]));
   res->velocity = maxes[1] > 0 ? maxes[0] / maxes[1] : maxes[0];
   PetscFunctionReturn(0);
 }

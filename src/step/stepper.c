@@ -17,7 +17,7 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   st->overlap_tol      = 5e-2; /* a settled NSCD sample keeps interpenetrations of about 1% of a radius */
   st->blowup_overlap   = 0.5;  /* fifty times what a settled sample keeps */
   st->blowup_energy    = 2.0;
-  st->divergence_tol   = 1.0; /* |e| > |r|: r = 0 would be as close to the law */
+  st->divergence_tol   = 0.7; /* r = 0 scores 1 (KergsLawNaturalResidualScaled); a diverging NLGS-Jac 0.78-0.93 */
   st->divergence_steps = 5;
   PetscCall(KergsStepperPeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));

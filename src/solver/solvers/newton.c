@@ -62,6 +62,7 @@ typedef struct {
   /* figures of the last solve */
   PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians, stalls;
   PetscReal linear_seconds, last_shift, merit;
+  PetscReal enorm; /* |e| of the last natural residual computed (NaturalResidual) */
 } Newton;
 
 /* ------------------------------------------------------------------------------------------------ */
@@ -96,28 +97,33 @@ static PetscErrorCode EvaluateFunction(KergsSolver s, Newton *nt, PetscInt n, Pe
   PetscFunctionReturn(0);
 }
 
-/* The natural residual of the original problem (|e| / |r|, docs/solver.md) from r and u = W r + v^d. */
+/* The natural residual of the original problem (KergsLawNaturalResidualScaled, docs/solver.md) from r and u = W r + v^d. */
 static PetscErrorCode NaturalResidual(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res)
 {
   const PetscScalar *rl, *ul;
-  PetscReal          sums[2] = {0.0, 0.0};
+  PetscReal          sums[3] = {0.0, 0.0, 0.0};
 
   PetscFunctionBeginUser;
   PetscCall(VecGetArrayRead(r, &rl));
   PetscCall(VecGetArrayRead(u, &ul));
   for (PetscInt a = 0; a < n; a++) {
-    PetscReal ra[KERGS_MAXCOMP], ua[KERGS_MAXCOMP];
+    PetscReal ra[KERGS_MAXCOMP], ua[KERGS_MAXCOMP], e[KERGS_MAXCOMP];
     for (PetscInt c = 0; c < nc; c++) {
       ra[c] = PetscRealPart(rl[a * nc + c]);
       ua[c] = PetscRealPart(ul[a * nc + c]);
-      sums[1] += ra[c] * ra[c];
     }
-    sums[0] += KergsLawNaturalResidual2(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a]);
+    KergsLawNaturalMap(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a], e);
+    for (PetscInt c = 0; c < nc; c++) {
+      sums[0] += e[c] * e[c];
+      sums[1] += ra[c] * ra[c];
+      sums[2] += PetscSqr(ra[c] - e[c]);
+    }
   }
   PetscCall(VecRestoreArrayRead(u, &ul));
   PetscCall(VecRestoreArrayRead(r, &rl));
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, s->comm));
-  *res = sums[1] > 0 ? PetscSqrtReal(sums[0]) / PetscSqrtReal(sums[1]) : PetscSqrtReal(sums[0]);
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 3, MPIU_REAL, MPIU_SUM, s->comm));
+  *res      = KergsLawNaturalResidualScaled(sums[0], sums[1], sums[2]);
+  nt->enorm = PetscSqrtReal(sums[0]);
   PetscFunctionReturn(0);
 }
 
@@ -596,7 +602,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   Newton        *nt = (Newton *)s->data;
   KergsDofLayout layout;
   PetscInt       n, nglobal, nc, steps = 0;
-  PetscReal      res = 0.0, rmax, rnorm, wmean = 1.0, alpha = nt->alpha;
+  PetscReal      res = 0.0, rmax, wmean = 1.0, alpha = nt->alpha;
   PetscLogDouble t0, t1;
   PetscBool      ok;
   Vec            r, u, vd;
@@ -619,14 +625,14 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   while (res > s->tol && nglobal > 0 && steps < s->max_it) {
     PetscReal before = res, inner_tol;
     PetscCall(VecCopy(r, nt->rc));
-    PetscCall(VecNorm(r, NORM_2, &rnorm));
+    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res)); /* |e| at the centre (after a rejected outer iteration too) */
     /* the first attempt is plain Newton (the smallest sigma): enough when the warm start lies on the solution's piece
        of F, and the residual (absolute at r = 0) says little about the distance to the solution */
     nt->sigma = nt->prox == NEWTON_PROX_IDENTITY
                     ? (nt->outer == 0 ? nt->sigma_min : PetscClipInterval(alpha * res, nt->sigma_min, nt->sigma_max)) * wmean
                     : 0.0;
     /* |F| scales with rho where the natural residual's map uses 1 / W_nn: a smaller rho asks for a smaller |F| */
-    inner_tol = nt->inner_rtol * PetscMin(1.0, nt->rho_factor) * res * (rnorm > 0 ? rnorm : 1.0);
+    inner_tol = nt->inner_rtol * PetscMin(1.0, nt->rho_factor) * nt->enorm;
     {
       const PetscInt before_steps = steps;
       PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));

@@ -224,16 +224,16 @@ static PetscErrorCode SolveQP(KergsSolver s, Tresca *tr, PetscInt n, PetscInt nc
 }
 
 /* Outer iterations until the natural residual of the original problem is at most -solver_tol or -solver_max_it. The
-   inner tolerance follows the residual down: |projected gradient| <= inner_rtol * res * |r| * mean W_nn (the natural
-   map divides velocities by W_nn), but never tighter than needed for -solver_tol; without friction the first QP is the
-   whole problem and is solved to -solver_tol at once. */
+   inner tolerance follows the residual down: |projected gradient| <= inner_rtol * |e| * mean W_nn (the natural map
+   divides velocities by W_nn; |e| = res * scale, KergsResiduals), but never tighter than needed for -solver_tol;
+   without friction the first QP is the whole problem and is solved to -solver_tol at once. */
 static PetscErrorCode SolverSolve_Tresca(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
                                          KergsSolveStats *stats)
 {
   Tresca        *tr = (Tresca *)s->data;
   KergsDofLayout layout;
   PetscInt       n, nc, nglobal;
-  PetscReal      res, rnorm;
+  KergsResiduals res;
   PetscBool      frictionless = PETSC_FALSE;
   PetscLogDouble t0, t1;
   Vec            r, v, vd, sub;
@@ -252,36 +252,34 @@ static PetscErrorCode SolverSolve_Tresca(KergsSolver s, KergsScene scene, KergsC
   PetscCall(VecGetSubVector(r, tr->is, &sub));
   PetscCall(VecCopy(sub, tr->x));
   PetscCall(VecRestoreSubVector(r, tr->is, &sub));
-  PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &res));
-  while (res > s->tol && nglobal > 0 && tr->outer < s->max_it) {
-    const PetscReal before = res;
+  PetscCall(KergsSweepResiduals(s->sweep, r, vd, v, &res));
+  while (res.natural > s->tol && nglobal > 0 && tr->outer < s->max_it) {
+    const PetscReal before = res.natural;
     PetscReal       gatol;
     PetscBool       solved;
     /* sigma follows the residual down (with -solver_tresca_sigma_alpha), as newton's proximal term does */
-    const PetscReal sigma = PetscMax(tr->sigma_factor, tr->sigma_alpha * res) * tr->wmean;
-    PetscCall(VecNorm(r, NORM_2, &rnorm));
-    if (rnorm == 0) rnorm = 1.0;
-    gatol = 0.1 * s->tol * rnorm * tr->wmean;
-    if (!frictionless) gatol = PetscMax(gatol, tr->inner_rtol * res * rnorm * tr->wmean);
+    const PetscReal sigma = PetscMax(tr->sigma_factor, tr->sigma_alpha * res.natural) * tr->wmean;
+    gatol                 = 0.1 * s->tol * res.scale * tr->wmean;
+    if (!frictionless) gatol = PetscMax(gatol, tr->inner_rtol * res.natural * res.scale * tr->wmean);
     PetscCall(SolveQP(s, tr, n, nc, vd, sigma, gatol, &solved));
     tr->outer++;
     PetscCall(VecISCopy(r, tr->is, SCATTER_FORWARD, tr->x)); /* inactive components stay 0 */
-    PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &res));
-    /* without friction the QP is the problem, but gatol was scaled by the warm start's |r|, which may be far below the
+    PetscCall(KergsSweepResiduals(s->sweep, r, vd, v, &res));
+    /* without friction the QP is the problem, but gatol was scaled by the warm start's max(|r|, |p|), which may be far below the
        solution's (a cold start), and the proximal term biases the QP's answer by sigma (r - r^k): the same thresholds
        (the same Tresca iteration) again, re-centred at the answer and tighter (by at most 100 per round) */
-    for (PetscInt k = 0; frictionless && solved && res > s->tol && k < 5; k++) {
-      gatol *= PetscMax(0.1 * s->tol / res, 1e-2);
+    for (PetscInt k = 0; frictionless && solved && res.natural > s->tol && k < 5; k++) {
+      gatol *= PetscMax(0.1 * s->tol / res.natural, 1e-2);
       PetscCall(SolveQP(s, tr, n, nc, vd, sigma, gatol, &solved));
       PetscCall(VecISCopy(r, tr->is, SCATTER_FORWARD, tr->x));
-      PetscCall(KergsSweepNaturalResidual(s->sweep, r, vd, v, &res));
+      PetscCall(KergsSweepResiduals(s->sweep, r, vd, v, &res));
     }
     PetscCall(PetscInfo(NULL, "tresca: outer %" PetscInt_FMT ": natural residual %g -> %g, %" PetscInt_FMT " TAO iterations so far\n",
-                        tr->outer, (double)before, (double)res, tr->tao_its));
+                        tr->outer, (double)before, (double)res.natural, tr->tao_its));
   }
   stats->iterations    = tr->outer;
-  stats->criterion     = res;
-  stats->criterion_met = (PetscBool)(res <= s->tol || nglobal == 0);
+  stats->criterion     = res.natural;
+  stats->criterion_met = (PetscBool)(res.natural <= s->tol || nglobal == 0);
   PetscCall(PetscTime(&t1));
   stats->sweep_seconds = t1 - t0;
   PetscFunctionReturn(0);
