@@ -3,6 +3,7 @@
    writing its own part, integers stored as reals (exact up to 2^53); the per-rank counts let a restart on the same
    number of ranks give every rank back exactly its disks, ghosts and contacts. */
 #include <kergs/checkpoint.h>
+#include <kergs/private/h5probe.h>
 #include <petscviewerhdf5.h>
 #include <petsclayouthdf5.h> /* PetscViewerHDF5ReadSizes */
 #include <stdio.h>
@@ -287,46 +288,11 @@ PetscErrorCode KergsCheckpointWrite(const char path[], KergsScene sc, KergsConta
 /* ------------------------------------------------------------------------------------------------ */
 /* Reading                                                                                          */
 
-/* Rank 0 checks that path is a readable HDF5 file holding a kergs checkpoint (quietly: failing is an expected
-   outcome), so that PETSc's viewer only ever opens a good one. */
+/* PETSc's viewer only ever opens a readable HDF5 file holding a kergs checkpoint. */
 static PetscErrorCode CheckFile(MPI_Comm comm, const char path[])
 {
-  char        msg[PETSC_MAX_PATH_LEN + 256] = "";
-  PetscMPIInt rank;
-
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  if (rank == 0) {
-    PetscBool readable;
-    PetscCall(PetscTestFile(path, 'r', &readable));
-    if (!readable)
-      PetscCall(PetscSNPrintf(msg, sizeof(msg), "Checkpoint file %s (-restart) does not exist or is not readable", path));
-    else {
-      H5E_auto2_t  handler    = NULL;
-      void        *data       = NULL;
-      char         format[64] = "";
-      const herr_t got        = H5Eget_auto2(H5E_DEFAULT, &handler, &data);
-      hid_t        file, attr, type;
-
-      if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-      file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
-      attr = file >= 0 ? H5Aopen_by_name(file, "/", "kergs_format", H5P_DEFAULT, H5P_DEFAULT) : -1;
-      type = H5Tcopy(H5T_C_S1);
-      (void)H5Tset_size(type, sizeof(format) - 1);
-      if (file < 0)
-        PetscCall(PetscSNPrintf(msg, sizeof(msg), "Checkpoint file %s cannot be opened as HDF5: not an HDF5 file, or truncated or corrupt",
-                                path));
-      else if (attr < 0 || H5Aread(attr, type, format) < 0 || strncmp(format, KERGS_CHECKPOINT_FORMAT, strlen(KERGS_CHECKPOINT_FORMAT)))
-        PetscCall(PetscSNPrintf(msg, sizeof(msg), "File %s is not a kergs checkpoint (root attribute kergs_format is not \"%s\")", path,
-                                KERGS_CHECKPOINT_FORMAT));
-      (void)H5Tclose(type);
-      if (attr >= 0) (void)H5Aclose(attr);
-      if (file >= 0) (void)H5Fclose(file);
-      if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, handler, data);
-    }
-  }
-  PetscCallMPI(MPI_Bcast(msg, (int)sizeof(msg), MPI_CHAR, 0, comm));
-  PetscCheck(msg[0] == 0, comm, PETSC_ERR_FILE_OPEN, "%s", msg);
+  PetscCall(KergsH5CheckFile(comm, path, "Checkpoint file (-restart)", KERGS_CHECKPOINT_FORMAT, "kergs checkpoint"));
   PetscFunctionReturn(0);
 }
 

@@ -6,6 +6,7 @@
    present with the size it expects, spacedim 2. libfclib is loaded with dlopen as for the export (src/io/fclib_export.c),
    so that its HDF5 calls bind to its own serial HDF5. */
 #include <kergs/fclib.h>
+#include <kergs/private/h5probe.h>
 #include <petscviewerhdf5.h>
 #include <errno.h>
 #include <string.h>
@@ -105,21 +106,19 @@ static void ImportCheckVector(hid_t f, const char path[], const char name[], lon
    the file cannot be read. */
 static void ImportCheckFile(const char path[], PetscBool *global, PetscBool *solution, char msg[], size_t len)
 {
-  H5E_auto2_t func;
-  void       *data;
-  hid_t       f;
-  int         m = 0, n = 0, spacedim;
-  const char *g;
+  KergsH5Quiet quiet;
+  hid_t        f;
+  int          m = 0, n = 0, spacedim;
+  const char  *g;
 
   if (access(path, R_OK)) {
     snprintf(msg, len, "Cannot read the FCLib file %s: %s", path, strerror(errno));
     return;
   }
-  H5Eget_auto2(H5E_DEFAULT, &func, &data);
-  H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* kergs says what is wrong, not HDF5's trace */
+  KergsH5QuietBegin(&quiet); /* kergs says what is wrong, not HDF5's trace */
   if (H5Fis_hdf5(path) <= 0 || (f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT)) < 0) {
     snprintf(msg, len, "%s is not an HDF5 file, hence not an FCLib problem", path);
-    H5Eset_auto2(H5E_DEFAULT, func, data);
+    KergsH5QuietEnd(&quiet);
     return;
   }
   *global = (PetscBool)(H5Lexists(f, "fclib_local", H5P_DEFAULT) <= 0 && H5Lexists(f, "fclib_global", H5P_DEFAULT) > 0);
@@ -156,7 +155,7 @@ static void ImportCheckFile(const char path[], PetscBool *global, PetscBool *sol
   *solution = PETSC_FALSE;
   if (!msg[0] && ImportDatasetSize(f, "solution/r") == m && ImportDatasetSize(f, "solution/u") == m) *solution = PETSC_TRUE;
   H5Fclose(f);
-  H5Eset_auto2(H5E_DEFAULT, func, data);
+  KergsH5QuietEnd(&quiet);
 }
 
 /* Triplets of an FCLib matrix (compressed columns nz = -1, compressed rows nz = -2, or nz triplets), checked. */

@@ -4,6 +4,7 @@
    disk regularly, so that the .tmp of a killed run is a readable file holding every flushed row and snapshot. The
    layout is documented in docs/results.md. */
 #include <kergs/private/resultsimpl.h>
+#include <kergs/private/h5probe.h>
 #include <kergs/xdmf.h>
 #include <petscviewerhdf5.h>
 #include <math.h>
@@ -251,28 +252,17 @@ static PetscErrorCode ResultsRefreshXdmf(KergsResults res, PetscBool now, PetscB
    HDF5's error printing off: a damaged file is an expected outcome here. */
 static void ProbeSource(const char file[], const KergsResultsState *st, PetscInt step, char why[], size_t len)
 {
-  H5E_auto2_t  handler = NULL;
-  void        *data    = NULL;
-  hid_t        f, a, t, d, space;
+  KergsH5Quiet quiet;
+  hid_t        f, a, d, space;
   hsize_t      dims[1] = {0}, start[1], count[1] = {1};
-  char         format[64] = "";
-  PetscInt     nsnap      = -1;
-  double       last       = -1;
-  const herr_t got        = H5Eget_auto2(H5E_DEFAULT, &handler, &data);
+  PetscInt     nsnap = -1;
+  double       last  = -1;
 
   why[0] = 0;
-  if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+  KergsH5QuietBegin(&quiet);
   f = H5Fopen(file, H5F_ACC_RDONLY, H5P_DEFAULT);
   if (f < 0) snprintf(why, len, "not a readable HDF5 file (damaged?)");
-  if (!why[0]) {
-    a = H5Aopen_by_name(f, "/", "kergs_format", H5P_DEFAULT, H5P_DEFAULT);
-    t = H5Tcopy(H5T_C_S1);
-    (void)H5Tset_size(t, sizeof(format) - 1);
-    if (a < 0 || H5Aread(a, t, format) < 0 || strncmp(format, KERGS_RESULTS_FORMAT, strlen(KERGS_RESULTS_FORMAT)))
-      snprintf(why, len, "not a kergs results file");
-    (void)H5Tclose(t);
-    if (a >= 0) (void)H5Aclose(a);
-  }
+  if (!why[0] && !KergsH5HasFormat(f, KERGS_RESULTS_FORMAT)) snprintf(why, len, "not a kergs results file");
   if (!why[0]) {
     a = H5Aopen_by_name(f, "/", "nsnapshots", H5P_DEFAULT, H5P_DEFAULT);
     if (a < 0 || H5Aread(a, sizeof(PetscInt) == 8 ? H5T_NATIVE_LLONG : H5T_NATIVE_INT, &nsnap) < 0 || nsnap < st->nsnapshots)
@@ -296,7 +286,7 @@ static void ProbeSource(const char file[], const KergsResultsState *st, PetscInt
     if (d >= 0) (void)H5Dclose(d);
   }
   if (f >= 0) (void)H5Fclose(f);
-  if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, handler, data);
+  KergsH5QuietEnd(&quiet);
 }
 
 /* H5Literate callback: the names of the datasets of /stats. */

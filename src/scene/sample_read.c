@@ -3,6 +3,7 @@
    and value (finite numbers, positive radii, existing materials, grain ids non-negative and distinct), so that a bad
    file gives an error that names it and what is wrong in it, never a crash. */
 #include <kergs/private/sceneimpl.h>
+#include <kergs/private/h5probe.h>
 #include <petscviewerhdf5.h>
 #include <petsclayouthdf5.h>
 
@@ -25,41 +26,6 @@ static PetscErrorCode SampleDataFree(SampleData *s)
   PetscCall(PetscFree(s->radius));
   PetscCall(PetscFree(s->material));
   PetscCall(PetscFree(s->id));
-  PetscFunctionReturn(0);
-}
-
-/* Rank 0 checks that path is a readable file that HDF5 can open (a truncated or non-HDF5 file fails
-   here, quietly), so that PETSc's viewer is only ever given a good file. */
-static PetscErrorCode SampleCheckFile(MPI_Comm comm, const char path[])
-{
-  char        msg[PETSC_MAX_PATH_LEN + 128] = "";
-  PetscMPIInt rank;
-
-  PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  if (rank == 0) {
-    PetscBool readable;
-    PetscCall(PetscTestFile(path, 'r', &readable));
-    if (!readable)
-      PetscCall(PetscSNPrintf(msg, sizeof(msg), "Sample file %s does not exist or is not readable", path));
-    else {
-      H5E_auto2_t handler = NULL;
-      void       *data    = NULL;
-      hid_t       file;
-      /* HDF5's own error printing is switched off around this probe: failing is an expected outcome */
-      const herr_t got = H5Eget_auto2(H5E_DEFAULT, &handler, &data);
-      if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-      file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
-      if (got >= 0) (void)H5Eset_auto2(H5E_DEFAULT, handler, data);
-      if (file < 0)
-        PetscCall(
-            PetscSNPrintf(msg, sizeof(msg), "Sample file %s cannot be opened as HDF5: not an HDF5 file, or truncated or corrupt", path));
-      else if (H5Fclose(file) < 0)
-        PetscCall(PetscSNPrintf(msg, sizeof(msg), "Sample file %s: HDF5 cannot close it after opening", path));
-    }
-  }
-  PetscCallMPI(MPI_Bcast(msg, (int)sizeof(msg), MPI_CHAR, 0, comm));
-  PetscCheck(msg[0] == 0, comm, PETSC_ERR_FILE_OPEN, "%s", msg);
   PetscFunctionReturn(0);
 }
 
@@ -242,7 +208,7 @@ PetscErrorCode KergsSampleRead(KergsScene scene, const char path[])
   PetscCall(KergsInitializePackage());
   PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
-  PetscCall(SampleCheckFile(comm, path));
+  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL)); /* PETSc's viewer is only ever given a good file */
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
   ierr = SampleLoad(viewer, comm, path, &s);
   PetscCall(PetscViewerDestroy(&viewer));

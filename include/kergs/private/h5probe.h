@@ -1,0 +1,28 @@
+/* kergs HDF5 probes, private: for the readers of src/io and src/scene (checkpoints, results files, samples, FCLib
+   problems), which look at a file before PETSc's viewer or libfclib opens it. A missing, truncated, damaged or foreign
+   file is an expected outcome there, so HDF5's own error trace is switched off around the probe and kergs says what is
+   wrong instead (src/io/h5probe.c). */
+#ifndef KERGS_H5PROBE_H
+#define KERGS_H5PROBE_H
+
+#include <petscsys.h>
+#include <hdf5.h>
+
+/* HDF5's automatic error printing, saved by KergsH5QuietBegin and restored by KergsH5QuietEnd. */
+typedef struct {
+  H5E_auto2_t handler;
+  void       *data;
+  PetscBool   saved;
+} KergsH5Quiet;
+
+PETSC_INTERN void KergsH5QuietBegin(KergsH5Quiet *);
+PETSC_INTERN void KergsH5QuietEnd(const KergsH5Quiet *);
+/* Whether the root attribute kergs_format of an open file begins with format (call between QuietBegin and QuietEnd). */
+PETSC_INTERN PetscBool KergsH5HasFormat(hid_t file, const char format[]);
+/* Rank 0 checks that path is a readable file that HDF5 opens and, with format not NULL, whose kergs_format is format;
+   every rank raises PETSC_ERR_FILE_OPEN otherwise: "<what> <path> does not exist or is not readable", "<what> <path>
+   cannot be opened as HDF5: ..." or "File <path> is not a <kind> (root attribute kergs_format is not "<format>")".
+   Collective. */
+PETSC_INTERN PetscErrorCode KergsH5CheckFile(MPI_Comm, const char path[], const char what[], const char format[], const char kind[]);
+
+#endif
