@@ -30,7 +30,7 @@ import time
 import h5py
 import numpy as np
 
-from checks import check, failures
+from checks import Kergs, check, failures
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -38,28 +38,6 @@ CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
 # the batch tests run confine500 with the paper's NLGS (fast, many steps), not the scene's default newton
 PAPER500 = ["-options_file", CONFINE500, "-solver_type", "nlgs", "-solver_max_it", "150", "-solver_tol", "1e-4"]
 CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
-
-
-class Kergs:
-    def __init__(self, a):
-        self.kergs, self.mpiexec, self.dir = os.path.abspath(a.kergs), a.mpiexec, os.path.abspath(a.dir)
-
-    def cmd(self, ranks, args):
-        return [self.mpiexec, "-n", str(ranks), self.kergs] + [str(x) for x in args]
-
-    def run(self, ranks, *args, log=None):
-        p = subprocess.run(self.cmd(ranks, args), cwd=ROOT, capture_output=True, text=True)
-        if log:
-            with open(os.path.join(self.dir, log), "w") as f:
-                f.write(p.stdout + p.stderr)
-        return p
-
-    def start(self, ranks, *args, log):
-        out = open(os.path.join(self.dir, log), "w")
-        return subprocess.Popen(self.cmd(ranks, args), cwd=ROOT, stdout=out, stderr=subprocess.STDOUT), os.path.join(self.dir, log)
-
-    def path(self, name):
-        return os.path.join(self.dir, name)
 
 
 def ranks_of(p):

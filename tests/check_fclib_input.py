@@ -20,29 +20,20 @@ Exit status 0 when every check holds, 1 otherwise."""
 import argparse
 import os
 import shutil
-import subprocess
 import sys
 
 import h5py
 import numpy as np
 
-from checks import check, failures
+from checks import Kergs, check, failures
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
 
 
-class Kergs:
-    def __init__(self, a):
-        self.kergs, self.mpiexec, self.dir = os.path.abspath(a.kergs), a.mpiexec, os.path.abspath(a.dir)
-
-    def run(self, ranks, *args):
-        cmd = [self.mpiexec, "-n", str(ranks), self.kergs] + [str(x) for x in args]
-        return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
-
-    def path(self, name):
-        return os.path.join(self.dir, name)
+class FCLibKergs(Kergs):
+    """The runner, with an export of confine500's step 5 and a solve of an FCLib file."""
 
     def export(self, name, *extra):
         """Step 5 of confine500 solved by Newton to 1e-10, exported."""
@@ -242,7 +233,7 @@ def main():
     ap.add_argument("--dir", required=True)
     a = ap.parse_args()
     os.makedirs(a.dir, exist_ok=True)
-    k = Kergs(a)
+    k = FCLibKergs(a)
     {"solve": test_solve, "global": test_global, "bad": test_bad}[a.test](k)
     print(f"{len(failures)} failure(s)" if failures else "every check holds")
     return 1 if failures else 0

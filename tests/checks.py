@@ -1,5 +1,10 @@
-"""What the Python tests share (as tests/testing.h for the C ones): one line per check, and the failures kept."""
+"""What the Python tests share (as tests/testing.h for the C ones): one line per check, the failures kept, and a
+runner for the kergs under test."""
 
+import os
+import subprocess
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 failures = []
 
 
@@ -9,3 +14,30 @@ def check(ok, what):
     if not ok:
         failures.append(what)
     return ok
+
+
+class Kergs:
+    """The kergs under test, run through mpiexec from the repository's root; a.kergs, a.mpiexec and a.dir (the scratch
+    directory for its files) come from the test's command line."""
+
+    def __init__(self, a):
+        self.kergs, self.mpiexec, self.dir = os.path.abspath(a.kergs), a.mpiexec, os.path.abspath(a.dir)
+
+    def cmd(self, ranks, args):
+        return [self.mpiexec, "-n", str(ranks), self.kergs] + [str(x) for x in args]
+
+    def run(self, ranks, *args, log=None):
+        """Run to the end; with log, its output is also written to that file of the scratch directory."""
+        p = subprocess.run(self.cmd(ranks, args), cwd=ROOT, capture_output=True, text=True)
+        if log:
+            with open(self.path(log), "w") as f:
+                f.write(p.stdout + p.stderr)
+        return p
+
+    def start(self, ranks, *args, log):
+        """Start in the background, its output to log: (the mpiexec process, the log's path)."""
+        out = open(self.path(log), "w")
+        return subprocess.Popen(self.cmd(ranks, args), cwd=ROOT, stdout=out, stderr=subprocess.STDOUT), self.path(log)
+
+    def path(self, name):
+        return os.path.join(self.dir, name)
