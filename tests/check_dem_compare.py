@@ -2,7 +2,8 @@
 """scripts/dem_compare --quick: both codes ran (a kergs row and a LAMMPS row), every row has the reported fields with
 finite values, both force histories grow as the walls advance, they agree within a factor 10 on every interval after
 the first (the order of magnitude: in the first the walls have barely touched), LAMMPS's largest overlap is within a
-factor 2 of its target (kn is chosen from kergs's contact force for that), and the run takes under 60 s.
+factor 2 of its target (kn is chosen from kergs's contact force for that), the force history figure is written, and
+the run takes under 60 s.
 
   check_dem_compare.py --kergs build/kergs --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
@@ -39,6 +40,9 @@ def main():
     lmp = [r for r in runs if r["code"] == "lammps"]
     check(len(kergs) >= 1 and len(lmp) >= 1, f"a kergs run and a LAMMPS run ({len(kergs)}, {len(lmp)})")
     check("summary" in rows[-1], "the last line is the summary")
+    png = os.path.join(a.dir, "forces.png")
+    with open(png, "rb") if os.path.exists(png) else open(os.devnull, "rb") as f:
+        check(f.read(8) == b"\x89PNG\r\n\x1a\n", "the force history figure forces.png is a PNG")
     for r in runs:
         miss = [k for k in FIELDS if k not in r]
         check(not miss, f"{r.get('code')} {r.get('setting')}: fields present (missing {miss})")
