@@ -24,3 +24,15 @@ set_tests_properties(bad_input_truncated_sample PROPERTIES FIXTURES_REQUIRED tru
 kergs_bad_input(missing_sample "no_such_sample.h5" -options_file cases/confine500.opts -sample_input tests/data/no_such_sample.h5)
 kergs_bad_input(bad_solver "solver_type" -options_file cases/confine5.opts -solver_type nlgz)
 kergs_bad_input(bad_dt "dt" -options_file cases/confine5.opts -dt -1)
+
+# Every scene file of cases/ builds its scene and reads every option it sets (-steps 0): a case file that names an
+# unknown option or a missing sample fails here, not in a user's batch job.
+file(GLOB KERGS_CASE_FILES CONFIGURE_DEPENDS ${CMAKE_SOURCE_DIR}/cases/*.opts)
+foreach(c ${KERGS_CASE_FILES})
+  get_filename_component(case ${c} NAME_WE)
+  add_test(NAME case_${case}
+           COMMAND $<TARGET_FILE:kergs_exe> -options_file cases/${case}.opts -steps 0 -output_none -quiet
+                   -sample_output ${CMAKE_CURRENT_BINARY_DIR}/case_${case}.sample.h5 # not over cases/deposit500.h5
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(case_${case} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60)
+endforeach()
