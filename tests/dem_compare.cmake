@@ -4,3 +4,8 @@ add_test(NAME dem_compare_quick
          COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_dem_compare.py --kergs $<TARGET_FILE:kergs_exe> --dir ${CMAKE_CURRENT_BINARY_DIR}/dem_compare_quick
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(dem_compare_quick PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 180 LABELS scripts)
+# scripts/dem_compare --scene pressure --quick: the deposit pushed by a free wall, both codes, wall histories agreeing.
+add_test(NAME dem_compare_pressure_quick
+         COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_dem_compare.py --scene pressure --kergs $<TARGET_FILE:kergs_exe> --dir ${CMAKE_CURRENT_BINARY_DIR}/dem_compare_pressure_quick
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(dem_compare_pressure_quick PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 180 LABELS scripts)
