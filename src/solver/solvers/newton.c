@@ -30,15 +30,19 @@ static const char *const NewtonProxes[] = {"none", "identity", "NewtonProx", "NE
 
 typedef struct {
   KSP        ksp;      /* J d = -F; prefix solver_ */
+  KSP        kreuse;   /* J d = -F by GMRES preconditioned by the last factorization of an earlier J; prefix solver_reuse_ */
   Mat        Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
   PetscReal *A, *B;         /* per local contact, ncomp x ncomp row-major: J = A + B W */
-  PetscReal *Aused, *Bused; /* the blocks of the Jacobian last assembled (and factored) */
+  PetscReal *Aused, *Bused; /* the blocks of the Jacobian last assembled */
+  PetscReal *Afact, *Bfact; /* the blocks of the Jacobian last factored */
+  PetscReal  sigma_fact;    /* and its sigma */
   PetscReal *rho;           /* per local contact: rho_n = rho_t = rho_factor / W_aa,nn */
   PetscReal *rho_nat;       /* per local contact: 1 / W_aa,nn, the natural residual's */
   PetscInt  *diagblock;     /* per local block row: position of its own block in J's diagonal part */
   PetscInt   nalloc;
+  PetscInt   nlocal, nc; /* this step's local contacts and components */
   /* options */
   PetscReal  rho_factor;           /* -solver_newton_rho */
   PetscReal  shift;                /* -solver_newton_shift */
@@ -59,8 +63,11 @@ typedef struct {
   PetscReal  sigma;                /* this outer iteration's sigma (0 without the proximal term) */
   PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
   PetscBool  project;              /* -solver_newton_project: line search along the path projected on the cones */
+  PetscInt   reuse_its;            /* -solver_newton_reuse_its: GMRES iterations on a stale factorization (0: never) */
+  PetscBool  factored;             /* ksp's preconditioner was set up on a J of this step */
+  PetscBool  stale;                /* J changed since that set-up */
   /* figures of the last solve */
-  PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians, stalls;
+  PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians, stalls, factorizations, reused;
   PetscReal linear_seconds, last_shift, merit;
   PetscReal enorm; /* |e| of the last natural residual computed (NaturalResidual) */
 } Newton;
@@ -227,6 +234,7 @@ static PetscErrorCode AssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pe
   PetscCall(PetscArraycpy(nt->Bused, nt->B, n * nc * nc));
   nt->sigma_used = sigma;
   nt->jacobians++;
+  nt->stale = PETSC_TRUE;
   PetscCall(MatCopy(nt->Wfull, nt->J, SAME_NONZERO_PATTERN));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
   PetscCall(ScaleBlockRows(nt, Ad, n, nc, PETSC_TRUE, eps, sigma));
@@ -246,7 +254,9 @@ static PetscErrorCode EnsureWork(Newton *nt, PetscInt n)
   if (n <= nt->nalloc) PetscFunctionReturn(0);
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
   PetscCall(PetscFree2(nt->Aused, nt->Bused));
+  PetscCall(PetscFree2(nt->Afact, nt->Bfact));
   nt->nalloc = PetscMax(n, 2 * nt->nalloc);
+  PetscCall(PetscMalloc2(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Afact, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Bfact));
   PetscCall(PetscMalloc2(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Aused, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Bused));
   PetscCall(PetscMalloc5(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->A, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->B, nt->nalloc,
                          &nt->rho, nt->nalloc, &nt->rho_nat, nt->nalloc, &nt->diagblock));
@@ -355,6 +365,8 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
   nc = layout.ncomp;
   PetscCall(EnsureWork(nt, n));
+  nt->nlocal = n;
+  nt->nc     = nc;
   PetscCall(DestroyStepObjects(nt));
   PetscCall(KergsOperatorsGetFullW(ops, &nt->Wfull));
   PetscCall(MatDuplicate(nt->Wfull, MAT_COPY_VALUES, &nt->J));
@@ -379,35 +391,98 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KSPReset(nt->ksp)); /* J's sizes and pattern are this step's */
   nt->sigma_used = -1.0;
   PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
+  PetscCall(KSPReset(nt->kreuse));
+  PetscCall(KSPSetOperators(nt->kreuse, nt->J, nt->J));
+  nt->factored = nt->stale = PETSC_FALSE;
   PetscCall(ChooseLinearSolver(s, nt));
   PetscCall(EnableNullPivots(nt));
   PetscFunctionReturn(0);
 }
 
-/* Solve J d = -F. A failed solve (a Krylov method on an ill-conditioned J, a singular factorization) is not an error:
-   the inner Newton stops and the outer iteration retries with a larger proximal term, which conditions J better. */
+/* The preconditioner of the reuse solver: the factorization (or block factorizations) last computed by ksp, applied to
+   a J that has changed since. Reuse is set on ksp's PC so that applying it does not factor again. */
+static PetscErrorCode ApplyStaleFactor(PC pc, Vec x, Vec y)
+{
+  Newton *nt;
+  PC      main;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &nt));
+  PetscCall(KSPGetPC(nt->ksp, &main));
+  PetscCall(PCSetReusePreconditioner(main, PETSC_TRUE));
+  PetscCall(PCApply(main, x, y));
+  PetscFunctionReturn(0);
+}
+
+/* J d = -F by at most -solver_newton_reuse_its GMRES iterations preconditioned by the factorization of an earlier J of
+   this step. J changes between Newton steps only in the rows of the contacts that changed piece (and by sigma between
+   outer iterations): a low-rank change, which GMRES absorbs in a few iterations, each costing one triangular solve
+   where a factorization costs far more. *solved is false when it did not converge: then J is factored again. */
+static PetscErrorCode ReuseDirection(Newton *nt, PetscBool *solved)
+{
+  KSPConvergedReason reason;
+  PetscInt           its;
+
+  PetscFunctionBeginUser;
+  *solved = PETSC_FALSE;
+  if (nt->reuse_its <= 0 || !nt->factored || !nt->stale || nt->sigma_used != nt->sigma_fact) PetscFunctionReturn(0);
+  { /* GMRES needs about one iteration per changed block row: try only when few changed */
+    PetscInt changed = 0;
+    for (PetscInt a = 0; a < nt->nlocal; a++)
+      if (memcmp(nt->A + a * nt->nc * nt->nc, nt->Afact + a * nt->nc * nt->nc, nt->nc * nt->nc * sizeof(PetscReal)) ||
+          memcmp(nt->B + a * nt->nc * nt->nc, nt->Bfact + a * nt->nc * nt->nc, nt->nc * nt->nc * sizeof(PetscReal)))
+        changed++;
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)nt->ksp)));
+    if (2 * changed > nt->reuse_its) PetscFunctionReturn(0);
+  }
+  PetscCall(VecScale(nt->F, -1.0));
+  PetscCall(KSPSolve(nt->kreuse, nt->F, nt->d));
+  PetscCall(VecScale(nt->F, -1.0));
+  PetscCall(KSPGetConvergedReason(nt->kreuse, &reason));
+  PetscCall(KSPGetIterationNumber(nt->kreuse, &its));
+  nt->linear_its += its;
+  *solved = (PetscBool)(reason > 0);
+  if (*solved) nt->reused++;
+  PetscFunctionReturn(0);
+}
+
+/* Solve J d = -F: with the last factorization while it serves (ReuseDirection), else by ksp, which factors J again. A
+   failed solve (a Krylov method on an ill-conditioned J, a singular factorization) is not an error: the inner Newton
+   stops and the outer iteration retries with a larger proximal term, which conditions J better. */
 static PetscErrorCode NewtonDirection(Newton *nt, PetscBool *solved)
 {
   KSPConvergedReason reason;
   PetscInt           its;
   PetscLogDouble     t0, t1;
+  PC                 pc;
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&t0));
-  PetscCall(VecScale(nt->F, -1.0));
-  PetscCall(KSPSolve(nt->ksp, nt->F, nt->d));
-  PetscCall(VecScale(nt->F, -1.0));
-  PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
-  PetscCall(KSPGetIterationNumber(nt->ksp, &its));
-  PetscCall(PetscTime(&t1));
-  nt->linear_its += its;
-  nt->linear_seconds += t1 - t0;
-  *solved = (PetscBool)(reason >= 0);
+  PetscCall(ReuseDirection(nt, solved));
   if (!*solved) {
-    nt->failed_linear++;
-    PetscCall(PetscInfo(NULL, "newton: the linear solve of a Newton step failed (%s): a larger proximal term next\n",
-                        KSPConvergedReasons[reason]));
+    PetscCall(KSPGetPC(nt->ksp, &pc));
+    PetscCall(PCSetReusePreconditioner(pc, PETSC_FALSE));
+    if (nt->stale || !nt->factored) nt->factorizations++;
+    PetscCall(VecScale(nt->F, -1.0));
+    PetscCall(KSPSolve(nt->ksp, nt->F, nt->d));
+    PetscCall(VecScale(nt->F, -1.0));
+    PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
+    PetscCall(KSPGetIterationNumber(nt->ksp, &its));
+    nt->linear_its += its;
+    nt->factored   = PETSC_TRUE;
+    nt->stale      = PETSC_FALSE;
+    nt->sigma_fact = nt->sigma_used;
+    PetscCall(PetscArraycpy(nt->Afact, nt->Aused, nt->nlocal * nt->nc * nt->nc));
+    PetscCall(PetscArraycpy(nt->Bfact, nt->Bused, nt->nlocal * nt->nc * nt->nc));
+    *solved = (PetscBool)(reason >= 0);
+    if (!*solved) {
+      nt->failed_linear++;
+      PetscCall(PetscInfo(NULL, "newton: the linear solve of a Newton step failed (%s): a larger proximal term next\n",
+                          KSPConvergedReasons[reason]));
+    }
   }
+  PetscCall(PetscTime(&t1));
+  nt->linear_seconds += t1 - t0;
   PetscFunctionReturn(0);
 }
 
@@ -616,7 +691,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(VecGetSize(r, &nglobal));
   nc             = layout.ncomp;
   nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = 0;
-  nt->sweeps = nt->outer = nt->jacobians = nt->stalls = 0;
+  nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
@@ -687,6 +762,8 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "sweeps", (PetscReal)nt->sweeps));
   PetscCall(KergsSolveStatsAdd(st, "outer_iterations", (PetscReal)nt->outer));
   PetscCall(KergsSolveStatsAdd(st, "jacobians", (PetscReal)nt->jacobians));
+  PetscCall(KergsSolveStatsAdd(st, "factorizations", (PetscReal)nt->factorizations));
+  PetscCall(KergsSolveStatsAdd(st, "reused_factorizations", (PetscReal)nt->reused));
   PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
   PetscFunctionReturn(0);
 }
@@ -723,6 +800,10 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                       "Several ranks: J gathered whole on every rank and factored there up to this many rows, else GMRES with block Jacobi",
                       "", nt->redundant_max, &nt->redundant_max, NULL));
   PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_type", &nt->user_pc));
+  PetscCall(PetscOptionsInt("-solver_newton_reuse_its",
+                            "GMRES iterations (relative tolerance 1e-8) preconditioned by the last factorization of J before J is factored "
+                            "again (0: factor every changed J)",
+                            "", nt->reuse_its, &nt->reuse_its, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_stall_steps",
                             "Newton steps in a row that each cut |F| by less than a tenth and end an outer iteration's Newton (0: never)",
                             "", nt->stall_steps, &nt->stall_steps, NULL));
@@ -738,6 +819,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              nt->inner_max);
   PetscCheck(nt->redundant_max >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_redundant_max %" PetscInt_FMT " must be non-negative", nt->redundant_max);
+  PetscCheck(nt->reuse_its >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_reuse_its %" PetscInt_FMT " must be non-negative",
+             nt->reuse_its);
   PetscCheck(nt->stall_steps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_stall_steps %" PetscInt_FMT " must be non-negative",
              nt->stall_steps);
   PetscCheck(nt->max_sweeps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_max_sweeps %" PetscInt_FMT " must be non-negative",
@@ -751,6 +834,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCheck(nt->max_backtracks >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_max_backtracks %" PetscInt_FMT " must be non-negative", nt->max_backtracks);
   PetscCall(KSPSetFromOptions(nt->ksp));
+  PetscCall(KSPSetTolerances(nt->kreuse, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, nt->reuse_its));
+  PetscCall(KSPGMRESSetRestart(nt->kreuse, PetscMax(nt->reuse_its, 1)));
+  PetscCall(KSPSetFromOptions(nt->kreuse));
   PetscFunctionReturn(0);
 }
 
@@ -775,8 +861,10 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
   PetscFunctionBeginUser;
   PetscCall(DestroyStepObjects(nt));
   PetscCall(KSPDestroy(&nt->ksp));
+  PetscCall(KSPDestroy(&nt->kreuse));
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
   PetscCall(PetscFree2(nt->Aused, nt->Bused));
+  PetscCall(PetscFree2(nt->Afact, nt->Bfact));
   PetscCall(PetscFree(nt));
   s->data = NULL;
   PetscFunctionReturn(0);
@@ -801,6 +889,18 @@ static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCall(PCFactorSetMatSolverType(pc, size > 1 ? MATSOLVERMUMPS : MATSOLVERPETSC)); /* -solver_pc_type lu on several */
   PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD));                           /* 1.6-2.5 times faster than nd here */
   PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
+  /* the reuse solver: GMRES on the unpreconditioned residual, preconditioned on the right by ksp's last factorization */
+  PetscCall(KSPCreate(s->comm, &nt->kreuse));
+  PetscCall(KSPSetOptionsPrefix(nt->kreuse, "solver_reuse_"));
+  PetscCall(KSPSetType(nt->kreuse, KSPGMRES));
+  PetscCall(KSPSetPCSide(nt->kreuse, PC_RIGHT));
+  PetscCall(KSPSetNormType(nt->kreuse, KSP_NORM_UNPRECONDITIONED));
+  PetscCall(KSPGetPC(nt->kreuse, &pc));
+  PetscCall(PCSetType(pc, PCSHELL));
+  PetscCall(PCShellSetContext(pc, nt));
+  PetscCall(PCShellSetApply(pc, ApplyStaleFactor));
+  PetscCall(PCShellSetName(pc, "the last factorization of J"));
+  PetscCall(KSPSetErrorIfNotConverged(nt->kreuse, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
 
@@ -826,6 +926,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->stall_steps    = 3;
   nt->redundant_max  = 400000;
   nt->inner_rtol     = 0.1;
+  nt->reuse_its      = 10;
   PetscCall(CreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 100;
