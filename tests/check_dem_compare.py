@@ -8,7 +8,7 @@ the run takes under 60 s.
 With --scene pressure (scripts/dem_compare --scene pressure --quick: the deposit pushed by a free wall under a constant
 force, a problem with a rigid answer): both codes ran, the fields are there and finite, the wall moves in at every
 interval in both, kergs's `newton` converged on every step and added no interpenetration beyond the deposit's own
-(0.45 % of d) plus 0.1 % of d, LAMMPS's overlap (level 0.03 %) is within a factor 3 of its target, the two wall
+(0.45 % of d) plus 0.1 % of d, LAMMPS's overlap (level 0.03 %) is at most 3 times its target, the two wall
 histories agree within 10 % of LAMMPS's travel on every interval after the first, the figure pressure.png is
 written, under 60 s.
 

@@ -44,6 +44,7 @@ static PetscErrorCode CheckSolverIntegerOptions(MPI_Comm comm)
                                 "-solver_newton_max_sweeps",
                                 "-solver_newton_stall_steps",
                                 "-solver_newton_redundant_max",
+                                "-solver_newton_reuse_its",
                                 NULL};
 
   PetscFunctionBeginUser;

@@ -415,9 +415,11 @@ static PetscErrorCode ApplyStaleFactor(PC pc, Vec x, Vec y)
 }
 
 /* J d = -F by at most -solver_newton_reuse_its GMRES iterations preconditioned by the factorization of an earlier J of
-   this step. J changes between Newton steps only in the rows of the contacts that changed piece (and by sigma between
-   outer iterations): a low-rank change, which GMRES absorbs in a few iterations, each costing one triangular solve
-   where a factorization costs far more. *solved is false when it did not converge: then J is factored again. */
+   this step. With sigma unchanged, J changes between Newton steps only in the rows of the contacts that changed piece:
+   a low-rank change, which GMRES absorbs in about one iteration per changed row, each costing one triangular solve
+   where a factorization costs far more. Only when ksp solves directly (KSPPREONLY: LU, or LU gathered by PCREDUNDANT):
+   an iterative ksp's preconditioner is not an inverse of J. *solved is false when it did not converge: then J is
+   factored again. */
 static PetscErrorCode ReuseDirection(Newton *nt, PetscBool *solved)
 {
   KSPConvergedReason reason;
@@ -426,6 +428,11 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscBool *solved)
   PetscFunctionBeginUser;
   *solved = PETSC_FALSE;
   if (nt->reuse_its <= 0 || !nt->factored || !nt->stale || nt->sigma_used != nt->sigma_fact) PetscFunctionReturn(0);
+  {
+    PetscBool direct;
+    PetscCall(PetscObjectTypeCompare((PetscObject)nt->ksp, KSPPREONLY, &direct));
+    if (!direct) PetscFunctionReturn(0);
+  }
   { /* GMRES needs about one iteration per changed block row: try only when few changed */
     PetscInt changed = 0;
     for (PetscInt a = 0; a < nt->nlocal; a++)
