@@ -930,7 +930,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->sigma_min      = 1e-8;
   nt->sigma_max      = 1.0;
   nt->inner_max      = 20;
-  nt->stall_steps    = 3;
+  nt->stall_steps    = 5;
   nt->redundant_max  = 400000;
   nt->inner_rtol     = 0.1;
   nt->reuse_its      = 10;
