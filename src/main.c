@@ -4,6 +4,7 @@ static const char help[] =
     "Every option of the scene, the solver, the output and the time loop is listed below; docs/ describes the files.\n\n";
 
 #include <kergs/kergs.h>
+#include <signal.h>
 
 /* Options that PETSc itself reads late (at finalize) or that tune PETSc, and so may legitimately look unused. */
 static PetscBool IsPetscOption(const char *name)
@@ -156,6 +157,9 @@ int main(int argc, char **argv)
   ierr = PetscInitialize(&argc, &argv, NULL, help);
   if (ierr) return KERGS_EXIT_ERROR;
   ierr = Run(argc, args, &status);
+  /* the run is over and its status known: a batch scheduler's warning signal (Slurm's --signal, SIGUSR1) arriving
+     during the last clean-up must not turn it into a failure */
+  if (!ierr) (void)signal(SIGUSR1, SIG_IGN);
   if (ierr) {
     /* the error was printed where it arose; every rank ends with the documented status, whatever rank failed (a rank
        waiting in a collective call is ended too) */

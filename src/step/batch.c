@@ -106,7 +106,8 @@ PetscErrorCode KergsStepperCheckPaths(KergsStepper st)
 static const int Caught[] = {SIGTERM, SIGINT, SIGUSR1};
 #define NCAUGHT ((int)(sizeof(Caught) / sizeof(Caught[0])))
 static struct sigaction      Saved[NCAUGHT];
-static volatile sig_atomic_t Received = 0;
+static volatile sig_atomic_t Received  = 0;
+static PetscBool             Installed = PETSC_FALSE;
 
 /* The first signal asks for a clean stop after the step; a second one of the same kind is not caught any more and
    ends the process at once (as without kergs's handler). Only async-signal-safe calls. */
@@ -120,9 +121,13 @@ static void OnSignal(int sig)
   Received = sig;
 }
 
+/* on: kergs's handler (a flag) for SIGTERM, SIGINT and SIGUSR1; off: the dispositions found before (nothing when the
+   handler is not installed). */
 PetscErrorCode KergsStepperCatchSignals(PetscBool on)
 {
   PetscFunctionBeginUser;
+  if (on == Installed) PetscFunctionReturn(0);
+  Installed = on;
   for (int k = 0; k < NCAUGHT; k++) {
     if (on) {
       struct sigaction sa;

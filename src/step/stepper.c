@@ -314,7 +314,8 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   PetscCall(KergsResultsSnapshot(st->results, sc, st->contacts));
   PetscCall(KergsResultsSetEnd(st->results, EndText(st, rest, end, sizeof(end))));
   PetscCall(KergsResultsClose(st->results));
-  PetscCall(KergsStepperCatchSignals(PETSC_FALSE));
+  /* the handler stays until KergsStepperDestroy: a signal now (Slurm's warning at the end of a run that has just
+     finished) finds the run's work done and changes nothing, instead of ending the process with status 128 + signal */
   if (st->sample_out[0] && st->status == KERGS_EXIT_DONE) PetscCall(KergsSampleWrite(sc, st->sample_out)); /* a finished packing only */
   if (st->status == KERGS_EXIT_DONE && st->error_on_nonconvergence && st->nonconverged > 0) st->status = KERGS_EXIT_NOT_CONVERGED;
   PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
@@ -353,6 +354,7 @@ PetscErrorCode KergsStepperDestroy(KergsStepper *st)
 {
   PetscFunctionBeginUser;
   if (!*st) PetscFunctionReturn(0);
+  PetscCall(KergsStepperCatchSignals(PETSC_FALSE));
   PetscCall(KergsPartitionDestroy(&(*st)->partition));
   PetscCall(KergsResultsDestroy(&(*st)->results));
   PetscCall(KergsSolverDestroy(&(*st)->solver));
