@@ -126,6 +126,7 @@ static void OnSignal(int sig)
 PetscErrorCode KergsStepperCatchSignals(PetscBool on)
 {
   PetscFunctionBeginUser;
+  if (on) Received = 0;
   if (on == Installed) PetscFunctionReturn(0);
   Installed = on;
   for (int k = 0; k < NCAUGHT; k++) {
@@ -139,7 +140,6 @@ PetscErrorCode KergsStepperCatchSignals(PetscBool on)
     } else
       (void)sigaction(Caught[k], &Saved[k], NULL);
   }
-  if (on) Received = 0;
   PetscFunctionReturn(0);
 }
 

@@ -42,7 +42,6 @@ typedef struct {
   PetscReal *rho_nat;       /* per local contact: 1 / W_aa,nn, the natural residual's */
   PetscInt  *diagblock;     /* per local block row: position of its own block in J's diagonal part */
   PetscInt   nalloc;
-  PetscInt   nlocal, nc; /* this step's local contacts and components */
   /* options */
   PetscReal  rho_factor;           /* -solver_newton_rho */
   PetscReal  shift;                /* -solver_newton_shift */
@@ -217,17 +216,26 @@ static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt n, Petsc
   PetscFunctionReturn(0);
 }
 
+/* The local contacts whose Jacobian blocks (A, B) differ from A0, B0. */
+static PetscInt ChangedBlocks(const Newton *nt, PetscInt n, PetscInt nc, const PetscReal *A0, const PetscReal *B0)
+{
+  const size_t bytes   = (size_t)nc * nc * sizeof(PetscReal);
+  PetscInt     changed = 0;
+
+  for (PetscInt a = 0; a < n; a++)
+    if (memcmp(nt->A + a * nc * nc, A0 + a * nc * nc, bytes) || memcmp(nt->B + a * nc * nc, B0 + a * nc * nc, bytes)) changed++;
+  return changed;
+}
+
 /* J = A + B (W + sigma I) + eps I, unless the contact states (A, B) and sigma are those of the last Jacobian: F is
    piecewise linear, so once the states settle J stays the same and its factorization is reused (the Newton step then
    costs one solve). */
 static PetscErrorCode AssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
 {
   Mat      Ad, Ao;
-  PetscInt changed = (PetscInt)(sigma != nt->sigma_used);
-  size_t   bytes   = (size_t)n * nc * nc * sizeof(PetscReal);
+  PetscInt changed = (PetscInt)(sigma != nt->sigma_used || ChangedBlocks(nt, n, nc, nt->Aused, nt->Bused) > 0);
 
   PetscFunctionBeginUser;
-  if (!changed) changed = (PetscInt)(memcmp(nt->A, nt->Aused, bytes) || memcmp(nt->B, nt->Bused, bytes));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_MAX, s->comm));
   if (!changed) PetscFunctionReturn(0);
   PetscCall(PetscArraycpy(nt->Aused, nt->A, n * nc * nc));
@@ -365,8 +373,6 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
   nc = layout.ncomp;
   PetscCall(EnsureWork(nt, n));
-  nt->nlocal = n;
-  nt->nc     = nc;
   PetscCall(DestroyStepObjects(nt));
   PetscCall(KergsOperatorsGetFullW(ops, &nt->Wfull));
   PetscCall(MatDuplicate(nt->Wfull, MAT_COPY_VALUES, &nt->J));
@@ -414,16 +420,31 @@ static PetscErrorCode ApplyStaleFactor(PC pc, Vec x, Vec y)
   PetscFunctionReturn(0);
 }
 
+/* d = J^-1 (-F) by `ksp`, counting its iterations. */
+static PetscErrorCode SolveNewtonSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason)
+{
+  PetscInt its;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecScale(nt->F, -1.0));
+  PetscCall(KSPSolve(ksp, nt->F, nt->d));
+  PetscCall(VecScale(nt->F, -1.0));
+  PetscCall(KSPGetConvergedReason(ksp, reason));
+  PetscCall(KSPGetIterationNumber(ksp, &its));
+  nt->linear_its += its;
+  PetscFunctionReturn(0);
+}
+
 /* J d = -F by at most -solver_newton_reuse_its GMRES iterations preconditioned by the factorization of an earlier J of
    this step. With sigma unchanged, J changes between Newton steps only in the rows of the contacts that changed piece:
    a low-rank change, which GMRES absorbs in about one iteration per changed row, each costing one triangular solve
    where a factorization costs far more. Only when ksp solves directly (KSPPREONLY: LU, or LU gathered by PCREDUNDANT):
    an iterative ksp's preconditioner is not an inverse of J. *solved is false when it did not converge: then J is
    factored again. */
-static PetscErrorCode ReuseDirection(Newton *nt, PetscBool *solved)
+static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBool *solved)
 {
   KSPConvergedReason reason;
-  PetscInt           its;
+  PetscInt           changed;
 
   PetscFunctionBeginUser;
   *solved = PETSC_FALSE;
@@ -433,21 +454,11 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscBool *solved)
     PetscCall(PetscObjectTypeCompare((PetscObject)nt->ksp, KSPPREONLY, &direct));
     if (!direct) PetscFunctionReturn(0);
   }
-  { /* GMRES needs about one iteration per changed block row: try only when few changed */
-    PetscInt changed = 0;
-    for (PetscInt a = 0; a < nt->nlocal; a++)
-      if (memcmp(nt->A + a * nt->nc * nt->nc, nt->Afact + a * nt->nc * nt->nc, nt->nc * nt->nc * sizeof(PetscReal)) ||
-          memcmp(nt->B + a * nt->nc * nt->nc, nt->Bfact + a * nt->nc * nt->nc, nt->nc * nt->nc * sizeof(PetscReal)))
-        changed++;
-    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)nt->ksp)));
-    if (2 * changed > nt->reuse_its) PetscFunctionReturn(0);
-  }
-  PetscCall(VecScale(nt->F, -1.0));
-  PetscCall(KSPSolve(nt->kreuse, nt->F, nt->d));
-  PetscCall(VecScale(nt->F, -1.0));
-  PetscCall(KSPGetConvergedReason(nt->kreuse, &reason));
-  PetscCall(KSPGetIterationNumber(nt->kreuse, &its));
-  nt->linear_its += its;
+  /* GMRES needs about one iteration per changed block row: try only when few changed */
+  changed = ChangedBlocks(nt, n, nc, nt->Afact, nt->Bfact);
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)nt->ksp)));
+  if (2 * changed > nt->reuse_its) PetscFunctionReturn(0);
+  PetscCall(SolveNewtonSystem(nt, nt->kreuse, &reason));
   *solved = (PetscBool)(reason > 0);
   if (*solved) nt->reused++;
   PetscFunctionReturn(0);
@@ -456,31 +467,25 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscBool *solved)
 /* Solve J d = -F: with the last factorization while it serves (ReuseDirection), else by ksp, which factors J again. A
    failed solve (a Krylov method on an ill-conditioned J, a singular factorization) is not an error: the inner Newton
    stops and the outer iteration retries with a larger proximal term, which conditions J better. */
-static PetscErrorCode NewtonDirection(Newton *nt, PetscBool *solved)
+static PetscErrorCode NewtonDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBool *solved)
 {
   KSPConvergedReason reason;
-  PetscInt           its;
   PetscLogDouble     t0, t1;
   PC                 pc;
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&t0));
-  PetscCall(ReuseDirection(nt, solved));
+  PetscCall(ReuseDirection(nt, n, nc, solved));
   if (!*solved) {
     PetscCall(KSPGetPC(nt->ksp, &pc));
     PetscCall(PCSetReusePreconditioner(pc, PETSC_FALSE));
     if (nt->stale || !nt->factored) nt->factorizations++;
-    PetscCall(VecScale(nt->F, -1.0));
-    PetscCall(KSPSolve(nt->ksp, nt->F, nt->d));
-    PetscCall(VecScale(nt->F, -1.0));
-    PetscCall(KSPGetConvergedReason(nt->ksp, &reason));
-    PetscCall(KSPGetIterationNumber(nt->ksp, &its));
-    nt->linear_its += its;
+    PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
     nt->factored   = PETSC_TRUE;
     nt->stale      = PETSC_FALSE;
     nt->sigma_fact = nt->sigma_used;
-    PetscCall(PetscArraycpy(nt->Afact, nt->Aused, nt->nlocal * nt->nc * nt->nc));
-    PetscCall(PetscArraycpy(nt->Bfact, nt->Bused, nt->nlocal * nt->nc * nt->nc));
+    PetscCall(PetscArraycpy(nt->Afact, nt->Aused, n * nc * nc));
+    PetscCall(PetscArraycpy(nt->Bfact, nt->Bused, n * nc * nc));
     *solved = (PetscBool)(reason >= 0);
     if (!*solved) {
       nt->failed_linear++;
@@ -624,7 +629,7 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit));
   for (PetscInt k = 0; k < count && PetscSqrtReal(2.0 * merit) > ftol; k++) {
     PetscCall(AssembleJacobian(s, nt, n, nc, nt->shift, nt->sigma));
-    PetscCall(NewtonDirection(nt, &solved));
+    PetscCall(NewtonDirection(nt, n, nc, &solved));
     if (!solved) {
       *ok   = PETSC_FALSE;
       merit = PETSC_MAX_REAL; /* not solved */
