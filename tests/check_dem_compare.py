@@ -32,30 +32,41 @@ PRESSURE_FIELDS = ["code", "setting", "dt", "steps", "wall_seconds", "seconds_pe
                    "overlap_max"]
 
 
-def check_pressure(a):
+def run_and_read(a, scene, jsonl, png, figure, fields, series, keys):
+    """scripts/dem_compare --quick (with --scene SCENE unless None) and the checks every scene shares: exit status, time,
+    the JSON lines file, a kergs and a LAMMPS run, the summary, the figure PNG, every field present and finite (the
+    per-interval list SERIES with its KEYS included). Returns the kergs rows and the LAMMPS rows."""
+    name = "dem_compare" + (f" --scene {scene}" if scene else "") + " --quick"
     t0 = time.time()
-    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "dem_compare"), "--scene", "pressure", "--quick",
-                        "--kergs", a.kergs, "--out", a.dir], capture_output=True, text=True)
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "dem_compare")] + (["--scene", scene] if scene else []) +
+                       ["--quick", "--kergs", a.kergs, "--out", a.dir], capture_output=True, text=True)
     wall = time.time() - t0
-    check(p.returncode == 0, f"dem_compare --scene pressure --quick exits 0 (status {p.returncode}) {p.stderr[-1500:]}")
-    check(wall < 60, f"dem_compare --scene pressure --quick takes under 60 s ({wall:.1f} s)")
+    check(p.returncode == 0, f"{name} exits 0 (status {p.returncode}) {p.stderr[-1500:]}")
+    check(wall < 60, f"{name} takes under 60 s ({wall:.1f} s)")
     rows = [json.loads(l) for l in p.stdout.splitlines() if l.strip()]
-    with open(os.path.join(a.dir, "dem_compare_pressure.jsonl")) as f:
-        check([json.loads(l) for l in f] == rows, "dem_compare_pressure.jsonl holds the printed lines")
+    with open(os.path.join(a.dir, jsonl)) as f:
+        check([json.loads(l) for l in f] == rows, f"{jsonl} holds the printed lines")
     runs = [r for r in rows if "code" in r]
     kergs = [r for r in runs if r["code"] == "kergs"]
     lmp = [r for r in runs if r["code"] == "lammps"]
     check(len(kergs) >= 1 and len(lmp) >= 1, f"a kergs run and a LAMMPS run ({len(kergs)}, {len(lmp)})")
-    check("summary" in rows[-1], "the last line is the summary")
-    png = os.path.join(a.dir, "pressure.png")
-    with open(png, "rb") if os.path.exists(png) else open(os.devnull, "rb") as f:
-        check(f.read(8) == b"\x89PNG\r\n\x1a\n", "the wall history figure pressure.png is a PNG")
+    check(bool(rows) and "summary" in rows[-1], "the last line is the summary")
+    path = os.path.join(a.dir, png)
+    with open(path, "rb") if os.path.exists(path) else open(os.devnull, "rb") as f:
+        check(f.read(8) == b"\x89PNG\r\n\x1a\n", f"the {figure} figure {png} is a PNG")
     for r in runs:
-        miss = [k for k in PRESSURE_FIELDS if k not in r]
+        miss = [k for k in fields if k not in r]
         check(not miss, f"{r.get('code')} {r.get('setting')}: fields present (missing {miss})")
-        nums = [r[k] for k in PRESSURE_FIELDS[2:] if k != "history" and k in r]
-        nums += [h[k] for h in r.get("history", []) for k in ("time", "wall_x", "right_x")]
+        nums = [r[k] for k in fields[2:] if k != series and k in r]
+        nums += [h[k] for h in r.get(series, []) for k in keys]
         check(all(math.isfinite(v) for v in nums), f"{r.get('code')} {r.get('setting')}: finite values")
+    return kergs, lmp
+
+
+def check_pressure(a):
+    kergs, lmp = run_and_read(a, "pressure", "dem_compare_pressure.jsonl", "pressure.png", "wall history", PRESSURE_FIELDS,
+                              "history", ("time", "wall_x", "right_x"))
+    for r in kergs + lmp:
         check(0.7 < r["packing"] < 0.85, f"{r['code']}: packing fraction of the deposit ({r['packing']:.4f})")
         x = [h["wall_x"] for h in r["history"]]
         check(len(x) == 5 and all(b < a_ for a_, b in zip(x, x[1:])) and x[0] < 0.5 and r["travel"] > 0,
@@ -81,29 +92,9 @@ def main():
     a = ap.parse_args()
     if a.scene == "pressure":
         return check_pressure(a)
-    t0 = time.time()
-    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "dem_compare"), "--quick", "--kergs", a.kergs,
-                        "--out", a.dir], capture_output=True, text=True)
-    wall = time.time() - t0
-    check(p.returncode == 0, f"dem_compare --quick exits 0 (status {p.returncode}) {p.stderr[-1500:]}")
-    check(wall < 60, f"dem_compare --quick takes under 60 s ({wall:.1f} s)")
-    rows = [json.loads(l) for l in p.stdout.splitlines() if l.strip()]
-    with open(os.path.join(a.dir, "dem_compare.jsonl")) as f:
-        check([json.loads(l) for l in f] == rows, "dem_compare.jsonl holds the printed lines")
-    runs = [r for r in rows if "code" in r]
-    kergs = [r for r in runs if r["code"] == "kergs"]
-    lmp = [r for r in runs if r["code"] == "lammps"]
-    check(len(kergs) >= 1 and len(lmp) >= 1, f"a kergs run and a LAMMPS run ({len(kergs)}, {len(lmp)})")
-    check("summary" in rows[-1], "the last line is the summary")
-    png = os.path.join(a.dir, "forces.png")
-    with open(png, "rb") if os.path.exists(png) else open(os.devnull, "rb") as f:
-        check(f.read(8) == b"\x89PNG\r\n\x1a\n", "the force history figure forces.png is a PNG")
-    for r in runs:
-        miss = [k for k in FIELDS if k not in r]
-        check(not miss, f"{r.get('code')} {r.get('setting')}: fields present (missing {miss})")
-        nums = [r[k] for k in FIELDS[2:] if k != "forces" and k in r]
-        nums += [f[k] for f in r.get("forces", []) for k in ("time", "top_y", "right_x")]
-        check(all(math.isfinite(v) for v in nums), f"{r.get('code')} {r.get('setting')}: finite values")
+    kergs, lmp = run_and_read(a, None, "dem_compare.jsonl", "forces.png", "force history", FIELDS, "forces",
+                              ("time", "top_y", "right_x"))
+    for r in kergs + lmp:
         check(0.8 < r["packing"] < 0.92, f"{r['code']}: packing fraction of a dense hex lattice ({r['packing']:.4f})")
         fy = [f["top_y"] for f in r["forces"]]
         check(len(fy) == 5 and all(b > a_ for a_, b in zip(fy, fy[1:])) and fy[0] > 0,
