@@ -40,7 +40,7 @@ static PetscBool IsPetscOption(const char *name)
                                    NULL};
   /* options under any prefix that PETSc reads when a preconditioner is first set up, inside the time loop, after the
      check: a factorization package's (-solver_mat_mumps_icntl_7) and those of inner solvers (-solver_sub_pc_type lu of
-     block Jacobi, -solver_mg_levels_ksp_type of multigrid), and those of the Newton type's linear solver, which it sets
+     block Jacobi or additive Schwarz, -solver_mg_levels_ksp_type of multigrid), and those of the Newton type's linear solver, which it sets
      up per step (-solver_ksp_rtol is read only once GMRES replaces the one-rank default) */
   static const char *packages[] = {"mat_mumps_", "mat_cholmod_", "mat_umfpack_", "mat_klu_",   "mat_superlu_",      "sub_",
                                    "mg_levels_", "mg_coarse_",   "solver_ksp_",  "solver_pc_", "solver_redundant_", NULL};

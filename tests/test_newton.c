@@ -221,7 +221,7 @@ static PetscErrorCode TestFrictionless(void)
 
 /* Frictionless confine500, 3 steps, on every rank of the world and on one rank: the disks' velocities agree grain by
    grain to the solver's tolerance. */
-/* `linear`: the options of the linear solver on several ranks (J gathered whole, or GMRES with block Jacobi). */
+/* `linear`: the options of the linear solver on several ranks (J gathered whole, or GMRES with additive Schwarz). */
 static PetscErrorCode TestRanks(const char *linear, const char *what)
 {
   char         opts[PETSC_MAX_PATH_LEN], label[128];
@@ -297,7 +297,7 @@ int main(int argc, char **argv)
     PetscCall(TestLineSearch());
   } else {
     PetscCall(TestRanks("", "J gathered on every rank"));
-    PetscCall(TestRanks("-solver_newton_redundant_max 0", "GMRES with block Jacobi"));
+    PetscCall(TestRanks("-solver_newton_redundant_max 0", "GMRES with additive Schwarz"));
   }
   {
     int code = Finish();

@@ -63,6 +63,7 @@ typedef struct {
   PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
   PetscBool  project;              /* -solver_newton_project: line search along the path projected on the cones */
   PetscInt   reuse_its;            /* -solver_newton_reuse_its: GMRES iterations on a stale factorization (0: never) */
+  PetscBool  configure_subs;       /* the subdomain solvers of ksp's additive Schwarz are still to be chosen */
   PetscBool  factored;             /* ksp's preconditioner was set up on a J of this step */
   PetscBool  stale;                /* J changed since that set-up */
   /* figures of the last solve */
@@ -315,17 +316,20 @@ static PetscErrorCode EnableNullPivots(Newton *nt)
      AMD (PCREDUNDANT): exact, and as fast as one rank. MUMPS spent about 12 ms in every factorization of
      confine500's J, where PETSc's LU takes well under one, and Newton factors up to 250 Jacobians a step; block
      Jacobi took 140 GMRES iterations per Newton step there (the network of forces crosses the cut).
-   - above, GMRES preconditioned by block Jacobi, one block per rank factored by LU with AMD: nothing of the size of
-     the whole J on one rank, about a dozen GMRES iterations per Newton step on biaxial 20k and 100k.
+   - above, GMRES preconditioned by additive Schwarz with an overlap of one layer, one subdomain per rank factored by
+     LU with AMD (ConfigureSubdomainSolvers): nothing of the size of the whole J on one rank; 1.1-1.5 times faster
+     than one rank from 10,000 disks on, where block Jacobi (no overlap) was often slower than one rank
+     (docs/solver.md, "Linear algebra").
    The sub-solvers exist once the KSP is set up; -solver_sub_* and -solver_redundant_* options, read last, win. */
 static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
 {
   PC          pc, subpc;
-  KSP        *sub, inner;
-  PetscInt    nblocks, rows;
+  KSP         inner;
+  PetscInt    rows;
   PetscMPIInt size;
 
   PetscFunctionBeginUser;
+  nt->configure_subs = PETSC_FALSE;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
   if (size == 1 || nt->user_pc) PetscFunctionReturn(0);
   PetscCall(KSPGetPC(nt->ksp, &pc));
@@ -343,10 +347,28 @@ static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
   }
   PetscCall(KSPSetType(nt->ksp, KSPGMRES));
   PetscCall(KSPSetTolerances(nt->ksp, 1e-6, PETSC_DEFAULT, PETSC_DEFAULT, 200));
-  PetscCall(PCSetType(pc, PCBJACOBI));
-  PetscCall(KSPSetFromOptions(nt->ksp)); /* -solver_ksp_rtol and the like */
+  PetscCall(PCSetType(pc, PCASM));
+  PetscCall(PCASMSetOverlap(pc, 1));
+  PetscCall(KSPSetFromOptions(nt->ksp)); /* -solver_ksp_rtol, -solver_pc_asm_overlap and the like */
+  nt->configure_subs = PETSC_TRUE;       /* ConfigureSubdomainSolvers, at the first solve */
+  PetscFunctionReturn(0);
+}
+
+/* The subdomain solvers of additive Schwarz exist once the KSP is set up: LU with AMD on each, chosen at the step's
+   first Newton solve, once J holds its first values (set up earlier, on J's initial copy of W, every solve of the
+   step failed with a zero pivot in a subdomain's LU on biaxial 20k, 2 ranks). -solver_sub_* options, read last, win. */
+static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
+{
+  PC       pc, subpc;
+  KSP     *sub;
+  PetscInt nblocks;
+
+  PetscFunctionBeginUser;
+  if (!nt->configure_subs) PetscFunctionReturn(0);
+  nt->configure_subs = PETSC_FALSE;
+  PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(KSPSetUp(nt->ksp));
-  PetscCall(PCBJacobiGetSubKSP(pc, &nblocks, NULL, &sub));
+  PetscCall(PCASMGetSubKSP(pc, &nblocks, NULL, &sub));
   for (PetscInt b = 0; b < nblocks; b++) {
     PetscCall(KSPSetType(sub[b], KSPPREONLY));
     PetscCall(KSPGetPC(sub[b], &subpc));
@@ -435,30 +457,35 @@ static PetscErrorCode SolveNewtonSystem(Newton *nt, KSP ksp, KSPConvergedReason 
   PetscFunctionReturn(0);
 }
 
-/* J d = -F by at most -solver_newton_reuse_its GMRES iterations preconditioned by the factorization of an earlier J of
-   this step. With sigma unchanged, J changes between Newton steps only in the rows of the contacts that changed piece:
-   a low-rank change, which GMRES absorbs in about one iteration per changed row, each costing one triangular solve
-   where a factorization costs far more. Only when ksp solves directly (KSPPREONLY: LU, or LU gathered by PCREDUNDANT):
-   an iterative ksp's preconditioner is not an inverse of J. *solved is false when it did not converge: then J is
-   factored again. */
+/* J d = -F with the factorization of an earlier J of this step. With sigma unchanged, J changes between Newton steps
+   only in the rows of the contacts that changed piece: a low-rank change, which GMRES absorbs in about one iteration
+   per changed row, each costing one triangular solve where a factorization costs far more. When ksp solves directly
+   (KSPPREONLY: LU, or LU gathered by PCREDUNDANT), by at most -solver_newton_reuse_its GMRES iterations preconditioned
+   by that factorization (kreuse); when ksp is itself a Krylov method (GMRES with additive Schwarz on several ranks),
+   by ksp with its preconditioner kept. Tried only when few contacts changed. *solved is false when it did not
+   converge: then J is factored again. */
 static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBool *solved)
 {
   KSPConvergedReason reason;
   PetscInt           changed;
+  PetscBool          direct;
+  PC                 pc;
 
   PetscFunctionBeginUser;
   *solved = PETSC_FALSE;
   if (nt->reuse_its <= 0 || !nt->factored || !nt->stale || nt->sigma_used != nt->sigma_fact) PetscFunctionReturn(0);
-  {
-    PetscBool direct;
-    PetscCall(PetscObjectTypeCompare((PetscObject)nt->ksp, KSPPREONLY, &direct));
-    if (!direct) PetscFunctionReturn(0);
-  }
   /* GMRES needs about one iteration per changed block row: try only when few changed */
   changed = ChangedBlocks(nt, n, nc, nt->Afact, nt->Bfact);
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)nt->ksp)));
   if (2 * changed > nt->reuse_its) PetscFunctionReturn(0);
-  PetscCall(SolveNewtonSystem(nt, nt->kreuse, &reason));
+  PetscCall(PetscObjectTypeCompare((PetscObject)nt->ksp, KSPPREONLY, &direct));
+  if (direct)
+    PetscCall(SolveNewtonSystem(nt, nt->kreuse, &reason));
+  else {
+    PetscCall(KSPGetPC(nt->ksp, &pc));
+    PetscCall(PCSetReusePreconditioner(pc, PETSC_TRUE));
+    PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
+  }
   *solved = (PetscBool)(reason > 0);
   if (*solved) nt->reused++;
   PetscFunctionReturn(0);
@@ -480,6 +507,7 @@ static PetscErrorCode NewtonDirection(Newton *nt, PetscInt n, PetscInt nc, Petsc
     PetscCall(KSPGetPC(nt->ksp, &pc));
     PetscCall(PCSetReusePreconditioner(pc, PETSC_FALSE));
     if (nt->stale || !nt->factored) nt->factorizations++;
+    PetscCall(ConfigureSubdomainSolvers(nt));
     PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
     nt->factored   = PETSC_TRUE;
     nt->stale      = PETSC_FALSE;
@@ -809,7 +837,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
   PetscCall(
       PetscOptionsInt("-solver_newton_redundant_max",
-                      "Several ranks: J gathered whole on every rank and factored there up to this many rows, else GMRES with block Jacobi",
+                      "Several ranks: J gathered whole on every rank and factored there up to this many rows, else GMRES with additive "
+                      "Schwarz (overlap 1)",
                       "", nt->redundant_max, &nt->redundant_max, NULL));
   PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_type", &nt->user_pc));
   PetscCall(PetscOptionsInt("-solver_newton_reuse_its",
@@ -936,7 +965,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->sigma_max      = 1.0;
   nt->inner_max      = 20;
   nt->stall_steps    = 5;
-  nt->redundant_max  = 400000;
+  nt->redundant_max  = 15000;
   nt->inner_rtol     = 0.1;
   nt->reuse_its      = 10;
   PetscCall(CreateLinearSolver(s, nt));
