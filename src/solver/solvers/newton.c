@@ -62,10 +62,11 @@ typedef struct {
   PetscReal  sigma;                /* this outer iteration's sigma (0 without the proximal term) */
   PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
   PetscBool  project;              /* -solver_newton_project: line search along the path projected on the cones */
-  PetscInt   reuse_its;            /* -solver_newton_reuse_its: GMRES iterations on a stale factorization (0: never) */
-  PetscBool  configure_subs;       /* the subdomain solvers of ksp's additive Schwarz are still to be chosen */
-  PetscBool  factored;             /* ksp's preconditioner was set up on a J of this step */
-  PetscBool  stale;                /* J changed since that set-up */
+  PetscInt   reuse_its;            /* -solver_newton_reuse_its: GMRES iterations on a stale factorization (0: never); with
+                                      additive Schwarz, twice the changed contacts up to which its set-up is kept */
+  PetscBool configure_subs;        /* the subdomain solvers of ksp's additive Schwarz are still to be chosen */
+  PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
+  PetscBool stale;                 /* J changed since that set-up */
   /* figures of the last solve */
   PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians, stalls, factorizations, reused;
   PetscReal linear_seconds, last_shift, merit;
@@ -315,12 +316,13 @@ static PetscErrorCode EnableNullPivots(Newton *nt)
    - up to -solver_newton_redundant_max rows, J gathered whole on every rank and factored there by PETSc's LU with
      AMD (PCREDUNDANT): exact, and as fast as one rank. MUMPS spent about 12 ms in every factorization of
      confine500's J, where PETSc's LU takes well under one, and Newton factors up to 250 Jacobians a step; block
-     Jacobi took 140 GMRES iterations per Newton step there (the network of forces crosses the cut).
+     Jacobi took about 90 GMRES iterations per Newton step there, additive Schwarz about 30 (the network of forces
+     crosses the cut).
    - above, GMRES preconditioned by additive Schwarz with an overlap of one layer, one subdomain per rank factored by
-     LU with AMD (ConfigureSubdomainSolvers): nothing of the size of the whole J on one rank; 1.1-1.5 times faster
-     than one rank from 10,000 disks on, where block Jacobi (no overlap) was often slower than one rank
-     (docs/solver.md, "Linear algebra").
-   The sub-solvers exist once the KSP is set up; -solver_sub_* and -solver_redundant_* options, read last, win. */
+     LU with AMD (ConfigureSubdomainSolvers): nothing of the size of the whole J on one rank; 1.03-1.8 times faster
+     than one rank from 5,000 disks on, where the gathered LU was slower than one rank and block Jacobi (overlap 0)
+     often too (docs/solver.md, "Linear algebra").
+   -solver_redundant_* options, read last, win; the subdomain solvers are chosen by ConfigureSubdomainSolvers. */
 static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
 {
   PC          pc, subpc;
@@ -355,8 +357,9 @@ static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
 }
 
 /* The subdomain solvers of additive Schwarz exist once the KSP is set up: LU with AMD on each, chosen at the step's
-   first Newton solve, once J holds its first values (set up earlier, on J's initial copy of W, every solve of the
-   step failed with a zero pivot in a subdomain's LU on biaxial 20k, 2 ranks). -solver_sub_* options, read last, win. */
+   first Newton solve, once J holds its first values (set up at the step's set-up, they would first factor the
+   subdomains of J's initial copy of W, singular: a wasted factorization, which fails). -solver_sub_* options, read
+   last, win. */
 static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
 {
   PC       pc, subpc;
@@ -461,9 +464,9 @@ static PetscErrorCode SolveNewtonSystem(Newton *nt, KSP ksp, KSPConvergedReason 
    only in the rows of the contacts that changed piece: a low-rank change, which GMRES absorbs in about one iteration
    per changed row, each costing one triangular solve where a factorization costs far more. When ksp solves directly
    (KSPPREONLY: LU, or LU gathered by PCREDUNDANT), by at most -solver_newton_reuse_its GMRES iterations preconditioned
-   by that factorization (kreuse); when ksp is itself a Krylov method (GMRES with additive Schwarz on several ranks),
-   by ksp with its preconditioner kept. Tried only when few contacts changed. *solved is false when it did not
-   converge: then J is factored again. */
+   by that factorization (kreuse); when ksp is kergs's GMRES with additive Schwarz (several ranks), by ksp with its
+   preconditioner kept, to ksp's own tolerance (a Krylov method chosen by option sets up every changed J). Tried only
+   when few contacts changed. *solved is false when it did not converge: then J is factored again. */
 static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBool *solved)
 {
   KSPConvergedReason reason;
@@ -482,8 +485,12 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscB
   if (direct)
     PetscCall(SolveNewtonSystem(nt, nt->kreuse, &reason));
   else {
+    PetscBool schwarz;
     PetscCall(KSPGetPC(nt->ksp, &pc));
+    PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCASM, &schwarz));
+    if (!schwarz || nt->user_pc) PetscFunctionReturn(0); /* a Krylov method chosen by option: every changed J is set up */
     PetscCall(PCSetReusePreconditioner(pc, PETSC_TRUE));
+    PetscCall(PCSetFailedReason(pc, PC_NOERROR));
     PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
   }
   *solved = (PetscBool)(reason > 0);
@@ -506,6 +513,9 @@ static PetscErrorCode NewtonDirection(Newton *nt, PetscInt n, PetscInt nc, Petsc
   if (!*solved) {
     PetscCall(KSPGetPC(nt->ksp, &pc));
     PetscCall(PCSetReusePreconditioner(pc, PETSC_FALSE));
+    /* additive Schwarz keeps a subdomain's failed factorization as its own failure through later set-ups (PETSc
+       3.18): without this, one failed solve would fail every later one, however good J */
+    PetscCall(PCSetFailedReason(pc, PC_NOERROR));
     if (nt->stale || !nt->factored) nt->factorizations++;
     PetscCall(ConfigureSubdomainSolvers(nt));
     PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
@@ -843,7 +853,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_type", &nt->user_pc));
   PetscCall(PetscOptionsInt("-solver_newton_reuse_its",
                             "GMRES iterations (relative tolerance 1e-8) preconditioned by the last factorization of J before J is factored "
-                            "again (0: factor every changed J)",
+                            "again, tried when at most half as many contacts changed piece (with additive Schwarz on several ranks: its "
+                            "set-up kept under the same rule) (0: factor every changed J)",
                             "", nt->reuse_its, &nt->reuse_its, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_stall_steps",
                             "Newton steps in a row that each cut |F| by less than a tenth and end an outer iteration's Newton (0: never)",
