@@ -11,7 +11,9 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
               friction against the disks), dt 1e-3 (docs/solver.md, "A polydisperse packing of the same size").
   siconos     confine500's step 5 exported (-fclib_step 5): newton's Newton steps and time on it against Siconos's fc2d
               NSGS at 1e-8 on the same file (scripts/siconos_solve.py), side by side.
-  ranks100k   biaxial 100,000, first step, newton to 1e-8 on 1 and on 2 ranks: residuals and speed-up.
+  ranks100k   biaxial 100,000, first step, newton to 1e-8 on 1 and on 2 ranks: residuals and speed-up; and the same on
+              the polydisperse packing (cases/deposit500.h5 tiled 200 times, 100,000 disks pushed by the free wall
+              of pressure20k, 2 steps of 1e-3 s), where the two ranks split the strip along its length.
   big         (--big only) biaxial 10^6 disks on 2 ranks, first step, newton to 1e-6: time, peak memory per grain.
 
 Usage: bench_accurate.py [--kergs build/kergs] [--parts confine500,biaxial20k,pressure20k,siconos,ranks100k] [--big] [--quick]
@@ -125,11 +127,16 @@ def tiled_deposit(tiles):
     return path
 
 
-if "pressure20k" in parts:
-    P20K = ["-options_file", "cases/confine500.opts", "-sample_input", tiled_deposit(40), "-box", "0,0,20,1.2",
+def pressure_scene(tiles, steps):
+    """deposit500 tiled `tiles` times, pushed by a free frictionless right wall (1 kg, 20 N), dt 1e-3."""
+    return ["-options_file", "cases/confine500.opts", "-sample_input", tiled_deposit(tiles), "-box", f"0,0,{0.5 * tiles:g},1.2",
             "-wall_box_right_velocity", "0,0", "-wall_box_right_type", "free", "-wall_box_right_mass", "1",
             "-wall_box_right_force", "-20,0", "-materials", "2", "-friction", "0.3", "-friction_pairs", "0,1,0",
-            "-wall_box_right_material", "1", "-dt", "1e-3", "-steps", "5", "-output_every", "1000", "-output_xdmf", "false"]
+            "-wall_box_right_material", "1", "-dt", "1e-3", "-steps", str(steps), "-output_every", "1000", "-output_xdmf", "false"]
+
+
+if "pressure20k" in parts:
+    P20K = pressure_scene(40, 5)
     g = run("pressure20k_nlgs_quad_1e-4", 1, P20K + ["-solver_type", "nlgs", "-solver_tol", "1e-4", "-solver_max_it", "1000000"])
     w = run("pressure20k_newton_1e-8", 1, P20K + NEWTON + ["-solver_tol", "1e-8"])
     if g is not None and w is not None:
@@ -163,6 +170,14 @@ if "ranks100k" in parts:
         emit({"bench": "ranks100k", "residual_1": float(one["residual"][0]), "residual_2": float(two["residual"][0]),
               "seconds_1": float(one["solve_seconds"][0]), "seconds_2": float(two["solve_seconds"][0]),
               "speedup": float(one["solve_seconds"][0] / two["solve_seconds"][0])})
+    P100K = pressure_scene(200, 2)
+    one = run("pressure100k_newton_1rank", 1, P100K + NEWTON + ["-solver_tol", "1e-8"])
+    two = run("pressure100k_newton_2ranks", 2, P100K + NEWTON + ["-solver_tol", "1e-8"])
+    if one is not None and two is not None:
+        t1, t2 = float(np.sum(one["solve_seconds"])), float(np.sum(two["solve_seconds"]))
+        emit({"bench": "ranks100k_pressure", "residual_max_1": float(np.max(one["residual"])),
+              "residual_max_2": float(np.max(two["residual"])), "newton_steps_1": [int(x) for x in one["iterations"]],
+              "newton_steps_2": [int(x) for x in two["iterations"]], "seconds_1": t1, "seconds_2": t2, "speedup": t1 / t2})
 
 if "big" in parts:
     s = run("biaxial1M_newton_2ranks", 2, B1M + ["-steps", "1"] + NEWTON + ["-solver_tol", "1e-6"])
