@@ -114,6 +114,75 @@ static PetscErrorCode TestJacobian(void)
 
 #define ONE_DISK "-gravity 0,-10 -dt 1e-3 -disks_source list -disks_radius 0.1 -alert 0.01 -solver_type newton -solver_tol 1e-12 "
 
+/* The smoothed Alart-Curnier function (KergsLawAlartCurnierSmoothed): at random points of every piece and at random
+   eps, its Jacobian A + B W against central differences (it is smooth: no kink to avoid), and its distance to the
+   nonsmooth function at most a small multiple of eps (every smoothed max is within eps of max). */
+static PetscErrorCode TestSmoothedLaw(void)
+{
+  PetscRandom rnd;
+  PetscReal   worst = 0, gap = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscRandomCreate(PETSC_COMM_SELF, &rnd));
+  PetscCall(PetscRandomSetInterval(rnd, -1.0, 1.0));
+  for (PetscInt k = 0; k < 2000; k++) {
+    const PetscInt  nc = k % 2 ? 2 : 1;
+    PetscReal       mu = 0, eps, rho, W[4] = {0, 0, 0, 0}, L[3], F0[2], Fp[2], Fm[2], Fns[2], A[4], B[4], err = 0, scale = 0;
+    PetscScalar     r[2] = {0, 0}, u[2] = {0, 0}, rp[2], rm[2], up[2], um[2], d[2] = {0, 0}, b[2] = {0, 0};
+    const PetscReal h = 1e-6;
+    for (PetscInt i = 0; i < 3; i++) PetscCall(PetscRandomGetValueReal(rnd, &L[i]));
+    W[0] = L[0] * L[0] + 0.1;
+    W[1] = W[2] = L[0] * L[1];
+    W[3]        = L[1] * L[1] + L[2] * L[2] + 0.1;
+    if (nc == 1) W[0] = PetscAbsReal(L[0]) + 0.1;
+    if (nc > 1) PetscCall(PetscRandomGetValueReal(rnd, &mu));
+    mu  = PetscAbsReal(mu);
+    rho = 1.0 / W[0];
+    PetscCall(PetscRandomGetValueReal(rnd, &eps));
+    eps = 1e-3 + 0.1 * PetscAbsReal(eps);
+    for (PetscInt c = 0; c < nc; c++) {
+      PetscReal x;
+      PetscCall(PetscRandomGetValueReal(rnd, &x));
+      r[c] = x;
+      PetscCall(PetscRandomGetValueReal(rnd, &x));
+      b[c] = x;
+      PetscCall(PetscRandomGetValueReal(rnd, &x));
+      d[c] = x;
+    }
+    for (PetscInt c = 0; c < nc; c++) {
+      rp[c] = r[c] + h * d[c];
+      rm[c] = r[c] - h * d[c];
+      u[c] = up[c] = um[c] = b[c];
+      for (PetscInt e = 0; e < nc; e++) {
+        u[c] += W[c * nc + e] * PetscRealPart(r[e]);
+        up[c] += W[c * nc + e] * PetscRealPart(r[e] + h * d[e]);
+        um[c] += W[c * nc + e] * PetscRealPart(r[e] - h * d[e]);
+      }
+    }
+    KergsLawAlartCurnierSmoothed(nc, r, u, mu, rho, PETSC_TRUE, eps, F0, A, B);
+    KergsLawAlartCurnierSmoothed(nc, rp, up, mu, rho, PETSC_TRUE, eps, Fp, NULL, NULL);
+    KergsLawAlartCurnierSmoothed(nc, rm, um, mu, rho, PETSC_TRUE, eps, Fm, NULL, NULL);
+    KergsLawAlartCurnier(nc, r, u, mu, rho, PETSC_TRUE, Fns, NULL, NULL);
+    for (PetscInt c = 0; c < nc; c++) {
+      PetscReal Jd = 0;
+      for (PetscInt e = 0; e < nc; e++) {
+        PetscReal Wd = 0;
+        for (PetscInt f = 0; f < nc; f++) Wd += W[e * nc + f] * PetscRealPart(d[f]);
+        Jd += A[c * nc + e] * PetscRealPart(d[e]) + B[c * nc + e] * Wd;
+      }
+      err += PetscSqr((Fp[c] - Fm[c]) / (2 * h) - Jd);
+      scale += PetscSqr(Jd) + PetscSqr(PetscRealPart(d[c]));
+      gap = PetscMax(gap, PetscAbsReal(F0[c] - Fns[c]) / eps);
+    }
+    worst = PetscMax(worst, PetscSqrtReal(err / scale));
+  }
+  PetscCall(PetscRandomDestroy(&rnd));
+  PetscCall(Check((PetscBool)(worst <= 1e-6), "smoothed Alart-Curnier: Jacobian = central difference (worst relative error)", worst, 1e-6));
+  PetscCall(Check((PetscBool)(gap <= 3.0), "smoothed Alart-Curnier: within a few eps of the nonsmooth function (worst |F_eps - F| / eps)",
+                  gap, 3.0));
+  PetscFunctionReturn(0);
+}
+
 /* One disk and one wall: open (moving away), resting (closing, stick), on a slope below and above tan = mu (stick,
    slip). Each step solved in at most 3 Newton steps, and the physics right. */
 static PetscErrorCode TestOneContact(void)
@@ -319,6 +388,7 @@ int main(int argc, char **argv)
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   if (size == 1) {
     PetscCall(TestJacobian());
+    PetscCall(TestSmoothedLaw());
     PetscCall(TestOneContact());
     PetscCall(TestWedged());
     PetscCall(TestFrictionless());

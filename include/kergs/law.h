@@ -45,5 +45,11 @@ static inline PetscReal KergsLawNaturalResidualScaled(PetscReal e2, PetscReal r2
    row-major) receive an element of the generalized Jacobian: dF = A dr + B du (so J = A + B W). */
 PETSC_EXTERN void KergsLawAlartCurnier(PetscInt ncomp, const PetscScalar r[], const PetscScalar u[], PetscReal mu, PetscReal rho,
                                        PetscBool active, PetscReal F[], PetscReal A[], PetscReal B[]);
+/* The same function with every max(0, x) replaced by its Chen-Harker-Kanzow-Smale smoothing
+   phi_eps(x) = (x + sqrt(x^2 + 4 eps^2)) / 2 (eps > 0, in units of r): proj_[-tau, tau](z) = z - phi(z - tau) + phi(-z - tau),
+   so F_t = rho u_t + phi(z - tau) - phi(-z - tau). F is smooth and tends to KergsLawAlartCurnier's as eps -> 0; A and B
+   are its Jacobian, whose diagonal parts lie strictly between those of the pieces it joins. */
+PETSC_EXTERN void KergsLawAlartCurnierSmoothed(PetscInt ncomp, const PetscScalar r[], const PetscScalar u[], PetscReal mu, PetscReal rho,
+                                               PetscBool active, PetscReal eps, PetscReal F[], PetscReal A[], PetscReal B[]);
 
 #endif

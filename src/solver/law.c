@@ -210,3 +210,44 @@ void KergsLawAlartCurnier(PetscInt nc, const PetscScalar r[], const PetscScalar 
     }
   }
 }
+
+/* phi_eps(x) = (x + sqrt(x^2 + 4 eps^2)) / 2 and its derivative (1 + x / sqrt(x^2 + 4 eps^2)) / 2 */
+static inline PetscReal SmoothPlus(PetscReal x, PetscReal eps, PetscReal *dphi)
+{
+  const PetscReal root = PetscSqrtReal(x * x + 4.0 * eps * eps);
+  *dphi                = root > 0 ? 0.5 * (1.0 + x / root) : 0.5;
+  return 0.5 * (x + root);
+}
+
+void KergsLawAlartCurnierSmoothed(PetscInt nc, const PetscScalar r[], const PetscScalar u[], PetscReal mu, PetscReal rho, PetscBool active,
+                                  PetscReal eps, PetscReal F[], PetscReal A[], PetscReal B[])
+{
+  PetscReal xi, dxi, tau, z, a, b;
+
+  if (A)
+    for (PetscInt i = 0; i < nc * nc; i++) A[i] = B[i] = 0.0;
+  if (!active) { /* r = 0 */
+    for (PetscInt c = 0; c < nc; c++) {
+      F[c] = PetscRealPart(r[c]);
+      if (A) A[c * nc + c] = 1.0;
+    }
+    return;
+  }
+  xi   = PetscRealPart(r[0]) - rho * PetscRealPart(u[0]);
+  tau  = SmoothPlus(xi, eps, &dxi); /* max(0, xi), smoothed */
+  F[0] = PetscRealPart(r[0]) - tau;
+  if (A) {
+    A[0] = 1.0 - dxi;
+    B[0] = dxi * rho;
+  }
+  if (nc == 1) return;
+  tau *= mu;
+  z    = PetscRealPart(r[1]) - rho * PetscRealPart(u[1]);
+  F[1] = rho * PetscRealPart(u[1]) + SmoothPlus(z - tau, eps, &a) - SmoothPlus(-z - tau, eps, &b);
+  if (A) { /* dz = dr_t - rho du_t, dtau = mu dxi (dr_n - rho du_n) */
+    A[3] = a + b;
+    A[2] = mu * dxi * (b - a);
+    B[3] = rho * (1.0 - a - b);
+    B[2] = -rho * mu * dxi * (b - a);
+  }
+}

@@ -18,7 +18,11 @@
    down, so that the convergence is fast near the solution; alpha shrinks after a solved proximal problem and grows
    tenfold after a failed one (which restarts from the centre when it made things worse). The inner Newton steps are
    damped by an Armijo line search on 1/2 |F|^2. J is assembled and factored again only when the contact states or
-   sigma changed. The type is warm-started from the previous step's impulses like every type; optional NLGS sweeps
+   sigma changed. Before the proximal iterations, unless 3 plain Newton steps from the warm start cut the natural
+   residual a thousandfold, a smoothing Newton phase (SolveSmoothed, -solver_newton_smoothing) solves the smoothed
+   function (KergsLawAlartCurnierSmoothed) for eps falling tenfold at a time, with a Levenberg-Marquardt term in J; the
+   proximal iterations finish from where it ends. The type is warm-started from the previous step's impulses like
+   every type; optional NLGS sweeps
    first (-solver_newton_max_sweeps, -solver_newton_switch_tol). Convergence is the natural residual of the original
    problem (-solver_tol, default 1e-10). */
 #include <kergs/private/solverimpl.h>
@@ -65,6 +69,11 @@ typedef struct {
   PetscInt   reuse_its;            /* -solver_newton_reuse_its: GMRES iterations on a stale factorization (0: never); with
                                       additive Schwarz, twice the changed contacts up to which its set-up is kept */
   PetscBool configure_subs;        /* the subdomain solvers of ksp's additive Schwarz are still to be chosen */
+  PetscBool smoothing;             /* -solver_newton_smoothing: smoothing Newton first (SolveSmoothed) */
+  PetscReal smooth_kappa;          /* -solver_newton_smoothing_kappa: its Jacobian's regularisation / natural residual */
+  PetscReal smooth_eps;            /* -solver_newton_smoothing_eps: its first eps / largest |rho v^d_n| */
+  PetscReal eps;                   /* > 0: F is the smoothed Alart-Curnier function with this eps */
+  PetscInt  smooth_steps;          /* Newton steps of the last solve's smoothing phase */
   PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
   PetscBool stale;                 /* J changed since that set-up */
   /* figures of the last solve */
@@ -90,8 +99,12 @@ static PetscErrorCode EvaluateFunction(KergsSolver s, Newton *nt, PetscInt n, Pe
   PetscCall(VecGetArray(F, &Fl));
   for (PetscInt a = 0; a < n; a++) {
     PetscReal f[KERGS_MAXCOMP];
-    KergsLawAlartCurnier(nc, rl + a * nc, ul + a * nc, s->mu[a], nt->rho[a], s->active[a], f, jac ? nt->A + a * nc * nc : NULL,
-                         jac ? nt->B + a * nc * nc : NULL);
+    if (nt->eps > 0)
+      KergsLawAlartCurnierSmoothed(nc, rl + a * nc, ul + a * nc, s->mu[a], nt->rho[a], s->active[a], nt->eps, f,
+                                   jac ? nt->A + a * nc * nc : NULL, jac ? nt->B + a * nc * nc : NULL);
+    else
+      KergsLawAlartCurnier(nc, rl + a * nc, ul + a * nc, s->mu[a], nt->rho[a], s->active[a], f, jac ? nt->A + a * nc * nc : NULL,
+                           jac ? nt->B + a * nc * nc : NULL);
     for (PetscInt c = 0; c < nc; c++) {
       Fl[a * nc + c] = f[c];
       sum += f[c] * f[c];
@@ -714,6 +727,65 @@ static PetscErrorCode MeanCompliance(KergsSolver s, Newton *nt, PetscInt n, Pets
   PetscFunctionReturn(0);
 }
 
+/* The largest |rho_a v^d_n,a| over the active contacts: the scale of an impulse, for the first eps. */
+static PetscErrorCode ImpulseScale(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec vd, PetscReal *scale)
+{
+  const PetscScalar *v;
+
+  PetscFunctionBeginUser;
+  *scale = 0.0;
+  PetscCall(VecGetArrayRead(vd, &v));
+  for (PetscInt a = 0; a < n; a++)
+    if (s->active[a]) *scale = PetscMax(*scale, PetscAbsReal(nt->rho[a] * PetscRealPart(v[a * nc])));
+  PetscCall(VecRestoreArrayRead(vd, &v));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, scale, 1, MPIU_REAL, MPIU_MAX, s->comm));
+  PetscFunctionReturn(0);
+}
+
+/* Smoothing Newton (-solver_newton_smoothing): Newton steps on the smoothed function F_eps (KergsLawAlartCurnierSmoothed),
+   eps divided by 10 whenever F_eps is solved to a tenth of eps per component, each step damped by the Armijo line
+   search on 1/2 |F_eps|^2. The smoothing keeps J = A + B W nonsingular away from eps = 0 except on W's kernel where B
+   is that of a stick contact; J's W part is regularised by sigma = kappa * natural residual * mean W_nn (a
+   Levenberg-Marquardt term: F keeps W, so the limit solves the original problem). Stops at the tolerance, at max_it, on a
+   failed linear solve, or after two line searches in a row ending below 2^-20 (J nearly singular as eps -> 0): the
+   proximal iterations go on from there. */
+static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd,
+                                    PetscReal wmean, PetscInt *steps, PetscReal *res)
+{
+  PetscReal merit, m0, scale;
+  PetscInt  stalls = 0;
+  PetscBool ok, solved;
+
+  PetscFunctionBeginUser;
+  PetscCall(ImpulseScale(s, nt, n, nc, vd, &scale));
+  if (!(scale > 0)) PetscFunctionReturn(0);
+  nt->sigma = 0.0; /* F without a proximal term (ProximalVelocity: u itself) */
+  nt->eps   = nt->smooth_eps * scale;
+  while (*res > s->tol && *steps < s->max_it) {
+    const PetscInt b0 = nt->backtracks;
+    PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_TRUE, &merit));
+    while (PetscSqrtReal(2.0 * merit) <= 0.1 * nt->eps * PetscSqrtReal((PetscReal)nglobal) && nt->eps > 1e-12 * nt->smooth_eps * scale) {
+      nt->eps *= 0.1;
+      PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_TRUE, &merit));
+    }
+    m0 = merit;
+    PetscCall(AssembleJacobian(s, nt, n, nc, nt->shift, PetscMin(nt->smooth_kappa * *res, nt->sigma_max) * wmean));
+    PetscCall(NewtonDirection(nt, n, nc, &solved));
+    if (!solved) break;
+    PetscCall(LineSearch(s, nt, n, nc, r, u, vd, &merit, &ok));
+    (*steps)++;
+    nt->smooth_steps++;
+    PetscCall(NaturalResidual(s, nt, n, nc, r, u, res));
+    PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, *steps));
+    PetscCall(PetscInfo(NULL, "smoothing %" PetscInt_FMT ": natural residual %g, eps %g, %" PetscInt_FMT " halvings\n", *steps,
+                        (double)*res, (double)nt->eps, nt->backtracks - b0));
+    stalls = merit > 0.81 * m0 ? stalls + 1 : 0; /* |F_eps| down by less than a tenth */
+    if (stalls >= nt->stall_steps) break;
+  }
+  nt->eps = 0.0;
+  PetscFunctionReturn(0);
+}
+
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
    -solver_newton_switch_tol. Then outer iterations: each solves, by at most -solver_prox_inner_max Newton steps, the
    proximal problem with W + sigma I and v^d - sigma r_c around the current r_c = r, and moves r_c to its solution. The
@@ -747,6 +819,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
+  nt->smooth_steps = 0;
   while (res > s->tol && nglobal > 0 && steps < s->max_it) {
     PetscReal before = res, inner_tol;
     PetscCall(VecCopy(r, nt->rc));
@@ -760,7 +833,10 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     inner_tol = nt->inner_rtol * PetscMin(1.0, nt->rho_factor) * nt->enorm;
     {
       const PetscInt before_steps = steps;
-      PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
+      /* with smoothing, the plain attempt gets 3 Newton steps: enough on the solution's piece (a few contacts), and
+         little lost otherwise */
+      const PetscBool plain = (PetscBool)(nt->outer == 0 && nt->smoothing);
+      PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(plain ? 3 : nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
       if (steps == before_steps) { /* an outer iteration without a Newton step still counts: the loop ends */
         steps++;
         PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, steps));
@@ -789,6 +865,14 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     PetscCall(PetscInfo(NULL,
                         "outer %" PetscInt_FMT " (%" PetscInt_FMT " Newton steps): natural residual %g -> %g, inner solved %d, alpha %g\n",
                         nt->outer, steps, (double)before, (double)res, (int)ok, (double)alpha));
+    /* unless plain Newton gained three orders of magnitude (it is then on the solution's piece, where the proximal
+       iterations finish in a few steps), smoothing Newton from the warm start, then the proximal iterations if needed */
+    if (nt->outer == 1 && res > 1e-3 * before && nt->smoothing && nt->prox == NEWTON_PROX_IDENTITY && res > s->tol && steps < s->max_it) {
+      PetscCall(VecCopy(nt->rc, r));
+      PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+      PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
+      PetscCall(SolveSmoothed(s, nt, n, nc, nglobal, r, u, vd, wmean, &steps, &res));
+    }
   }
   stats->iterations    = steps;
   stats->criterion     = res;
@@ -859,6 +943,12 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(PetscOptionsInt("-solver_newton_stall_steps",
                             "Newton steps in a row that each cut |F| by less than a tenth and end an outer iteration's Newton (0: never)",
                             "", nt->stall_steps, &nt->stall_steps, NULL));
+  PetscCall(PetscOptionsBool("-solver_newton_smoothing", "Smoothing Newton steps first, then the proximal iterations if still needed", "",
+                             nt->smoothing, &nt->smoothing, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_smoothing_kappa", "Smoothing Newton: sigma of its Jacobian / (natural residual * mean W_nn)",
+                             "", nt->smooth_kappa, &nt->smooth_kappa, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_smoothing_eps", "Smoothing Newton: first eps / largest |rho v^d_n|", "", nt->smooth_eps,
+                             &nt->smooth_eps, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_max_sweeps", "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol",
                             "", nt->max_sweeps, &nt->max_sweeps, NULL));
   PetscOptionsHeadEnd();
@@ -877,6 +967,10 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              nt->stall_steps);
   PetscCheck(nt->max_sweeps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_max_sweeps %" PetscInt_FMT " must be non-negative",
              nt->max_sweeps);
+  PetscCheck(nt->smooth_kappa >= 0 && !PetscIsInfOrNanReal(nt->smooth_kappa), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_smoothing_kappa %g must be non-negative", (double)nt->smooth_kappa);
+  PetscCheck(nt->smooth_eps > 0 && PetscIsNormalReal(nt->smooth_eps), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_smoothing_eps %g must be positive", (double)nt->smooth_eps);
   PetscCheck(nt->rho_factor > 0 && PetscIsNormalReal(nt->rho_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_rho %g must be positive", (double)nt->rho_factor);
   PetscCheck(nt->shift >= 0 && !PetscIsInfOrNanReal(nt->shift), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -902,6 +996,11 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
       "Semismooth Newton on the Alart-Curnier function (rho = %g / W_nn), Armijo line search (%g, at most %" PetscInt_FMT
       " halvings), shift %g\n",
       (double)nt->rho_factor, (double)nt->armijo, nt->max_backtracks, (double)nt->shift));
+  if (nt->smoothing)
+    PetscCall(PetscViewerASCIIPrintf(
+        viewer,
+        "Smoothing Newton phase first: eps from %g times the largest |rho v^d_n|, Jacobian regularised by %g times the natural residual\n",
+        (double)nt->smooth_eps, (double)nt->smooth_kappa));
   PetscCall(KSPView(nt->ksp, viewer));
   PetscFunctionReturn(0);
 }
@@ -979,6 +1078,9 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->redundant_max  = 15000;
   nt->inner_rtol     = 0.1;
   nt->reuse_its      = 10;
+  nt->smooth_kappa   = 0.3;
+  nt->smoothing      = PETSC_TRUE;
+  nt->smooth_eps     = 4.0;
   PetscCall(CreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 100;
