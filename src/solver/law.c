@@ -211,12 +211,19 @@ void KergsLawAlartCurnier(PetscInt nc, const PetscScalar r[], const PetscScalar 
   }
 }
 
-/* phi_eps(x) = (x + sqrt(x^2 + 4 eps^2)) / 2 and its derivative (1 + x / sqrt(x^2 + 4 eps^2)) / 2 */
+/* phi_eps(x) = (x + sqrt(x^2 + 4 eps^2)) / 2 and its derivative (1 + x / sqrt(x^2 + 4 eps^2)) / 2 = phi / sqrt(...) */
 static inline PetscReal SmoothPlus(PetscReal x, PetscReal eps, PetscReal *dphi)
 {
-  const PetscReal root = PetscSqrtReal(x * x + 4.0 * eps * eps);
-  *dphi                = root > 0 ? 0.5 * (1.0 + x / root) : 0.5;
-  return 0.5 * (x + root);
+  const PetscReal root = PetscHypotReal(x, 2.0 * eps); /* no overflow of x^2 */
+  PetscReal       phi;
+
+  if (!(root > 0)) { /* x = eps = 0 */
+    *dphi = 0.5;
+    return 0.0;
+  }
+  phi   = x >= 0 ? 0.5 * (x + root) : 2.0 * eps * eps / (root - x); /* no cancellation for x << 0 */
+  *dphi = phi / root;                                               /* = (1 + x / root) / 2 */
+  return phi;
 }
 
 void KergsLawAlartCurnierSmoothed(PetscInt nc, const PetscScalar r[], const PetscScalar u[], PetscReal mu, PetscReal rho, PetscBool active,

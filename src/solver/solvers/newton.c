@@ -38,6 +38,7 @@ typedef struct {
   Mat        Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
+  Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */
   PetscReal *A, *B;         /* per local contact, ncomp x ncomp row-major: J = A + B W */
   PetscReal *Aused, *Bused; /* the blocks of the Jacobian last assembled */
   PetscReal *Afact, *Bfact; /* the blocks of the Jacobian last factored */
@@ -299,6 +300,7 @@ static PetscErrorCode DestroyStepObjects(Newton *nt)
   PetscCall(VecDestroy(&nt->Ftry));
   PetscCall(VecDestroy(&nt->rc));
   PetscCall(VecDestroy(&nt->ueff));
+  PetscCall(VecDestroy(&nt->rplain));
   PetscFunctionReturn(0);
 }
 
@@ -432,6 +434,7 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(VecDuplicate(r, &nt->Ftry));
   PetscCall(VecDuplicate(r, &nt->rc));
   PetscCall(VecDuplicate(r, &nt->ueff));
+  PetscCall(VecDuplicate(r, &nt->rplain));
   PetscCall(KSPReset(nt->ksp)); /* J's sizes and pattern are this step's */
   nt->sigma_used = -1.0;
   PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
@@ -744,28 +747,31 @@ static PetscErrorCode ImpulseScale(KergsSolver s, Newton *nt, PetscInt n, PetscI
 
 /* Smoothing Newton (-solver_newton_smoothing): Newton steps on the smoothed function F_eps (KergsLawAlartCurnierSmoothed),
    eps divided by 10 whenever F_eps is solved to a tenth of eps per component, each step damped by the Armijo line
-   search on 1/2 |F_eps|^2. The smoothing keeps J = A + B W nonsingular away from eps = 0 except on W's kernel where B
-   is that of a stick contact; J's W part is regularised by sigma = kappa * natural residual * mean W_nn (a
-   Levenberg-Marquardt term: F keeps W, so the limit solves the original problem). Stops at the tolerance, at max_it, on a
-   failed linear solve, or after two line searches in a row ending below 2^-20 (J nearly singular as eps -> 0): the
-   proximal iterations go on from there. */
+   search on 1/2 |F_eps|^2. The first eps is -solver_newton_smoothing_eps times `scale` (ImpulseScale), at most ten
+   times the start's |F| per component (a good start keeps a small eps); the last, 1e-12 of the first. The smoothing
+   keeps J = A + B W nonsingular away from eps = 0 except on W's kernel where B is that of a stick contact; J's W part is
+   regularised by sigma = kappa * natural residual * mean W_nn (within sigma_max; a Levenberg-Marquardt term: F keeps W,
+   so the limit solves the original problem). Stops at the tolerance, at max_it, on a failed linear solve, or after
+   -solver_newton_stall_steps steps in a row at one eps that each cut |F_eps| by less than a tenth (J nearly singular
+   as eps -> 0): the proximal iterations go on from there. */
 static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd,
-                                    PetscReal wmean, PetscInt *steps, PetscReal *res)
+                                    PetscReal wmean, PetscReal scale, PetscInt *steps, PetscReal *res)
 {
-  PetscReal merit, m0, scale;
+  PetscReal merit, m0, epsmin;
   PetscInt  stalls = 0;
   PetscBool ok, solved;
 
   PetscFunctionBeginUser;
-  PetscCall(ImpulseScale(s, nt, n, nc, vd, &scale));
-  if (!(scale > 0)) PetscFunctionReturn(0);
   nt->sigma = 0.0; /* F without a proximal term (ProximalVelocity: u itself) */
-  nt->eps   = nt->smooth_eps * scale;
-  while (*res > s->tol && *steps < s->max_it) {
+  PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_FALSE, &merit));
+  nt->eps = PetscMin(nt->smooth_eps * scale, 10.0 * PetscSqrtReal(2.0 * merit / (PetscReal)nglobal));
+  epsmin  = 1e-12 * nt->smooth_eps * scale;
+  while (*res > s->tol && *steps < s->max_it && nt->eps > 0) {
     const PetscInt b0 = nt->backtracks;
     PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_TRUE, &merit));
-    while (PetscSqrtReal(2.0 * merit) <= 0.1 * nt->eps * PetscSqrtReal((PetscReal)nglobal) && nt->eps > 1e-12 * nt->smooth_eps * scale) {
+    while (PetscSqrtReal(2.0 * merit) <= 0.1 * nt->eps * PetscSqrtReal((PetscReal)nglobal) && nt->eps > epsmin) {
       nt->eps *= 0.1;
+      stalls = 0;
       PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_TRUE, &merit));
     }
     m0 = merit;
@@ -780,9 +786,10 @@ static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, Petsc
     PetscCall(PetscInfo(NULL, "smoothing %" PetscInt_FMT ": natural residual %g, eps %g, %" PetscInt_FMT " halvings\n", *steps,
                         (double)*res, (double)nt->eps, nt->backtracks - b0));
     stalls = merit > 0.81 * m0 ? stalls + 1 : 0; /* |F_eps| down by less than a tenth */
-    if (stalls >= nt->stall_steps) break;
+    if (nt->stall_steps > 0 && stalls >= nt->stall_steps) break;
   }
   nt->eps = 0.0;
+  PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_FALSE, &nt->merit)); /* the exact law's merit, for the statistics */
   PetscFunctionReturn(0);
 }
 
@@ -835,7 +842,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
       const PetscInt before_steps = steps;
       /* with smoothing, the plain attempt gets 3 Newton steps: enough on the solution's piece (a few contacts), and
          little lost otherwise */
-      const PetscBool plain = (PetscBool)(nt->outer == 0 && nt->smoothing);
+      const PetscBool plain = (PetscBool)(nt->outer == 0 && nt->smoothing && nt->prox == NEWTON_PROX_IDENTITY);
       PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(plain ? 3 : nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
       if (steps == before_steps) { /* an outer iteration without a Newton step still counts: the loop ends */
         steps++;
@@ -868,10 +875,23 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     /* unless plain Newton gained three orders of magnitude (it is then on the solution's piece, where the proximal
        iterations finish in a few steps), smoothing Newton from the warm start, then the proximal iterations if needed */
     if (nt->outer == 1 && res > 1e-3 * before && nt->smoothing && nt->prox == NEWTON_PROX_IDENTITY && res > s->tol && steps < s->max_it) {
-      PetscCall(VecCopy(nt->rc, r));
-      PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
-      PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
-      PetscCall(SolveSmoothed(s, nt, n, nc, nglobal, r, u, vd, wmean, &steps, &res));
+      PetscReal scale, plain_res = res, start_res;
+      PetscCall(ImpulseScale(s, nt, n, nc, vd, &scale));
+      if (scale > 0) {
+        PetscCall(VecCopy(r, nt->rplain));
+        PetscCall(VecCopy(nt->rc, r));
+        PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+        PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
+        start_res = res;
+        PetscCall(SolveSmoothed(s, nt, n, nc, nglobal, r, u, vd, wmean, scale, &steps, &res));
+        /* the proximal iterations go on from the best of the warm start, the plain attempt's end and the smoothing's */
+        if (PetscMin(start_res, plain_res) < res) {
+          PetscCall(VecCopy(start_res <= plain_res ? nt->rc : nt->rplain, r));
+          PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+          res = PetscMin(start_res, plain_res);
+        }
+        alpha = nt->alpha; /* the plain attempt's outcome says nothing about the proximal problems from here */
+      }
     }
   }
   stats->iterations    = steps;
@@ -899,6 +919,7 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "factorizations", (PetscReal)nt->factorizations));
   PetscCall(KergsSolveStatsAdd(st, "reused_factorizations", (PetscReal)nt->reused));
   PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
+  PetscCall(KergsSolveStatsAdd(st, "smoothing_steps", (PetscReal)nt->smooth_steps));
   PetscFunctionReturn(0);
 }
 
