@@ -166,6 +166,20 @@ KergsLawStatus KergsLawSolve(PetscInt ncomp, const PetscReal Waa[], const PetscR
   return SolveCoulomb2(Waa, b, mu, r);
 }
 
+/* Shared by the Alart-Curnier functions: A and B zeroed when wanted; for an inactive contact (r = 0) F = r, J = I, and
+   true is returned (nothing more to compute). */
+static inline PetscBool StartJacobian(PetscInt nc, const PetscScalar r[], PetscBool active, PetscReal F[], PetscReal A[], PetscReal B[])
+{
+  if (A)
+    for (PetscInt i = 0; i < nc * nc; i++) A[i] = B[i] = 0.0;
+  if (active) return PETSC_FALSE;
+  for (PetscInt c = 0; c < nc; c++) {
+    F[c] = PetscRealPart(r[c]);
+    if (A) A[c * nc + c] = 1.0;
+  }
+  return PETSC_TRUE;
+}
+
 /* Alart-Curnier function of one contact and an element of its generalized Jacobian (law.h). Each branch is a piece
    where F is linear in (r, u): open (F = r_n), closed (F_n = rho u_n), stick (F_t = rho u_t), slip (F_t = r_t - sign(z)
    mu (r_n - rho u_n)). On a boundary between pieces (xi = 0: open; |z| = tau: slip) the row chosen stays
@@ -175,15 +189,7 @@ void KergsLawAlartCurnier(PetscInt nc, const PetscScalar r[], const PetscScalar 
 {
   PetscReal xi, tau, z;
 
-  if (A)
-    for (PetscInt i = 0; i < nc * nc; i++) A[i] = B[i] = 0.0;
-  if (!active) { /* r = 0 */
-    for (PetscInt c = 0; c < nc; c++) {
-      F[c] = PetscRealPart(r[c]);
-      if (A) A[c * nc + c] = 1.0;
-    }
-    return;
-  }
+  if (StartJacobian(nc, r, active, F, A, B)) return;
   xi = PetscRealPart(r[0]) - rho * PetscRealPart(u[0]);
   if (xi > 0) { /* closed: F_n = rho u_n */
     F[0] = rho * PetscRealPart(u[0]);
@@ -231,15 +237,7 @@ void KergsLawAlartCurnierSmoothed(PetscInt nc, const PetscScalar r[], const Pets
 {
   PetscReal xi, dxi, tau, z, a, b;
 
-  if (A)
-    for (PetscInt i = 0; i < nc * nc; i++) A[i] = B[i] = 0.0;
-  if (!active) { /* r = 0 */
-    for (PetscInt c = 0; c < nc; c++) {
-      F[c] = PetscRealPart(r[c]);
-      if (A) A[c * nc + c] = 1.0;
-    }
-    return;
-  }
+  if (StartJacobian(nc, r, active, F, A, B)) return;
   xi   = PetscRealPart(r[0]) - rho * PetscRealPart(u[0]);
   tau  = SmoothPlus(xi, eps, &dxi); /* max(0, xi), smoothed */
   F[0] = PetscRealPart(r[0]) - tau;
