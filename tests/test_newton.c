@@ -28,6 +28,25 @@ static void Piece(PetscInt nc, const PetscScalar r[], const PetscScalar u[], Pet
   if (nc > 1 && xi > 0) *margin = PetscMin(*margin, PetscAbsReal(PetscAbsReal(z) - tau));
 }
 
+/* A random contact: W_aa symmetric positive definite (L L^T + 0.1 I, L lower triangular; a positive scalar when nc = 1),
+   mu in [0, 1) when frictional (0 otherwise), rho = 1 / W_nn. */
+static PetscErrorCode RandomContact(PetscRandom rnd, PetscInt nc, PetscReal W[4], PetscReal *mu, PetscReal *rho)
+{
+  PetscReal L[3];
+
+  PetscFunctionBeginUser;
+  *mu = 0;
+  for (PetscInt i = 0; i < 3; i++) PetscCall(PetscRandomGetValueReal(rnd, &L[i]));
+  W[0] = L[0] * L[0] + 0.1;
+  W[1] = W[2] = L[0] * L[1];
+  W[3]        = L[1] * L[1] + L[2] * L[2] + 0.1;
+  if (nc == 1) W[0] = PetscAbsReal(L[0]) + 0.1;
+  if (nc > 1) PetscCall(PetscRandomGetValueReal(rnd, mu));
+  *mu  = PetscAbsReal(*mu);
+  *rho = 1.0 / W[0];
+  PetscFunctionReturn(0);
+}
+
 /* Random points of each piece, for a random symmetric positive definite W_aa: the Jacobian J = A + B W_aa times a
    random direction against the difference quotient of F, with a step small enough not to leave the piece. */
 static PetscErrorCode TestJacobian(void)
@@ -41,17 +60,10 @@ static PetscErrorCode TestJacobian(void)
   PetscCall(PetscRandomSetInterval(rnd, -1.0, 1.0));
   for (PetscInt k = 0; k < 4000; k++) {
     const PetscInt nc = k % 2 ? 2 : 1;
-    PetscReal      mu = 0, rho, W[4], L[3], b[2], F0[2], F1[2], A[4], B[4], Jd[2], margin, h, err = 0, scale = 0;
+    PetscReal      mu, rho, W[4], b[2], F0[2], F1[2], A[4], B[4], Jd[2], margin, h, err = 0, scale = 0;
     PetscScalar    r[2] = {0, 0}, u[2] = {0, 0}, rh[2], uh[2], d[2] = {0, 0};
     PetscInt       piece;
-    for (PetscInt i = 0; i < 3; i++) PetscCall(PetscRandomGetValueReal(rnd, &L[i]));
-    W[0] = L[0] * L[0] + 0.1; /* W = L L^T + 0.1 I, L lower triangular */
-    W[1] = W[2] = L[0] * L[1];
-    W[3]        = L[1] * L[1] + L[2] * L[2] + 0.1;
-    if (nc == 1) W[0] = PetscAbsReal(L[0]) + 0.1;
-    if (nc > 1) PetscCall(PetscRandomGetValueReal(rnd, &mu));
-    mu  = PetscAbsReal(mu);
-    rho = 1.0 / W[0];
+    PetscCall(RandomContact(rnd, nc, W, &mu, &rho));
     for (PetscInt c = 0; c < nc; c++) {
       PetscReal x;
       PetscCall(PetscRandomGetValueReal(rnd, &x));
@@ -127,17 +139,10 @@ static PetscErrorCode TestSmoothedLaw(void)
   PetscCall(PetscRandomSetInterval(rnd, -1.0, 1.0));
   for (PetscInt k = 0; k < 2000; k++) {
     const PetscInt  nc = k % 2 ? 2 : 1;
-    PetscReal       mu = 0, eps, rho, W[4] = {0, 0, 0, 0}, L[3], F0[2], Fp[2], Fm[2], Fns[2], A[4], B[4], err = 0, scale = 0;
+    PetscReal       mu, eps, rho, W[4], F0[2], Fp[2], Fm[2], Fns[2], A[4], B[4], err = 0, scale = 0;
     PetscScalar     r[2] = {0, 0}, u[2] = {0, 0}, rp[2], rm[2], up[2], um[2], d[2] = {0, 0}, b[2] = {0, 0};
     const PetscReal h = 1e-5; /* d of order 1: rounding stays far below the tolerance, truncation (h^2) too */
-    for (PetscInt i = 0; i < 3; i++) PetscCall(PetscRandomGetValueReal(rnd, &L[i]));
-    W[0] = L[0] * L[0] + 0.1;
-    W[1] = W[2] = L[0] * L[1];
-    W[3]        = L[1] * L[1] + L[2] * L[2] + 0.1;
-    if (nc == 1) W[0] = PetscAbsReal(L[0]) + 0.1;
-    if (nc > 1) PetscCall(PetscRandomGetValueReal(rnd, &mu));
-    mu  = PetscAbsReal(mu);
-    rho = 1.0 / W[0];
+    PetscCall(RandomContact(rnd, nc, W, &mu, &rho));
     PetscCall(PetscRandomGetValueReal(rnd, &eps));
     eps = 1e-3 + 0.1 * PetscAbsReal(eps);
     for (PetscInt c = 0; c < nc; c++) {
