@@ -631,6 +631,15 @@ static PetscErrorCode LineSearch(KergsSolver s, Newton *nt, PetscInt n, PetscInt
   PetscFunctionReturn(0);
 }
 
+/* r <- x and u = W r + v^d: a point the iterations move (back) to. */
+static PetscErrorCode MoveTo(Newton *nt, Vec x, Vec r, Vec u, Vec vd)
+{
+  PetscFunctionBeginUser;
+  PetscCall(VecCopy(x, r));
+  PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+  PetscFunctionReturn(0);
+}
+
 /* At most `count` NLGS sweeps on W (the sweep of KergsSolverSetUpSweep), stopping early once the natural residual is
    at most `target`; u = W r + v^d and the residual on exit. */
 static PetscErrorCode Sweeps(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscInt count, PetscReal target,
@@ -808,7 +817,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscInt       n, nglobal, nc, steps = 0;
   PetscReal      res = 0.0, rmax, wmean = 1.0, alpha = nt->alpha;
   PetscLogDouble t0, t1;
-  PetscBool      ok;
+  PetscBool      ok, smoothing;
   Vec            r, u, vd;
 
   PetscFunctionBeginUser;
@@ -827,6 +836,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
   nt->smooth_steps = 0;
+  smoothing        = (PetscBool)(nt->smoothing && nt->prox == NEWTON_PROX_IDENTITY); /* the phase hands over to the proximal iterations */
   while (res > s->tol && nglobal > 0 && steps < s->max_it) {
     PetscReal before = res, inner_tol;
     PetscCall(VecCopy(r, nt->rc));
@@ -842,7 +852,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
       const PetscInt before_steps = steps;
       /* with smoothing, the plain attempt gets 3 Newton steps: enough on the solution's piece (a few contacts), and
          little lost otherwise */
-      const PetscBool plain = (PetscBool)(nt->outer == 0 && nt->smoothing && nt->prox == NEWTON_PROX_IDENTITY);
+      const PetscBool plain = (PetscBool)(nt->outer == 0 && smoothing);
       PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(plain ? 3 : nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
       if (steps == before_steps) { /* an outer iteration without a Newton step still counts: the loop ends */
         steps++;
@@ -854,8 +864,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     ok = (PetscBool)(PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */
     if (nt->outer == 1 && nt->prox == NEWTON_PROX_IDENTITY && res >= before) {
       /* plain Newton from the warm start went elsewhere (along W's near-kernel, where sigma_min barely holds it): back */
-      PetscCall(VecCopy(nt->rc, r));
-      PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+      PetscCall(MoveTo(nt, nt->rc, r, u, vd));
       res = before;
     } else if (ok)
       alpha = res < before ? PetscMax(alpha / 3.0, nt->alpha_min) : alpha; /* a proximal step: always taken */
@@ -864,8 +873,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     else {           /* no progress: more damping, from the centre */
       alpha *= 10.0;
       if (res >= before) {
-        PetscCall(VecCopy(nt->rc, r));
-        PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+        PetscCall(MoveTo(nt, nt->rc, r, u, vd));
         res = before;
       }
     }
@@ -874,20 +882,17 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
                         nt->outer, steps, (double)before, (double)res, (int)ok, (double)alpha));
     /* unless plain Newton gained three orders of magnitude (it is then on the solution's piece, where the proximal
        iterations finish in a few steps), smoothing Newton from the warm start, then the proximal iterations if needed */
-    if (nt->outer == 1 && res > 1e-3 * before && nt->smoothing && nt->prox == NEWTON_PROX_IDENTITY && res > s->tol && steps < s->max_it) {
-      PetscReal scale, plain_res = res, start_res;
+    if (nt->outer == 1 && smoothing && res > 1e-3 * before && res > s->tol && steps < s->max_it) {
+      PetscReal scale, plain_res = res, start_res = before; /* before: the natural residual at the warm start, nt->rc */
       PetscCall(ImpulseScale(s, nt, n, nc, vd, &scale));
       if (scale > 0) {
         PetscCall(VecCopy(r, nt->rplain));
-        PetscCall(VecCopy(nt->rc, r));
-        PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
-        PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
-        start_res = res;
+        PetscCall(MoveTo(nt, nt->rc, r, u, vd));
+        res = start_res;
         PetscCall(SolveSmoothed(s, nt, n, nc, nglobal, r, u, vd, wmean, scale, &steps, &res));
         /* the proximal iterations go on from the best of the warm start, the plain attempt's end and the smoothing's */
         if (PetscMin(start_res, plain_res) < res) {
-          PetscCall(VecCopy(start_res <= plain_res ? nt->rc : nt->rplain, r));
-          PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+          PetscCall(MoveTo(nt, start_res <= plain_res ? nt->rc : nt->rplain, r, u, vd));
           res = PetscMin(start_res, plain_res);
         }
         alpha = nt->alpha; /* the plain attempt's outcome says nothing about the proximal problems from here */
