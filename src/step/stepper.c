@@ -43,6 +43,7 @@ static PetscErrorCode CheckSolverIntegerOptions(MPI_Comm comm)
                                 "-solver_prox_inner_max",
                                 "-solver_newton_max_sweeps",
                                 "-solver_newton_stall_steps",
+                                "-solver_newton_smoothing_raises",
                                 "-solver_newton_redundant_max",
                                 "-solver_newton_reuse_its",
                                 NULL};

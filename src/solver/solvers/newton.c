@@ -73,6 +73,7 @@ typedef struct {
   PetscBool smoothing;             /* -solver_newton_smoothing: smoothing Newton first (SolveSmoothed) */
   PetscReal smooth_kappa;          /* -solver_newton_smoothing_kappa: its Jacobian's regularisation / natural residual */
   PetscReal smooth_eps;            /* -solver_newton_smoothing_eps: its first eps / largest |rho v^d_n| */
+  PetscInt  smooth_raises;         /* -solver_newton_smoothing_raises: stalls that raise eps instead of ending the phase */
   PetscReal eps;                   /* > 0: F is the smoothed Alart-Curnier function with this eps */
   PetscInt  smooth_steps;          /* Newton steps of the last solve's smoothing phase */
   PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
@@ -762,12 +763,15 @@ static PetscErrorCode ImpulseScale(KergsSolver s, Newton *nt, PetscInt n, PetscI
    regularised by sigma = kappa * natural residual * mean W_nn (within sigma_max; a Levenberg-Marquardt term: F keeps W,
    so the limit solves the original problem). Stops at the tolerance, at max_it, on a failed linear solve, or after
    -solver_newton_stall_steps steps in a row at one eps that each cut |F_eps| by less than a tenth (J nearly singular
-   as eps -> 0): the proximal iterations go on from there. */
+   as eps -> 0): the proximal iterations go on from there. The first such stall of a solve (up to
+   -solver_newton_smoothing_raises of them) instead raises eps a hundredfold and goes on from the current point: eps was
+   lowered too early, while a few contacts were still far from their piece (on pressure20k's cold first step, two
+   contacts closing at 5e-4 m/s with r_n = 0 held the residual at 1e-3), and the smoother function lets them move. */
 static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd,
                                     PetscReal wmean, PetscReal scale, PetscInt *steps, PetscReal *res)
 {
   PetscReal merit, m0, epsmin;
-  PetscInt  stalls = 0;
+  PetscInt  stalls = 0, raises = 0;
   PetscBool ok, solved;
 
   PetscFunctionBeginUser;
@@ -795,7 +799,13 @@ static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, Petsc
     PetscCall(PetscInfo(NULL, "smoothing %" PetscInt_FMT ": natural residual %g, eps %g, %" PetscInt_FMT " halvings\n", *steps,
                         (double)*res, (double)nt->eps, nt->backtracks - b0));
     stalls = merit > 0.81 * m0 ? stalls + 1 : 0; /* |F_eps| down by less than a tenth */
-    if (nt->stall_steps > 0 && stalls >= nt->stall_steps) break;
+    if (nt->stall_steps > 0 && stalls >= nt->stall_steps) {
+      if (raises == nt->smooth_raises) break;
+      raises++;
+      stalls = 0;
+      nt->eps *= 100.0;
+      PetscCall(PetscInfo(NULL, "smoothing stalled: eps raised to %g\n", (double)nt->eps));
+    }
   }
   nt->eps = 0.0;
   PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_FALSE, &nt->merit)); /* the exact law's merit, for the statistics */
@@ -975,6 +985,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "", nt->smooth_kappa, &nt->smooth_kappa, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_smoothing_eps", "Smoothing Newton: first eps / largest |rho v^d_n|", "", nt->smooth_eps,
                              &nt->smooth_eps, NULL));
+  PetscCall(PetscOptionsInt("-solver_newton_smoothing_raises",
+                            "Smoothing Newton: stalls of a solve that raise eps a hundredfold instead of ending the phase", "",
+                            nt->smooth_raises, &nt->smooth_raises, NULL));
   PetscCall(PetscOptionsInt("-solver_newton_max_sweeps", "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol",
                             "", nt->max_sweeps, &nt->max_sweeps, NULL));
   PetscOptionsHeadEnd();
@@ -991,6 +1004,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              nt->reuse_its);
   PetscCheck(nt->stall_steps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_stall_steps %" PetscInt_FMT " must be non-negative",
              nt->stall_steps);
+  PetscCheck(nt->smooth_raises >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_smoothing_raises %" PetscInt_FMT " must be non-negative", nt->smooth_raises);
   PetscCheck(nt->max_sweeps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_max_sweeps %" PetscInt_FMT " must be non-negative",
              nt->max_sweeps);
   PetscCheck(nt->smooth_kappa >= 0 && !PetscIsInfOrNanReal(nt->smooth_kappa), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -1025,8 +1040,9 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
   if (nt->smoothing)
     PetscCall(PetscViewerASCIIPrintf(
         viewer,
-        "Smoothing Newton phase first: eps from %g times the largest |rho v^d_n|, Jacobian regularised by %g times the natural residual\n",
-        (double)nt->smooth_eps, (double)nt->smooth_kappa));
+        "Smoothing Newton phase first: eps from %g times the largest |rho v^d_n|, Jacobian regularised by %g times the natural residual, "
+        "eps raised after %" PetscInt_FMT " stall(s)\n",
+        (double)nt->smooth_eps, (double)nt->smooth_kappa, nt->smooth_raises));
   PetscCall(KSPView(nt->ksp, viewer));
   PetscFunctionReturn(0);
 }
@@ -1107,6 +1123,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->smooth_kappa   = 0.3;
   nt->smoothing      = PETSC_TRUE;
   nt->smooth_eps     = 4.0;
+  nt->smooth_raises  = 1;
   PetscCall(CreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 100;
