@@ -679,13 +679,15 @@ static PetscErrorCode MonitorNewtonStep(KergsSolver s, Newton *nt, PetscInt n, P
 /* Newton on the current (proximal) problem, from r: at most `count` steps, until |F| is at most `ftol`; *ok is false
    when some line search failed. Newton stops early when it crawls: -solver_newton_stall_steps steps in a row that
    each cut the merit by less than a tenth (many contacts change piece at every step, and the line search keeps
-   them short); a larger proximal term is then cheaper than more steps. */
+   them short); a larger proximal term is then cheaper than more steps. A `trial` (the plain attempt before the
+   smoothing phase) also stops after a step that cut |F| by less than tenfold: the warm start is then not on the
+   solution's piece, and the smoothing phase starts again from the warm start. */
 static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscInt count, PetscReal ftol,
-                                  PetscInt *steps, PetscBool *ok)
+                                  PetscBool trial, PetscInt *steps, PetscBool *ok)
 {
   PetscReal merit;
-  PetscBool decreased = PETSC_TRUE, solved;
-  PetscInt  crawling  = 0;
+  PetscBool decreased = PETSC_TRUE, solved, off_piece = PETSC_FALSE;
+  PetscInt  crawling = 0;
 
   PetscFunctionBeginUser;
   *ok = PETSC_TRUE;
@@ -705,11 +707,16 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
       PetscCall(LineSearch(s, nt, n, nc, r, u, vd, &merit, &decreased));
       PetscCall(PetscInfo(NULL, "inner %" PetscInt_FMT ": merit %g -> %g, %" PetscInt_FMT " halvings, decreased %d, sigma %g\n", k,
                           (double)m0, (double)merit, nt->backtracks - b0, (int)decreased, (double)nt->sigma));
-      crawling = merit > 0.81 * m0 ? crawling + 1 : 0; /* |F| down by less than a tenth */
+      crawling  = merit > 0.81 * m0 ? crawling + 1 : 0;    /* |F| down by less than a tenth */
+      off_piece = (PetscBool)(trial && merit > 0.01 * m0); /* |F| down by less than tenfold */
     }
     (*steps)++;
     PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, *steps));
     if (!decreased) *ok = PETSC_FALSE;
+    if (off_piece) {
+      *ok = PETSC_FALSE;
+      break;
+    }
     if (nt->stall_steps > 0 && crawling >= nt->stall_steps) {
       *ok = PETSC_FALSE;
       nt->stalls++;
@@ -860,10 +867,10 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     inner_tol = nt->inner_rtol * PetscMin(1.0, nt->rho_factor) * nt->enorm;
     {
       const PetscInt before_steps = steps;
-      /* with smoothing, the plain attempt gets 3 Newton steps: enough on the solution's piece (a few contacts), and
-         little lost otherwise */
+      /* with smoothing, the plain attempt gets 3 Newton steps: enough on the solution's piece (a few contacts); it
+         stops after one that gained less than tenfold, as little as possible lost otherwise */
       const PetscBool plain = (PetscBool)(nt->outer == 0 && smoothing);
-      PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(plain ? 3 : nt->inner_max, s->max_it - steps), inner_tol, &steps, &ok));
+      PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(plain ? 3 : nt->inner_max, s->max_it - steps), inner_tol, plain, &steps, &ok));
       if (steps == before_steps) { /* an outer iteration without a Newton step still counts: the loop ends */
         steps++;
         PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, steps));
