@@ -357,9 +357,10 @@ static PetscErrorCode TestRecovery(void)
   PetscFunctionReturn(0);
 }
 
-/* confine5 with friction: some full Newton steps increase the merit and are cut by the line search (statistic
-   backtracks > 0), and every step converges; without the line search (-solver_newton_max_backtracks 0, every full step
-   taken) the same steps need more Newton steps or fail. */
+/* confine500's first 5 steps, with friction: some full Newton steps increase the merit and are cut by the line search
+   (statistic backtracks > 0), and every step converges; without the line search (-solver_newton_max_backtracks 0, every
+   full step taken) the same steps need more Newton steps or fail (measured: steps 3 and 4 stop at the cap of 500 with
+   residuals 5e-4 and 9e-3; over 2 steps only, full steps happened to win on the cold first step, 57 against 136). */
 static PetscErrorCode TestLineSearch(void)
 {
   KergsStepper st;
@@ -367,19 +368,19 @@ static PetscErrorCode TestLineSearch(void)
   PetscReal    maxres, bt = 0, b, maxres0;
 
   PetscFunctionBeginUser;
-  PetscCall(RunSteps("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_max_it 500", 2, &st,
+  PetscCall(RunSteps("-options_file cases/confine500.opts -steps 5 -solver_type newton -solver_tol 1e-10 -solver_max_it 500", 5, &st,
                      &maxits, &maxres, &nconv));
-  for (PetscInt s = 0; s < 2; s++) {
+  for (PetscInt s = 0; s < 5; s++) {
     PetscCall(StatAt(st->results, "backtracks", s, &b));
     bt += b;
   }
   PetscCall(KergsStepperDestroy(&st));
-  PetscCall(Check((PetscBool)(bt > 0 && nconv == 2),
+  PetscCall(Check((PetscBool)(bt > 0 && nconv == 5),
                   "confine500 (cold start): the line search cut some Newton steps (halvings), every step converged", bt, 1));
-  PetscCall(RunSteps("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_max_it 500 "
+  PetscCall(RunSteps("-options_file cases/confine500.opts -steps 5 -solver_type newton -solver_tol 1e-10 -solver_max_it 500 "
                      "-solver_newton_max_backtracks 0",
-                     2, NULL, &maxits0, &maxres0, &nconv0));
-  PetscCall(Check((PetscBool)(nconv0 < 2 || maxits0 > maxits),
+                     5, NULL, &maxits0, &maxres0, &nconv0));
+  PetscCall(Check((PetscBool)(nconv0 < 5 || maxits0 > maxits),
                   "... without it (full steps), fewer steps converge or they take more Newton steps", maxits0, maxits));
   PetscFunctionReturn(0);
 }
