@@ -170,45 +170,59 @@ static PetscErrorCode GetParts(Mat M, PetscInt nc, Mat *Ad, Mat *Ao)
   PetscFunctionReturn(0);
 }
 
-/* Left-multiply every block of block row a of a sequential (B)AIJ part by B_a (nc x nc; BAIJ stores each block
-   column by column: entry (c, e) at c + e nc); in the diagonal part, also add A_a + sigma B_a + eps I to the own block,
-   found at diagblock[a]. */
-static PetscErrorCode ScaleBlockRows(Newton *nt, Mat P, PetscInt n, PetscInt nc, PetscBool diagonal, PetscReal eps, PetscReal sigma)
+/* Block row a of a sequential (B)AIJ part of J is B_a (nc x nc) times block row a of the same part of W (the same
+   pattern, W being J's template); in the diagonal part, A_a + sigma B_a + eps I is also added to the own block, found at
+   diagblock[a]. BAIJ stores each block column by column: entry (c, e) at c + e nc. Reading W and writing J in one pass
+   spares copying W into J first. */
+static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, PetscInt nc, PetscBool diagonal, PetscReal eps,
+                                     PetscReal sigma)
 {
   const PetscInt *ia, *ja;
   PetscInt        nrow;
   PetscBool       done;
-  PetscScalar    *v;
+  PetscScalar    *w, *v; /* W is only read (PETSc 3.18 has no read-only access to a BAIJ array) */
 
   PetscFunctionBeginUser;
   PetscCall(MatGetRowIJ(P, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
   PetscCheck(done && nrow == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the Jacobian's rows");
-  if (nc > 1)
+  if (nc > 1) {
+    PetscCall(MatSeqBAIJGetArray(Wpart, &w));
     PetscCall(MatSeqBAIJGetArray(P, &v));
-  else
+  } else {
+    PetscCall(MatSeqAIJGetArrayRead(Wpart, (const PetscScalar **)&w));
     PetscCall(MatSeqAIJGetArray(P, &v));
+  }
   for (PetscInt a = 0; a < n; a++) {
     const PetscReal *Ba = nt->B + a * nc * nc, *Aa = nt->A + a * nc * nc;
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
-      PetscScalar *blk = v + j * nc * nc, out[KERGS_MAXCOMP * KERGS_MAXCOMP];
-      for (PetscInt c = 0; c < nc; c++)
-        for (PetscInt e = 0; e < nc; e++) {
-          PetscScalar sum = 0.0;
-          for (PetscInt k = 0; k < nc; k++) sum += Ba[c * nc + k] * blk[k + e * nc];
-          out[c + e * nc] = sum;
-        }
+      const PetscScalar *wb  = w + j * nc * nc;
+      PetscScalar       *out = v + j * nc * nc;
+      if (nc == 2) { /* the 2D case, written out: most of the time goes here */
+        out[0] = Ba[0] * wb[0] + Ba[1] * wb[1];
+        out[1] = Ba[2] * wb[0] + Ba[3] * wb[1];
+        out[2] = Ba[0] * wb[2] + Ba[1] * wb[3];
+        out[3] = Ba[2] * wb[2] + Ba[3] * wb[3];
+      } else
+        for (PetscInt c = 0; c < nc; c++)
+          for (PetscInt e = 0; e < nc; e++) {
+            PetscScalar sum = 0.0;
+            for (PetscInt k = 0; k < nc; k++) sum += Ba[c * nc + k] * wb[k + e * nc];
+            out[c + e * nc] = sum;
+          }
       if (diagonal && j == nt->diagblock[a])
         for (PetscInt c = 0; c < nc; c++) {
           for (PetscInt e = 0; e < nc; e++) out[c + e * nc] += Aa[c * nc + e] + sigma * Ba[c * nc + e];
           out[c + c * nc] += eps;
         }
-      for (PetscInt i = 0; i < nc * nc; i++) blk[i] = out[i];
     }
   }
-  if (nc > 1)
+  if (nc > 1) {
     PetscCall(MatSeqBAIJRestoreArray(P, &v));
-  else
+    PetscCall(MatSeqBAIJRestoreArray(Wpart, &w));
+  } else {
     PetscCall(MatSeqAIJRestoreArray(P, &v));
+    PetscCall(MatSeqAIJRestoreArrayRead(Wpart, (const PetscScalar **)&w));
+  }
   PetscCall(MatRestoreRowIJ(P, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
   PetscFunctionReturn(0);
 }
@@ -249,7 +263,7 @@ static PetscInt ChangedBlocks(const Newton *nt, PetscInt n, PetscInt nc, const P
    costs one solve). */
 static PetscErrorCode AssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
 {
-  Mat      Ad, Ao;
+  Mat      Ad, Ao, Wd, Wo;
   PetscInt changed = (PetscInt)(sigma != nt->sigma_used || ChangedBlocks(nt, n, nc, nt->Aused, nt->Bused) > 0);
 
   PetscFunctionBeginUser;
@@ -260,10 +274,10 @@ static PetscErrorCode AssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pe
   nt->sigma_used = sigma;
   nt->jacobians++;
   nt->stale = PETSC_TRUE;
-  PetscCall(MatCopy(nt->Wfull, nt->J, SAME_NONZERO_PATTERN));
+  PetscCall(GetParts(nt->Wfull, nc, &Wd, &Wo));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
-  PetscCall(ScaleBlockRows(nt, Ad, n, nc, PETSC_TRUE, eps, sigma));
-  if (Ao) PetscCall(ScaleBlockRows(nt, Ao, n, nc, PETSC_FALSE, 0.0, 0.0));
+  PetscCall(ScaleBlockRows(nt, Wd, Ad, n, nc, PETSC_TRUE, eps, sigma));
+  if (Ao) PetscCall(ScaleBlockRows(nt, Wo, Ao, n, nc, PETSC_FALSE, 0.0, 0.0));
   /* values changed through the arrays: assembling again tells PETSc (and the factorization) that J changed */
   PetscCall(MatAssemblyBegin(nt->J, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(nt->J, MAT_FINAL_ASSEMBLY));
