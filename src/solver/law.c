@@ -220,10 +220,11 @@ void KergsLawAlartCurnier(PetscInt nc, const PetscScalar r[], const PetscScalar 
 /* phi_eps(x) = (x + sqrt(x^2 + 4 eps^2)) / 2 and its derivative (1 + x / sqrt(x^2 + 4 eps^2)) / 2 = phi / sqrt(...) */
 static inline PetscReal SmoothPlus(PetscReal x, PetscReal eps, PetscReal *dphi)
 {
-  const PetscReal big = PetscMax(PetscAbsReal(x), 2.0 * eps);
-  /* sqrt(x^2 + 4 eps^2); hypot, which avoids overflow and underflow of the squares, only where they could happen: it
-     costs several times as much, and this runs for every contact at every trial point of every line search */
-  const PetscReal root = big > 1e-150 && big < 1e150 ? PetscSqrtReal(x * x + 4.0 * eps * eps) : PetscHypotReal(x, 2.0 * eps);
+  const PetscReal big = PetscMax(PetscAbsReal(x), 2.0 * eps), safe = 0.25 * PetscSqrtReal(PETSC_MAX_REAL);
+  /* sqrt(x^2 + 4 eps^2); hypot, which avoids overflow and underflow of the squares, only where they could happen
+     (sqrt(DBL_MIN) < 1 / safe): it costs several times as much, and this runs for every contact at every trial point of
+     every line search */
+  const PetscReal root = big > 1.0 / safe && big < safe ? PetscSqrtReal(x * x + 4.0 * eps * eps) : PetscHypotReal(x, 2.0 * eps);
   PetscReal       phi;
 
   if (!(root > 0)) { /* x = eps = 0 */

@@ -18,13 +18,13 @@
    down, so that the convergence is fast near the solution; alpha shrinks after a solved proximal problem and grows
    tenfold after a failed one (which restarts from the centre when it made things worse). The inner Newton steps are
    damped by an Armijo line search on 1/2 |F|^2. J is assembled and factored again only when the contact states or
-   sigma changed. Before the proximal iterations, unless 3 plain Newton steps from the warm start cut the natural
-   residual a thousandfold, a smoothing Newton phase (SolveSmoothed, -solver_newton_smoothing) solves the smoothed
-   function (KergsLawAlartCurnierSmoothed) for eps falling tenfold at a time, with a Levenberg-Marquardt term in J; the
-   proximal iterations finish from where it ends. The type is warm-started from the previous step's impulses like
-   every type; optional NLGS sweeps
-   first (-solver_newton_max_sweeps, -solver_newton_switch_tol). Convergence is the natural residual of the original
-   problem (-solver_tol, default 1e-10). */
+   sigma changed. Before the proximal iterations, unless a plain attempt from the warm start (at most 3 Newton steps,
+   stopped after one that gains less than tenfold) cuts the natural residual a thousandfold, a smoothing Newton phase
+   (SolveSmoothed, -solver_newton_smoothing) solves the smoothed function (KergsLawAlartCurnierSmoothed) for eps
+   falling tenfold at a time, with a Levenberg-Marquardt term in J, eps raised a hundredfold at its first stall; the
+   proximal iterations finish from where it ends. On one rank J is stored in W's AMD order (PresortContacts). The type is warm-started from
+   the previous step's impulses like every type; optional NLGS sweeps first (-solver_newton_max_sweeps, -solver_newton_switch_tol).
+   Convergence is the natural residual of the original problem (-solver_tol, default 1e-10). */
 #include <kergs/private/solverimpl.h>
 #include <petscksp.h>
 #include <string.h>
@@ -40,6 +40,7 @@ typedef struct {
      order (PresortContacts) */
   PetscInt  *order;    /* J's block row i is contact order[i]; NULL: J in the contacts' order */
   PetscInt   order_nc; /* components per contact (J's block size) */
+  PetscBool  presort;  /* decided once the linear solver's options are read (PresortApplies) */
   Mat        Wsorted;  /* W in that order: J's template */
   Vec        Fs, ds;   /* -F and d in that order */
   Vec        F, d, Wd, rtry, utry, Ftry;
@@ -176,8 +177,8 @@ static PetscErrorCode GetParts(Mat M, PetscInt nc, Mat *Ad, Mat *Ao)
   PetscFunctionReturn(0);
 }
 
-/* Block row a of a sequential (B)AIJ part of J is B_c (nc x nc) times block row a of the same part of W (the same
-   pattern, W being J's template), c the contact of that row (order[a], or a); in the diagonal part, A_c + sigma B_c +
+/* Block row a of a sequential (B)AIJ part of J is B_k (nc x nc) times block row a of the same part of W (the same
+   pattern, W being J's template), k the contact of that row (order[a], or a); in the diagonal part, A_k + sigma B_k +
    eps I is also added to the own block, found at diagblock[a]. BAIJ stores each block column by column: entry (c, e) at c + e nc. Reading W
    and writing J in one pass spares copying W into J first. */
 static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, PetscInt nc, PetscBool diagonal, PetscReal eps,
@@ -199,8 +200,8 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, P
     PetscCall(MatSeqAIJGetArray(P, &v));
   }
   for (PetscInt a = 0; a < n; a++) {
-    const PetscInt   c  = nt->order ? nt->order[a] : a;
-    const PetscReal *Ba = nt->B + c * nc * nc, *Aa = nt->A + c * nc * nc;
+    const PetscInt   contact = nt->order ? nt->order[a] : a;
+    const PetscReal *Ba = nt->B + contact * nc * nc, *Aa = nt->A + contact * nc * nc;
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
       const PetscScalar *wb  = w + j * nc * nc;
       PetscScalar       *out = v + j * nc * nc;
@@ -423,12 +424,13 @@ static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
   PetscFunctionReturn(0);
 }
 
-/* On one rank, with kergs's own LU (PETSc's, AMD ordering: no -solver_pc_* or -solver_ksp_type chosen), J is built
-   with its block rows and columns already in W's AMD order and factored in that order (PETSc's natural-ordering
-   kernel), instead of being reordered inside every factorization: W is permuted once per step (its pattern, hence
-   the ordering, is the step's), and -F and d once per Newton step. Same factors, same iterates up to rounding;
-   measured on pressure20k's Jacobian, 12.3 ms per factorization instead of 15.1 (the permuted kernel copies and
-   zeroes each 2 x 2 block through a library call). */
+/* On one rank, with kergs's own LU (PETSc's LU through KSPPREONLY, its ordering not chosen by
+   -solver_pc_factor_mat_ordering_type, no -solver_pc_type), J is built with its block rows and columns already in
+   W's AMD order and factored with the natural ordering, instead of handing PETSc's LU the AMD ordering to apply: W
+   is permuted once per step (its pattern, hence the ordering, is the step's), and -F and d once per Newton step. Same
+   factors, same iterates up to rounding; PETSc's kernel for a permuted 2 x 2-block matrix copies and zeroes every
+   block through a library call, its natural-ordering kernel does not: 12.3 ms per factorization of pressure20k's J
+   instead of 15.1. */
 static PetscErrorCode PresortApplies(KergsSolver s, Newton *nt, PetscBool *applies)
 {
   PetscMPIInt   size;
@@ -454,26 +456,25 @@ static PetscErrorCode PresortApplies(KergsSolver s, Newton *nt, PetscBool *appli
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode PresortContacts(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc)
+static PetscErrorCode PresortContacts(Newton *nt, PetscInt n, PetscInt nc)
 {
-  PetscBool       applies;
-  PC              pc;
   IS              rows, cols, points;
   const PetscInt *idx;
+  PetscInt        m;
 
   PetscFunctionBeginUser;
-  PetscCall(PresortApplies(s, nt, &applies));
-  if (!applies || n == 0) PetscFunctionReturn(0);
-  PetscCall(KSPGetPC(nt->ksp, &pc));
+  if (!nt->presort || n == 0) PetscFunctionReturn(0);
   PetscCall(MatGetOrdering(nt->Wfull, MATORDERINGAMD, &rows, &cols));
+  PetscCall(ISGetLocalSize(rows, &m));
+  PetscCheck(m == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: W's ordering has %" PetscInt_FMT " entries for %" PetscInt_FMT " contacts",
+             m, n);
   PetscCall(PetscMalloc1(n, &nt->order));
   nt->order_nc = nc;
   PetscCall(ISGetIndices(rows, &idx));
   PetscCall(PetscArraycpy(nt->order, idx, n));
   PetscCall(ISCreateBlock(PETSC_COMM_SELF, nc, n, idx, PETSC_COPY_VALUES, &points));
   PetscCall(ISRestoreIndices(rows, &idx));
-  PetscCall(MatPermute(nt->Wfull, points, points, &nt->Wsorted));
-  PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGNATURAL));
+  PetscCall(MatPermute(nt->Wfull, points, points, &nt->Wsorted)); /* Wsorted(i, j) = W(order[i], order[j]), by blocks */
   PetscCall(ISDestroy(&points));
   PetscCall(ISDestroy(&rows));
   PetscCall(ISDestroy(&cols));
@@ -498,7 +499,7 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(EnsureWork(nt, n));
   PetscCall(DestroyStepObjects(nt));
   PetscCall(KergsOperatorsGetFullW(ops, &nt->Wfull));
-  PetscCall(PresortContacts(s, nt, n, nc));
+  PetscCall(PresortContacts(nt, n, nc));
   PetscCall(MatDuplicate(nt->order ? nt->Wsorted : nt->Wfull, MAT_COPY_VALUES, &nt->J));
   if (nt->order) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
@@ -1135,6 +1136,12 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCheck(nt->max_backtracks >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_max_backtracks %" PetscInt_FMT " must be non-negative", nt->max_backtracks);
   PetscCall(KSPSetFromOptions(nt->ksp));
+  PetscCall(PresortApplies(s, nt, &nt->presort));
+  if (nt->presort) { /* J arrives in W's AMD order (PresortContacts) */
+    PC pc;
+    PetscCall(KSPGetPC(nt->ksp, &pc));
+    PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGNATURAL));
+  }
   PetscCall(KSPSetTolerances(nt->kreuse, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, nt->reuse_its));
   PetscCall(KSPGMRESSetRestart(nt->kreuse, PetscMax(nt->reuse_its, 1)));
   PetscCall(KSPSetFromOptions(nt->kreuse));
@@ -1151,17 +1158,16 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
       "Semismooth Newton on the Alart-Curnier function (rho = %g / W_nn), Armijo line search (%g, at most %" PetscInt_FMT
       " halvings), shift %g\n",
       (double)nt->rho_factor, (double)nt->armijo, nt->max_backtracks, (double)nt->shift));
-  if (nt->smoothing)
+  if (nt->smoothing) {
     PetscCall(PetscViewerASCIIPrintf(
         viewer,
-        "Smoothing Newton phase first: eps from %g times the largest |rho v^d_n|, Jacobian regularised by %g times the natural residual, "
-        "eps raised after %" PetscInt_FMT " stall(s)\n",
-        (double)nt->smooth_eps, (double)nt->smooth_kappa, nt->smooth_raises));
-  {
-    PetscBool presorted;
-    PetscCall(PresortApplies(s, nt, &presorted));
-    if (presorted) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
+        "Smoothing Newton phase first: eps from %g times the largest |rho v^d_n|, Jacobian regularised by %g times the natural residual\n",
+        (double)nt->smooth_eps, (double)nt->smooth_kappa));
+    if (nt->smooth_raises > 0 && nt->stall_steps > 0)
+      PetscCall(PetscViewerASCIIPrintf(
+          viewer, "  its first %" PetscInt_FMT " stall(s) of a solve raise eps a hundredfold instead of ending it\n", nt->smooth_raises));
   }
+  if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
   PetscCall(KSPView(nt->ksp, viewer));
   PetscFunctionReturn(0);
 }
@@ -1199,7 +1205,8 @@ static PetscErrorCode CreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(PCSetType(pc, PCLU));
   PetscCall(PCFactorSetMatSolverType(pc, size > 1 ? MATSOLVERMUMPS : MATSOLVERPETSC)); /* -solver_pc_type lu on several */
-  PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD));                           /* 1.6-2.5 times faster than nd here */
+  PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD)); /* 1.6-2.5 times faster than nd here; natural on one rank
+                                                                 when J arrives presorted (PresortContacts) */
   PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
   /* the reuse solver: GMRES on the unpreconditioned residual, preconditioned on the right by ksp's last factorization */
   PetscCall(KSPCreate(s->comm, &nt->kreuse));
