@@ -38,11 +38,10 @@ typedef struct {
   Mat Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
   /* one rank, kergs's LU: J is stored with its block rows and columns in W's AMD order, factored in that (natural)
      order (PresortContacts) */
-  PetscInt  *order;    /* J's block row i is contact order[i]; NULL: J in the contacts' order */
-  PetscInt   order_nc; /* components per contact (J's block size) */
-  PetscBool  presort;  /* decided once the linear solver's options are read (PresortApplies) */
-  Mat        Wsorted;  /* W in that order: J's template */
-  Vec        Fs, ds;   /* -F and d in that order */
+  PetscInt  *order;   /* J's block row i is contact order[i]; NULL: J in the contacts' order */
+  PetscBool  presort; /* decided once the linear solver's options are read (PresortApplies) */
+  Mat        Wsorted; /* W in that order: J's template */
+  Vec        Fs, ds;  /* -F and d in that order */
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
   Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */
@@ -361,9 +360,8 @@ static PetscErrorCode EnableNullPivots(Newton *nt)
      Jacobi took about 90 GMRES iterations per Newton step there, additive Schwarz about 30 (the network of forces
      crosses the cut).
    - above, GMRES preconditioned by additive Schwarz with an overlap of one layer, one subdomain per rank factored by
-     LU with AMD (ConfigureSubdomainSolvers): nothing of the size of the whole J on one rank; 1.03-1.8 times faster
-     than one rank from 5,000 disks on, where the gathered LU was slower than one rank and block Jacobi (overlap 0)
-     often too (docs/solver.md, "Linear algebra").
+     LU with AMD (ConfigureSubdomainSolvers): nothing of the size of the whole J on one rank; faster than the
+     gathered LU and than block Jacobi (overlap 0) from 5,000 disks on (docs/solver.md, "Linear algebra").
    -solver_redundant_* options, read last, win; the subdomain solvers are chosen by ConfigureSubdomainSolvers. */
 static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
 {
@@ -469,7 +467,6 @@ static PetscErrorCode PresortContacts(Newton *nt, PetscInt n, PetscInt nc)
   PetscCheck(m == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: W's ordering has %" PetscInt_FMT " entries for %" PetscInt_FMT " contacts",
              m, n);
   PetscCall(PetscMalloc1(n, &nt->order));
-  nt->order_nc = nc;
   PetscCall(ISGetIndices(rows, &idx));
   PetscCall(PetscArraycpy(nt->order, idx, n));
   PetscCall(ISCreateBlock(PETSC_COMM_SELF, nc, n, idx, PETSC_COPY_VALUES, &points));
@@ -559,7 +556,7 @@ static PetscErrorCode SolveNewtonSystem(Newton *nt, KSP ksp, KSPConvergedReason 
     PetscScalar       *bs, *x;
 
     PetscCall(VecGetLocalSize(nt->F, &n));
-    nc = nt->order_nc;
+    PetscCall(MatGetBlockSize(nt->J, &nc)); /* components per contact */
     n /= nc;
     PetscCall(VecGetArrayRead(nt->F, &f));
     PetscCall(VecGetArray(nt->Fs, &bs));
@@ -873,7 +870,8 @@ static PetscErrorCode ImpulseScale(KergsSolver s, Newton *nt, PetscInt n, PetscI
 /* Smoothing Newton (-solver_newton_smoothing): Newton steps on the smoothed function F_eps (KergsLawAlartCurnierSmoothed),
    eps divided by 10 whenever F_eps is solved to a tenth of eps per component, each step damped by the Armijo line
    search on 1/2 |F_eps|^2. The first eps is -solver_newton_smoothing_eps times `scale` (ImpulseScale), at most ten
-   times the start's |F| per component (a good start keeps a small eps); the last, 1e-12 of the first. The smoothing
+   times the start's |F| per component (a good start keeps a small eps); the last, 1e-12 of the first before that cap.
+   The smoothing
    keeps J = A + B W nonsingular away from eps = 0 except on W's kernel where B is that of a stick contact; J's W part is
    regularised by sigma = kappa * natural residual * mean W_nn (within sigma_max; a Levenberg-Marquardt term: F keeps W,
    so the limit solves the original problem). Stops at the tolerance, at max_it, on a failed linear solve, or after
