@@ -10,7 +10,7 @@ kergs_test(NAME straight_row_tresca SOURCE test_regularised.c NPROCS 1 ARGS -str
 # kergs -help lists the options of every solver type, each under its own heading (PETSc prints a heading's options
 # once only: under a shared heading only the first type's appeared)
 add_test(NAME solver_help
-         COMMAND sh -c "\"$0\" -n 1 \"$1\" -help | tr '\\n' ' ' | grep -q 'Contact solver type nlkergs options.*-solver_nlkergs_max_size.*Contact solver type nlgsjac options.*Contact solver type newton options.*-solver_newton_rho.*-solver_newton_redundant_max.*Contact solver type tresca options.*-solver_tresca_tao_type'"
+         COMMAND sh -c "\"$0\" -n 1 \"$1\" -help | tr '\\n' ' ' | grep -q 'Contact solver type nlkergs options.*-solver_nlkergs_max_size.*Contact solver type nlgsjac options.*Contact solver type newton options.*-solver_newton_rho.*-solver_newton_redundant_max.*Contact solver type tresca options.*-solver_tresca_tao_type.*Contact solver type snesvi options.*-solver_snesvi_shift'"
                  ${MPIEXEC_EXECUTABLE} $<TARGET_FILE:kergs_exe>
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(solver_help PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 1 TIMEOUT 60)

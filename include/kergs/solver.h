@@ -5,6 +5,7 @@
      nlgsjac  Algorithm 6 (NLGS-Jac): Gauss-Seidel on W, Jacobi on the dense part omega N N^T, never stored
      newton   semismooth Newton on the Alart-Curnier function, proximal outer iterations
      tresca   Tresca fixed point, each Tresca problem a bound-constrained QP solved by PETSc TAO
+     snesvi   the law as a mixed complementarity problem, solved by PETSc's SNESVI (Fischer-Burmeister or active set)
    Options: -solver_max_it (paper: 150), -solver_tol, -solver_criterion quad|maxm|natural; the regularised types
    add -solver_omega, -solver_omega_factor, the kernel's (-kernel_*) and the predictor's (-predictor_*). */
 #ifndef KERGS_SOLVER_H
@@ -18,6 +19,7 @@ typedef const char *KergsSolverType;
 #define KERGS_SOLVER_NLGSJAC "nlgsjac"
 #define KERGS_SOLVER_NEWTON "newton"
 #define KERGS_SOLVER_TRESCA "tresca"
+#define KERGS_SOLVER_SNESVI "snesvi"
 
 typedef enum { KERGS_CRITERION_QUAD, KERGS_CRITERION_MAXM, KERGS_CRITERION_NATURAL } KergsCriterion;
 PETSC_EXTERN const char *const KergsCriteria[];

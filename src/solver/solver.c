@@ -38,6 +38,7 @@ static PetscErrorCode SolverRegisterAll(void)
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NLGSJAC, KergsSolverCreate_NLGSJac));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_NEWTON, KergsSolverCreate_Newton));
   PetscCall(KergsSolverRegister(KERGS_SOLVER_TRESCA, KergsSolverCreate_Tresca));
+  PetscCall(KergsSolverRegister(KERGS_SOLVER_SNESVI, KergsSolverCreate_SnesVI));
   PetscFunctionReturn(0);
 }
 

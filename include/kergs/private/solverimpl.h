@@ -73,5 +73,6 @@ PETSC_INTERN PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_Newton(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_Tresca(KergsSolver);
+PETSC_INTERN PetscErrorCode KergsSolverCreate_SnesVI(KergsSolver);
 
 #endif
