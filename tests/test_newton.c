@@ -314,7 +314,7 @@ static PetscErrorCode TestSmoothingRaise(void)
 }
 
 /* Whether the solver's view (ASCII only: written to a scratch file, read back) says that J is stored in W's AMD order
-   (PresortContacts in newton.c). */
+   (PresortContacts in newton_linear.c). */
 static PetscErrorCode ViewSaysPresorted(KergsSolver solver, PetscBool *presorted)
 {
   PetscViewer viewer;
@@ -338,7 +338,7 @@ static PetscErrorCode ViewSaysPresorted(KergsSolver solver, PetscBool *presorted
   PetscFunctionReturn(0);
 }
 
-/* On one rank J is stored in W's AMD order and factored in that order (PresortContacts in newton.c); with an ordering
+/* On one rank J is stored in W's AMD order and factored in that order (PresortContacts in newton_linear.c); with an ordering
    chosen by option, J stays in the contacts' order and PETSc's LU reorders it. confine500's first step to 1e-12 both
    ways, with or without friction: the views say which applies, and the contact velocities agree to `vtol` of their
    size (without friction they are unique, and the Newton steps are the same; with friction, rounding could lead the

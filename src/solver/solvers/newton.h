@@ -1,0 +1,76 @@
+/* kergs solver type "newton" (newton.c): its state, shared with its linear algebra (newton_linear.c: the Jacobian
+   J = A + B (W + sigma I) + eps I on W's pattern, and the solves of J d = -F). Private to these two files. */
+#ifndef KERGS_NEWTON_H
+#define KERGS_NEWTON_H
+
+#include <kergs/private/solverimpl.h>
+#include <petscksp.h>
+
+typedef enum { NEWTON_PROX_NONE, NEWTON_PROX_IDENTITY } NewtonProx;
+
+typedef struct {
+  KSP ksp;      /* J d = -F; prefix solver_ */
+  KSP kreuse;   /* J d = -F by GMRES preconditioned by the last factorization of an earlier J; prefix solver_reuse_ */
+  Mat Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
+  /* one rank, kergs's LU: J is stored with its block rows and columns in W's AMD order, factored in that (natural)
+     order (PresortContacts) */
+  PetscInt  *order;   /* J's block row i is contact order[i]; NULL: J in the contacts' order */
+  PetscBool  presort; /* decided once the linear solver's options are read (PresortApplies) */
+  Mat        Wsorted; /* W in that order: J's template */
+  Vec        Fs, ds;  /* -F and d in that order */
+  Vec        F, d, Wd, rtry, utry, Ftry;
+  Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
+  Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */
+  PetscReal *A, *B;         /* per local contact, ncomp x ncomp row-major: J = A + B W */
+  PetscReal *Aused, *Bused; /* the blocks of the Jacobian last assembled */
+  PetscReal *Afact, *Bfact; /* the blocks of the Jacobian last factored */
+  PetscReal  sigma_fact;    /* and its sigma */
+  PetscReal *rho;           /* per local contact: rho_n = rho_t = rho_factor / W_aa,nn */
+  PetscReal *rho_nat;       /* per local contact: 1 / W_aa,nn, the natural residual's */
+  PetscInt  *diagblock;     /* per local block row: position of its own block in J's diagonal part */
+  PetscInt   nalloc;
+  /* options */
+  PetscReal  rho_factor;           /* -solver_newton_rho */
+  PetscReal  shift;                /* -solver_newton_shift */
+  PetscReal  armijo;               /* -solver_newton_armijo: sufficient decrease of the merit */
+  PetscInt   max_backtracks;       /* -solver_newton_max_backtracks */
+  PetscReal  switch_tol;           /* -solver_newton_switch_tol: natural residual at which sweeps hand over to Newton */
+  PetscInt   max_sweeps;           /* -solver_newton_max_sweeps: sweeps over the whole solve */
+  PetscInt   sweep_check;          /* residual checked every this many sweeps */
+  NewtonProx prox;                 /* -solver_prox */
+  PetscReal  alpha;                /* -solver_prox_alpha: sigma / mean W_nn = alpha * natural residual */
+  PetscReal  sigma_min, sigma_max; /* -solver_prox_sigma_min, _max: its bounds */
+  PetscReal  alpha_min;            /* smallest alpha */
+  PetscInt   inner_max;            /* -solver_prox_inner_max: Newton steps per outer iteration */
+  PetscInt   stall_steps;          /* -solver_newton_stall_steps: crawling steps that end an inner Newton */
+  PetscInt   redundant_max;        /* -solver_newton_redundant_max: several ranks, J gathered whole up to this many rows */
+  PetscBool  user_pc;              /* -solver_pc_type given: the user chose the linear solver */
+  PetscReal  inner_rtol;           /* inner tolerance on |F|, relative to the natural residual times |r| */
+  PetscReal  sigma;                /* this outer iteration's sigma (0 without the proximal term) */
+  PetscReal  sigma_used;           /* sigma of the Jacobian last assembled (-1: none this step) */
+  PetscBool  project;              /* -solver_newton_project: line search along the path projected on the cones */
+  PetscInt   reuse_its;            /* -solver_newton_reuse_its: GMRES iterations on a stale factorization (0: never); with
+                                      additive Schwarz, twice the changed contacts up to which its set-up is kept */
+  PetscBool configure_subs;        /* the subdomain solvers of ksp's additive Schwarz are still to be chosen */
+  PetscBool smoothing;             /* -solver_newton_smoothing: smoothing Newton first (SolveSmoothed) */
+  PetscReal smooth_kappa;          /* -solver_newton_smoothing_kappa: its Jacobian's regularisation / natural residual */
+  PetscReal smooth_eps;            /* -solver_newton_smoothing_eps: its first eps / largest |rho v^d_n| */
+  PetscInt  smooth_raises;         /* -solver_newton_smoothing_raises: stalls that raise eps instead of ending the phase */
+  PetscReal eps;                   /* > 0: F is the smoothed Alart-Curnier function with this eps */
+  PetscInt  smooth_steps;          /* Newton steps of the last solve's smoothing phase */
+  PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
+  PetscBool stale;                 /* J changed since that set-up */
+  /* figures of the last solve */
+  PetscInt  linear_its, backtracks, failed_searches, failed_linear, sweeps, outer, jacobians, stalls, factorizations, reused;
+  PetscReal linear_seconds, last_shift, merit;
+  PetscReal enorm; /* |e| of the last natural residual computed (NaturalResidual) */
+} Newton;
+
+/* newton_linear.c */
+PETSC_INTERN PetscErrorCode NewtonCreateLinearSolver(KergsSolver, Newton *);
+PETSC_INTERN PetscErrorCode NewtonPresortApplies(KergsSolver, Newton *, PetscBool *);
+PETSC_INTERN PetscErrorCode NewtonSetUpJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc);
+PETSC_INTERN PetscErrorCode NewtonAssembleJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma);
+PETSC_INTERN PetscErrorCode NewtonSolveDirection(Newton *, PetscInt n, PetscInt nc, PetscBool *solved);
+
+#endif

@@ -1,0 +1,474 @@
+/* The linear algebra of solver type "newton" (newton.c): the Jacobian J = A + B (W + sigma I) + eps I of the
+   Alart-Curnier function, built on W's pattern (A, B block diagonal, one ncomp x ncomp block per contact), and the
+   solves of J d = -F. One rank: PETSc's LU, J stored in W's AMD order (PresortContacts); several ranks: J gathered
+   whole up to -solver_newton_redundant_max rows, else GMRES with additive Schwarz (ChooseLinearSolver); a stale
+   factorization reused by GMRES while few contacts changed piece (ReuseDirection). docs/solver.md, "Linear algebra". */
+#include "newton.h"
+#include <string.h>
+
+/* The local (diagonal) part of a parallel matrix, or the matrix itself, and the off-process part (NULL on one rank). */
+static PetscErrorCode GetParts(Mat M, PetscInt nc, Mat *Ad, Mat *Ao)
+{
+  PetscBool mpi;
+
+  PetscFunctionBeginUser;
+  *Ao = NULL;
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)M, &mpi, MATMPIAIJ, MATMPIBAIJ, ""));
+  if (!mpi)
+    *Ad = M;
+  else if (nc > 1)
+    PetscCall(MatMPIBAIJGetSeqBAIJ(M, Ad, Ao, NULL));
+  else
+    PetscCall(MatMPIAIJGetSeqAIJ(M, Ad, Ao, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* Block row a of a sequential (B)AIJ part of J is B_k (nc x nc) times block row a of the same part of W (the same
+   pattern, W being J's template), k the contact of that row (order[a], or a); in the diagonal part, A_k + sigma B_k +
+   eps I is also added to the own block, found at diagblock[a]. BAIJ stores each block column by column: entry (c, e) at c + e nc. Reading W
+   and writing J in one pass spares copying W into J first. */
+static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, PetscInt nc, PetscBool diagonal, PetscReal eps,
+                                     PetscReal sigma)
+{
+  const PetscInt *ia, *ja;
+  PetscInt        nrow;
+  PetscBool       done;
+  PetscScalar    *w, *v; /* W is only read (PETSc 3.18 has no read-only access to a BAIJ array) */
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetRowIJ(P, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscCheck(done && nrow == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the Jacobian's rows");
+  if (nc > 1) {
+    PetscCall(MatSeqBAIJGetArray(Wpart, &w));
+    PetscCall(MatSeqBAIJGetArray(P, &v));
+  } else {
+    PetscCall(MatSeqAIJGetArrayRead(Wpart, (const PetscScalar **)&w));
+    PetscCall(MatSeqAIJGetArray(P, &v));
+  }
+  for (PetscInt a = 0; a < n; a++) {
+    const PetscInt   contact = nt->order ? nt->order[a] : a;
+    const PetscReal *Ba = nt->B + contact * nc * nc, *Aa = nt->A + contact * nc * nc;
+    for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
+      const PetscScalar *wb  = w + j * nc * nc;
+      PetscScalar       *out = v + j * nc * nc;
+      if (nc == 2) { /* the 2D case, written out: most of the time goes here */
+        out[0] = Ba[0] * wb[0] + Ba[1] * wb[1];
+        out[1] = Ba[2] * wb[0] + Ba[3] * wb[1];
+        out[2] = Ba[0] * wb[2] + Ba[1] * wb[3];
+        out[3] = Ba[2] * wb[2] + Ba[3] * wb[3];
+      } else
+        for (PetscInt c = 0; c < nc; c++)
+          for (PetscInt e = 0; e < nc; e++) {
+            PetscScalar sum = 0.0;
+            for (PetscInt k = 0; k < nc; k++) sum += Ba[c * nc + k] * wb[k + e * nc];
+            out[c + e * nc] = sum;
+          }
+      if (diagonal && j == nt->diagblock[a])
+        for (PetscInt c = 0; c < nc; c++) {
+          for (PetscInt e = 0; e < nc; e++) out[c + e * nc] += Aa[c * nc + e] + sigma * Ba[c * nc + e];
+          out[c + c * nc] += eps;
+        }
+    }
+  }
+  if (nc > 1) {
+    PetscCall(MatSeqBAIJRestoreArray(P, &v));
+    PetscCall(MatSeqBAIJRestoreArray(Wpart, &w));
+  } else {
+    PetscCall(MatSeqAIJRestoreArray(P, &v));
+    PetscCall(MatSeqAIJRestoreArrayRead(Wpart, (const PetscScalar **)&w));
+  }
+  PetscCall(MatRestoreRowIJ(P, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscFunctionReturn(0);
+}
+
+/* Position of each block row's own block in the diagonal part (its local block column is the row). */
+static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt n, PetscInt nc)
+{
+  const PetscInt *ia, *ja;
+  PetscInt        nrow;
+  PetscBool       done;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetRowIJ(Ad, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  for (PetscInt a = 0; a < n; a++) {
+    nt->diagblock[a] = -1;
+    for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
+      if (ja[j] == a) nt->diagblock[a] = j;
+    PetscCheck(nt->diagblock[a] >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "newton: W's diagonal block of local contact %" PetscInt_FMT " is not stored", a);
+  }
+  PetscCall(MatRestoreRowIJ(Ad, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscFunctionReturn(0);
+}
+
+/* The local contacts whose Jacobian blocks (A, B) differ from A0, B0. */
+static PetscInt ChangedBlocks(const Newton *nt, PetscInt n, PetscInt nc, const PetscReal *A0, const PetscReal *B0)
+{
+  const size_t bytes   = (size_t)nc * nc * sizeof(PetscReal);
+  PetscInt     changed = 0;
+
+  for (PetscInt a = 0; a < n; a++)
+    if (memcmp(nt->A + a * nc * nc, A0 + a * nc * nc, bytes) || memcmp(nt->B + a * nc * nc, B0 + a * nc * nc, bytes)) changed++;
+  return changed;
+}
+
+/* J = A + B (W + sigma I) + eps I, unless the contact states (A, B) and sigma are those of the last Jacobian: F is
+   piecewise linear, so once the states settle J stays the same and its factorization is reused (the Newton step then
+   costs one solve). */
+PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
+{
+  Mat      Ad, Ao, Wd, Wo;
+  PetscInt changed = (PetscInt)(sigma != nt->sigma_used || ChangedBlocks(nt, n, nc, nt->Aused, nt->Bused) > 0);
+
+  PetscFunctionBeginUser;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_MAX, s->comm));
+  if (!changed) PetscFunctionReturn(0);
+  PetscCall(PetscArraycpy(nt->Aused, nt->A, n * nc * nc));
+  PetscCall(PetscArraycpy(nt->Bused, nt->B, n * nc * nc));
+  nt->sigma_used = sigma;
+  nt->jacobians++;
+  nt->stale = PETSC_TRUE;
+  PetscCall(GetParts(nt->order ? nt->Wsorted : nt->Wfull, nc, &Wd, &Wo));
+  PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
+  PetscCall(ScaleBlockRows(nt, Wd, Ad, n, nc, PETSC_TRUE, eps, sigma));
+  if (Ao) PetscCall(ScaleBlockRows(nt, Wo, Ao, n, nc, PETSC_FALSE, 0.0, 0.0));
+  /* values changed through the arrays: assembling again tells PETSc (and the factorization) that J changed */
+  PetscCall(MatAssemblyBegin(nt->J, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(nt->J, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
+/* MUMPS's null-pivot detection (ICNTL(24) = 1): a singular J (hyperstatic stick networks) gets a solution of its
+   consistent part instead of a failed factorization. Set on this step's factor before it is computed; an option
+   -solver_mat_mumps_icntl_24 given by the user still wins (read at the factorization). */
+static PetscErrorCode EnableNullPivots(Newton *nt)
+{
+  PC            pc;
+  Mat           F;
+  MatSolverType type;
+  PetscBool     mumps;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCLU, &mumps));
+  if (!mumps) PetscFunctionReturn(0);
+  PetscCall(PCFactorGetMatSolverType(pc, &type));
+  PetscCall(PetscStrcmp(type, MATSOLVERMUMPS, &mumps));
+  if (!mumps) PetscFunctionReturn(0);
+  PetscCall(PCFactorSetUpMatSolverType(pc));
+  PetscCall(PCFactorGetMatrix(pc, &F));
+  PetscCall(MatMumpsSetIcntl(F, 24, 1));
+  PetscFunctionReturn(0);
+}
+
+/* The default linear solver on several ranks, chosen each step from J's size unless -solver_pc_type was given:
+   - up to -solver_newton_redundant_max rows, J gathered whole on every rank and factored there by PETSc's LU with
+     AMD (PCREDUNDANT): exact, and as fast as one rank. MUMPS spent about 12 ms in every factorization of
+     confine500's J, where PETSc's LU takes well under one, and Newton factors up to 250 Jacobians a step; block
+     Jacobi took about 90 GMRES iterations per Newton step there, additive Schwarz about 30 (the network of forces
+     crosses the cut).
+   - above, GMRES preconditioned by additive Schwarz with an overlap of one layer, one subdomain per rank factored by
+     LU with AMD (ConfigureSubdomainSolvers): nothing of the size of the whole J on one rank; faster than the
+     gathered LU and than block Jacobi (overlap 0) from 5,000 disks on (docs/solver.md, "Linear algebra").
+   -solver_redundant_* options, read last, win; the subdomain solvers are chosen by ConfigureSubdomainSolvers. */
+static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
+{
+  PC          pc, subpc;
+  KSP         inner;
+  PetscInt    rows;
+  PetscMPIInt size;
+
+  PetscFunctionBeginUser;
+  nt->configure_subs = PETSC_FALSE;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  if (size == 1 || nt->user_pc) PetscFunctionReturn(0);
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(MatGetSize(nt->J, &rows, NULL));
+  if (rows <= nt->redundant_max) {
+    PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
+    PetscCall(PCSetType(pc, PCREDUNDANT));
+    PetscCall(PCRedundantGetKSP(pc, &inner));
+    PetscCall(KSPGetPC(inner, &subpc));
+    PetscCall(PCSetType(subpc, PCLU));
+    PetscCall(PCFactorSetMatSolverType(subpc, MATSOLVERPETSC));
+    PetscCall(PCFactorSetMatOrderingType(subpc, MATORDERINGAMD));
+    PetscCall(KSPSetFromOptions(inner));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(KSPSetType(nt->ksp, KSPGMRES));
+  PetscCall(KSPSetTolerances(nt->ksp, 1e-6, PETSC_DEFAULT, PETSC_DEFAULT, 200));
+  PetscCall(PCSetType(pc, PCASM));
+  PetscCall(PCASMSetOverlap(pc, 1));
+  PetscCall(KSPSetFromOptions(nt->ksp)); /* -solver_ksp_rtol, -solver_pc_asm_overlap and the like */
+  nt->configure_subs = PETSC_TRUE;       /* ConfigureSubdomainSolvers, at the first solve */
+  PetscFunctionReturn(0);
+}
+
+/* The subdomain solvers of additive Schwarz exist once the KSP is set up: LU with AMD on each, chosen at the step's
+   first Newton solve, once J holds its first values (set up at the step's set-up, they would first factor the
+   subdomains of J's initial copy of W, singular: a wasted factorization, which fails). -solver_sub_* options, read
+   last, win. */
+static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
+{
+  PC       pc, subpc;
+  KSP     *sub;
+  PetscInt nblocks;
+
+  PetscFunctionBeginUser;
+  if (!nt->configure_subs) PetscFunctionReturn(0);
+  nt->configure_subs = PETSC_FALSE;
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(KSPSetUp(nt->ksp));
+  PetscCall(PCASMGetSubKSP(pc, &nblocks, NULL, &sub));
+  for (PetscInt b = 0; b < nblocks; b++) {
+    PetscCall(KSPSetType(sub[b], KSPPREONLY));
+    PetscCall(KSPGetPC(sub[b], &subpc));
+    PetscCall(PCSetType(subpc, PCLU));
+    PetscCall(PCFactorSetMatOrderingType(subpc, MATORDERINGAMD));
+    PetscCall(KSPSetFromOptions(sub[b]));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* On one rank, with kergs's own LU (PETSc's LU through KSPPREONLY, its ordering not chosen by
+   -solver_pc_factor_mat_ordering_type, no -solver_pc_type), J is built with its block rows and columns already in
+   W's AMD order and factored with the natural ordering, instead of handing PETSc's LU the AMD ordering to apply: W
+   is permuted once per step (its pattern, hence the ordering, is the step's), and -F and d once per Newton step. Same
+   factors, same iterates up to rounding; PETSc's kernel for a permuted 2 x 2-block matrix copies and zeroes every
+   block through a library call, its natural-ordering kernel does not: 12.3 ms per factorization of pressure20k's J
+   instead of 15.1. */
+PetscErrorCode NewtonPresortApplies(KergsSolver s, Newton *nt, PetscBool *applies)
+{
+  PetscMPIInt   size;
+  PC            pc;
+  KSPType       ktype;
+  PCType        ptype;
+  MatSolverType stype;
+  PetscBool     preonly, lu, petsc, chosen;
+
+  PetscFunctionBeginUser;
+  *applies = PETSC_FALSE;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_factor_mat_ordering_type", &chosen));
+  if (size > 1 || nt->user_pc || chosen) PetscFunctionReturn(0);
+  PetscCall(KSPGetType(nt->ksp, &ktype));
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PCGetType(pc, &ptype));
+  PetscCall(PCFactorGetMatSolverType(pc, &stype));
+  PetscCall(PetscStrcmp(ktype, KSPPREONLY, &preonly));
+  PetscCall(PetscStrcmp(ptype, PCLU, &lu));
+  PetscCall(PetscStrcmp(stype, MATSOLVERPETSC, &petsc));
+  *applies = (PetscBool)(preonly && lu && petsc);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode PresortContacts(Newton *nt, PetscInt n, PetscInt nc)
+{
+  IS              rows, cols, points;
+  const PetscInt *idx;
+  PetscInt        m;
+
+  PetscFunctionBeginUser;
+  if (!nt->presort || n == 0) PetscFunctionReturn(0);
+  PetscCall(MatGetOrdering(nt->Wfull, MATORDERINGAMD, &rows, &cols));
+  PetscCall(ISGetLocalSize(rows, &m));
+  PetscCheck(m == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: W's ordering has %" PetscInt_FMT " entries for %" PetscInt_FMT " contacts",
+             m, n);
+  PetscCall(PetscMalloc1(n, &nt->order));
+  PetscCall(ISGetIndices(rows, &idx));
+  PetscCall(PetscArraycpy(nt->order, idx, n));
+  PetscCall(ISCreateBlock(PETSC_COMM_SELF, nc, n, idx, PETSC_COPY_VALUES, &points));
+  PetscCall(ISRestoreIndices(rows, &idx));
+  PetscCall(MatPermute(nt->Wfull, points, points, &nt->Wsorted)); /* Wsorted(i, j) = W(order[i], order[j]), by blocks */
+  PetscCall(ISDestroy(&points));
+  PetscCall(ISDestroy(&rows));
+  PetscCall(ISDestroy(&cols));
+  PetscFunctionReturn(0);
+}
+
+/* The step's Jacobian and linear solver: W presorted (one rank, PresortContacts), J created on its pattern, the
+   position of every diagonal block, and the KSP reset to J's sizes, then chosen for them (ChooseLinearSolver). */
+PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc)
+{
+  Mat Ad, Ao;
+
+  PetscFunctionBeginUser;
+  PetscCall(PresortContacts(nt, n, nc));
+  PetscCall(MatDuplicate(nt->order ? nt->Wsorted : nt->Wfull, MAT_COPY_VALUES, &nt->J));
+  if (nt->order) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
+  PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
+  PetscCall(LocateDiagonalBlocks(nt, Ad, n, nc));
+  PetscCall(KSPReset(nt->ksp)); /* J's sizes and pattern are this step's */
+  nt->sigma_used = -1.0;
+  PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
+  PetscCall(KSPReset(nt->kreuse));
+  PetscCall(KSPSetOperators(nt->kreuse, nt->J, nt->J));
+  nt->factored = nt->stale = PETSC_FALSE;
+  PetscCall(ChooseLinearSolver(s, nt));
+  PetscCall(EnableNullPivots(nt));
+  PetscFunctionReturn(0);
+}
+
+/* The preconditioner of the reuse solver: the factorization (or block factorizations) last computed by ksp, applied to
+   a J that has changed since. Reuse is set on ksp's PC so that applying it does not factor again. */
+static PetscErrorCode ApplyStaleFactor(PC pc, Vec x, Vec y)
+{
+  Newton *nt;
+  PC      main;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &nt));
+  PetscCall(KSPGetPC(nt->ksp, &main));
+  PetscCall(PCSetReusePreconditioner(main, PETSC_TRUE));
+  PetscCall(PCApply(main, x, y));
+  PetscFunctionReturn(0);
+}
+
+/* d = J^-1 (-F) by `ksp`, counting its iterations. */
+static PetscErrorCode SolveNewtonSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason)
+{
+  PetscInt its;
+
+  PetscFunctionBeginUser;
+  if (nt->order) { /* J in W's AMD order (PresortContacts): -F into that order, d back from it */
+    PetscInt           n, nc;
+    const PetscScalar *f, *xs;
+    PetscScalar       *bs, *x;
+
+    PetscCall(VecGetLocalSize(nt->F, &n));
+    PetscCall(MatGetBlockSize(nt->J, &nc)); /* components per contact */
+    n /= nc;
+    PetscCall(VecGetArrayRead(nt->F, &f));
+    PetscCall(VecGetArray(nt->Fs, &bs));
+    for (PetscInt i = 0; i < n; i++)
+      for (PetscInt c = 0; c < nc; c++) bs[i * nc + c] = -f[nt->order[i] * nc + c];
+    PetscCall(VecRestoreArray(nt->Fs, &bs));
+    PetscCall(VecRestoreArrayRead(nt->F, &f));
+    PetscCall(KSPSolve(ksp, nt->Fs, nt->ds));
+    PetscCall(VecGetArrayRead(nt->ds, &xs));
+    PetscCall(VecGetArray(nt->d, &x));
+    for (PetscInt i = 0; i < n; i++)
+      for (PetscInt c = 0; c < nc; c++) x[nt->order[i] * nc + c] = xs[i * nc + c];
+    PetscCall(VecRestoreArray(nt->d, &x));
+    PetscCall(VecRestoreArrayRead(nt->ds, &xs));
+  } else {
+    PetscCall(VecScale(nt->F, -1.0));
+    PetscCall(KSPSolve(ksp, nt->F, nt->d));
+    PetscCall(VecScale(nt->F, -1.0));
+  }
+  PetscCall(KSPGetConvergedReason(ksp, reason));
+  PetscCall(KSPGetIterationNumber(ksp, &its));
+  nt->linear_its += its;
+  PetscFunctionReturn(0);
+}
+
+/* J d = -F with the factorization of an earlier J of this step. With sigma unchanged, J changes between Newton steps
+   only in the rows of the contacts that changed piece: a low-rank change, which GMRES absorbs in about one iteration
+   per changed row, each costing one triangular solve where a factorization costs far more. When ksp solves directly
+   (KSPPREONLY: LU, or LU gathered by PCREDUNDANT), by at most -solver_newton_reuse_its GMRES iterations preconditioned
+   by that factorization (kreuse); when ksp is kergs's GMRES with additive Schwarz (several ranks), by ksp with its
+   preconditioner kept, to ksp's own tolerance (a Krylov method chosen by option sets up every changed J). Tried only
+   when few contacts changed. *solved is false when it did not converge: then J is factored again. */
+static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBool *solved)
+{
+  KSPConvergedReason reason;
+  PetscInt           changed;
+  PetscBool          direct;
+  PC                 pc;
+
+  PetscFunctionBeginUser;
+  *solved = PETSC_FALSE;
+  if (nt->reuse_its <= 0 || !nt->factored || !nt->stale || nt->sigma_used != nt->sigma_fact) PetscFunctionReturn(0);
+  /* GMRES needs about one iteration per changed block row: try only when few changed */
+  changed = ChangedBlocks(nt, n, nc, nt->Afact, nt->Bfact);
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)nt->ksp)));
+  if (2 * changed > nt->reuse_its) PetscFunctionReturn(0);
+  PetscCall(PetscObjectTypeCompare((PetscObject)nt->ksp, KSPPREONLY, &direct));
+  if (direct)
+    PetscCall(SolveNewtonSystem(nt, nt->kreuse, &reason));
+  else {
+    PetscBool schwarz;
+    PetscCall(KSPGetPC(nt->ksp, &pc));
+    PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCASM, &schwarz));
+    if (!schwarz || nt->user_pc) PetscFunctionReturn(0); /* a Krylov method chosen by option: every changed J is set up */
+    PetscCall(PCSetReusePreconditioner(pc, PETSC_TRUE));
+    PetscCall(PCSetFailedReason(pc, PC_NOERROR));
+    PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
+  }
+  *solved = (PetscBool)(reason > 0);
+  if (*solved) nt->reused++;
+  PetscFunctionReturn(0);
+}
+
+/* Solve J d = -F: with the last factorization while it serves (ReuseDirection), else by ksp, which factors J again. A
+   failed solve (a Krylov method on an ill-conditioned J, a singular factorization) is not an error: the inner Newton
+   stops and the outer iteration retries with a larger proximal term, which conditions J better. */
+PetscErrorCode NewtonSolveDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBool *solved)
+{
+  KSPConvergedReason reason;
+  PetscLogDouble     t0, t1;
+  PC                 pc;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscTime(&t0));
+  PetscCall(ReuseDirection(nt, n, nc, solved));
+  if (!*solved) {
+    PetscCall(KSPGetPC(nt->ksp, &pc));
+    PetscCall(PCSetReusePreconditioner(pc, PETSC_FALSE));
+    /* additive Schwarz keeps a subdomain's failed factorization as its own failure through later set-ups (PETSc
+       3.18): without this, one failed solve would fail every later one, however good J */
+    PetscCall(PCSetFailedReason(pc, PC_NOERROR));
+    if (nt->stale || !nt->factored) nt->factorizations++;
+    PetscCall(ConfigureSubdomainSolvers(nt));
+    PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
+    nt->factored   = PETSC_TRUE;
+    nt->stale      = PETSC_FALSE;
+    nt->sigma_fact = nt->sigma_used;
+    PetscCall(PetscArraycpy(nt->Afact, nt->Aused, n * nc * nc));
+    PetscCall(PetscArraycpy(nt->Bfact, nt->Bused, n * nc * nc));
+    *solved = (PetscBool)(reason >= 0);
+    if (!*solved) {
+      nt->failed_linear++;
+      PetscCall(PetscInfo(NULL, "newton: the linear solve of a Newton step failed (%s): a larger proximal term next\n",
+                          KSPConvergedReasons[reason]));
+    }
+  }
+  PetscCall(PetscTime(&t1));
+  nt->linear_seconds += t1 - t0;
+  PetscFunctionReturn(0);
+}
+
+/* One rank: a direct LU, PETSc's own with an AMD ordering (the fastest measured on the Jacobians of confine500 and
+   biaxial 20k). Several ranks: chosen each step by ChooseLinearSolver. -solver_ksp_type, -solver_pc_type,
+   -solver_pc_factor_mat_solver_type mumps (then with its null-pivot detection, EnableNullPivots) and the like choose
+   otherwise. */
+PetscErrorCode NewtonCreateLinearSolver(KergsSolver s, Newton *nt)
+{
+  PC          pc;
+  PetscMPIInt size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCall(KSPCreate(s->comm, &nt->ksp));
+  PetscCall(KSPSetOptionsPrefix(nt->ksp, "solver_"));
+  PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PCSetType(pc, PCLU));
+  PetscCall(PCFactorSetMatSolverType(pc, size > 1 ? MATSOLVERMUMPS : MATSOLVERPETSC)); /* -solver_pc_type lu on several */
+  PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD)); /* 1.6-2.5 times faster than nd here; natural on one rank
+                                                                 when J arrives presorted (PresortContacts) */
+  PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
+  /* the reuse solver: GMRES on the unpreconditioned residual, preconditioned on the right by ksp's last factorization */
+  PetscCall(KSPCreate(s->comm, &nt->kreuse));
+  PetscCall(KSPSetOptionsPrefix(nt->kreuse, "solver_reuse_"));
+  PetscCall(KSPSetType(nt->kreuse, KSPGMRES));
+  PetscCall(KSPSetPCSide(nt->kreuse, PC_RIGHT));
+  PetscCall(KSPSetNormType(nt->kreuse, KSP_NORM_UNPRECONDITIONED));
+  PetscCall(KSPGetPC(nt->kreuse, &pc));
+  PetscCall(PCSetType(pc, PCSHELL));
+  PetscCall(PCShellSetContext(pc, nt));
+  PetscCall(PCShellSetApply(pc, ApplyStaleFactor));
+  PetscCall(PCShellSetName(pc, "the last factorization of J"));
+  PetscCall(KSPSetErrorIfNotConverged(nt->kreuse, PETSC_FALSE));
+  PetscFunctionReturn(0);
+}
