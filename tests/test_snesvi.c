@@ -1,8 +1,8 @@
-/* Solver type "tresca" (src/solver/solvers/tresca.c): one-contact cases (open, stick, slip on a slope) solved to 1e-10
-   with the right physics, and frictionless confine500 solved in one Tresca iteration (one QP: the thresholds do not
-   matter) with the velocities of the newton type. The infeasible straight row is a ctest of test_regularised.c
-   (tests/tresca.cmake). */
-static const char help[] = "kergs tresca solver tests.\n";
+/* Solver type "snesvi" (src/solver/solvers/snesvi.c, PETSc's SNESVI on the law written as a complementarity problem):
+   one-contact cases (open, stick, stick and slip on a slope) solved to 1e-10 with the right physics, and frictionless
+   confine500 (the linear complementarity problem of the normal impulses, W singular) solved to 1e-10 with the
+   velocities of the newton type. Run for the SNESVI type given by -test_snes_type (tests/snesvi.cmake). */
+static const char help[] = "kergs snesvi solver tests.\n";
 
 #include "testing.h"
 
