@@ -19,6 +19,11 @@ set_tests_properties(malloc_dump_fclib_input PROPERTIES FIXTURES_REQUIRED dump_c
 kergs_test(NAME malloc_dump_confine5_nlgsjac NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none
                 -solver_type nlgsjac -predictor_type linear -partition_check_every 1 -partition_imbalance_tol 1.0)
+# the accurate types, which build PETSc solvers of their own every step (a KSP, a SNES, a Tao), frictional, on 2 ranks
+foreach(type newton snesvi tresca)
+  kergs_test(NAME malloc_dump_confine5_${type} NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
+             ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type ${type})
+endforeach()
 
 # 2. Label memcheck (ctest -L memcheck: about 85 s on 2 cores, 160 s of processor time): scenes under valgrind,
 #    failing on any invalid access, use of uninitialised memory or leak (definite, indirect, possible).

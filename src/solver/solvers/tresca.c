@@ -19,12 +19,12 @@
 typedef struct {
   Tao       tao; /* this step's QP solver; prefix solver_tresca_ */
   char      taotype[64];
-  Mat       H;               /* W over the active components (+ sigma I), AIJ */
-  IS        is;              /* the active components, global indices of r */
-  Vec       x, c, lb, ub, g; /* the active components: impulses, linear term, bounds, gradient */
-  PetscReal wmean;           /* mean W_nn over the active contacts */
-  PetscReal sigma;           /* the proximal coefficient of this step (absolute) */
-  PetscInt  nactive;         /* local active contacts */
+  Mat       H;            /* W over the active components (+ sigma I), AIJ */
+  IS        is;           /* the active components, global indices of r */
+  Vec       x, c, lb, ub; /* the active components: impulses, linear term, bounds */
+  PetscReal wmean;        /* mean W_nn over the active contacts */
+  PetscReal sigma;        /* the proximal coefficient of this step (absolute) */
+  PetscInt  nactive;      /* local active contacts */
   /* options */
   PetscReal sigma_factor; /* -solver_tresca_sigma: sigma / mean W_nn, at least */
   PetscReal sigma_alpha;  /* -solver_tresca_sigma_alpha: sigma / mean W_nn = alpha * natural residual, when larger */
@@ -72,7 +72,6 @@ static PetscErrorCode DestroyStepObjects(Tresca *tr)
   PetscCall(VecDestroy(&tr->c));
   PetscCall(VecDestroy(&tr->lb));
   PetscCall(VecDestroy(&tr->ub));
-  PetscCall(VecDestroy(&tr->g));
   PetscFunctionReturn(0);
 }
 
@@ -136,9 +135,10 @@ static PetscErrorCode SolverSetUp_Tresca(KergsSolver s, KergsScene scene, KergsC
   PetscCall(MatCreateVecs(tr->H, &tr->x, &tr->c));
   PetscCall(VecDuplicate(tr->x, &tr->lb));
   PetscCall(VecDuplicate(tr->x, &tr->ub));
-  PetscCall(VecDuplicate(tr->x, &tr->g));
   PetscCall(CreateTao(s, tr));
-  PetscCall(TaoSetObjectiveAndGradient(tr->tao, tr->g, TrescaObjectiveGradient, tr));
+  /* no gradient vector of ours: with one, TRON (PETSc 3.18) kept a reference to it past TaoDestroy, a vector leaked
+     per step (-malloc_dump, tests/memcheck.cmake); Tao makes its own */
+  PetscCall(TaoSetObjectiveAndGradient(tr->tao, NULL, TrescaObjectiveGradient, tr));
   PetscCall(TaoSetHessian(tr->tao, tr->H, tr->H, TrescaHessian, tr));
   PetscCall(TaoSetVariableBounds(tr->tao, tr->lb, tr->ub));
   PetscFunctionReturn(0);
