@@ -14,6 +14,10 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
   ranks100k   biaxial 100,000, first step, newton to 1e-8 on 1 and on 2 ranks: residuals and speed-up; and the same on
               the polydisperse packing (cases/deposit500.h5 tiled 200 times, 100,000 disks pushed by the free wall
               of pressure20k, 2 steps of 1e-3 s), where the two ranks split the strip along its length.
+  snesvi      (not run by default; about 30 s) PETSc's SNESVI (-solver_type snesvi: RSLS, and SSLS without
+              friction) against newton, one rank: confine500 (10 steps, 1e-10) and the pressure20k packing tiled 10
+              times (5,000 disks, 5 steps, 1e-8), without friction and with (SNESVI capped at 300 iterations a step
+              there); steps converged and solve times side by side (docs/solver.md, "PETSc's SNESVI").
   big         (--big only) biaxial 10^6 disks on 2 ranks, first step, newton to 1e-6: time, peak memory per grain.
 
 Usage: bench_accurate.py [--kergs build/kergs] [--parts confine500,biaxial20k,pressure20k,siconos,ranks100k] [--big] [--quick]
@@ -145,6 +149,25 @@ if "pressure20k" in parts:
         emit({"bench": "pressure20k", "compare": "newton to 1e-8 against nlgs to quad 1e-4, 5 steps", "nlgs_seconds": tg,
               "newton_seconds": tw, "nlgs_residual_max": float(np.max(g["residual"])), "newton_every_step_1e-8": every,
               "target": "every step <= 1e-8, in less time than nlgs", "met": every and tw < tg})
+
+if "snesvi" in parts:
+    scenes = {"confine500": (["-options_file", "cases/confine500.opts", "-steps", "10"], "1e-10", []),
+              "tiling5k": (pressure_scene(10, 5), "1e-8", ["-friction_pairs", "0,1,0"])}
+    types = {"newton": NEWTON, "snesvi_rsls": ["-solver_type", "snesvi"],
+             "snesvi_ssls": ["-solver_type", "snesvi", "-solver_snes_type", "vinewtonssls"]}
+    for name, (opts, tol, pairs) in scenes.items():
+        for mu in ("0", "0.3"):
+            rows = {}
+            for t, topts in types.items():
+                if t == "snesvi_ssls" and mu != "0":
+                    continue  # fails from the first frictional step (docs/solver.md)
+                cap = ["-solver_max_it", "300"] if t != "newton" and mu != "0" else ["-solver_max_it", "1000"]
+                rows[t] = run(f"{name}_mu{mu}_{t}", 1, opts + ["-friction", mu] + pairs + topts + cap + ["-solver_tol", tol])
+            if all(r is not None for r in rows.values()):
+                emit({"bench": "snesvi", "scene": name, "friction": float(mu), "tol": float(tol),
+                      "steps_converged": {t: int(np.sum(r["converged"])) for t, r in rows.items()},
+                      "solve_seconds": {t: round(float(np.sum(r["solve_seconds"])), 3) for t, r in rows.items()},
+                      "iterations": {t: [int(x) for x in r["iterations"]] for t, r in rows.items()}})
 
 if "siconos" in parts:
     f = os.path.join(tmp, "confine500_step5.fclib.h5")
