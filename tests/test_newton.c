@@ -472,6 +472,33 @@ static PetscErrorCode TestLineSearch(void)
   PetscFunctionReturn(0);
 }
 
+/* -solver_prox kernel: the proximal term sigma P (r - r_c) on ker W alone (P through the kernel projector), its Newton
+   systems solved by GMRES preconditioned by the factorization of J with the smallest sigma. confine500's cold first
+   step goes through proximal outer iterations (the smoothing phase stalls there, TestSmoothingRaise): both steps must
+   reach 1e-10, step 1 through more than one outer iteration and with GMRES iterations beyond one per Newton step (the
+   kernel path ran), in about the Newton steps of the identity term (135 against 136 measured). */
+static PetscErrorCode TestProxKernel(void)
+{
+  KergsStepper st;
+  PetscInt     maxits, nconv;
+  PetscReal    maxres, outer, its, linear;
+
+  PetscFunctionBeginUser;
+  PetscCall(RunSteps("-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_prox kernel -solver_tol 1e-10 "
+                     "-solver_max_it 1000",
+                     2, &st, &maxits, &maxres, &nconv));
+  PetscCall(Check((PetscBool)(nconv == 2 && maxres <= 1e-10), "confine500, -solver_prox kernel: 2 steps to 1e-10 (largest residual)",
+                  maxres, 1e-10));
+  PetscCall(StatAt(st->results, "outer_iterations", 0, &outer));
+  PetscCall(StatAt(st->results, "iterations", 0, &its));
+  PetscCall(StatAt(st->results, "linear_iterations", 0, &linear));
+  PetscCall(Check((PetscBool)(outer > 1 && linear > 2 * its), "confine500, -solver_prox kernel: step 1's GMRES iterations per Newton step",
+                  linear / its, 2));
+  PetscCall(Check((PetscBool)(its <= 200), "confine500, -solver_prox kernel: step 1's Newton steps (identity: 136)", its, 200));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   PetscMPIInt size;
@@ -489,6 +516,7 @@ int main(int argc, char **argv)
     PetscCall(TestPresorted(PETSC_TRUE, 1e-8, "frictionless confine500"));
     PetscCall(TestPresorted(PETSC_FALSE, 1e-6, "confine500 with friction"));
     PetscCall(TestLineSearch());
+    PetscCall(TestProxKernel());
   } else {
     PetscCall(TestRanks("", "J gathered on every rank"));
     PetscCall(TestRanks("-solver_newton_redundant_max 0", "GMRES with additive Schwarz"));

@@ -31,6 +31,9 @@ PETSC_EXTERN PetscErrorCode KergsKernelSetOmega(KergsKernel, PetscReal omega);
    predicted gap is <= 0). By default H_f spans every potential contact (within the alert distance). The array must
    live until the next SetUp. NULL: every contact is active. */
 PETSC_EXTERN PetscErrorCode KergsKernelSetActive(KergsKernel, const PetscBool *active);
+/* Force H_f over the active contacts only, whatever -kernel_active_only says (newton's proximal term on ker W, whose
+   unknowns are the active contacts' impulses). */
+PETSC_EXTERN PetscErrorCode KergsKernelSetActiveOnly(KergsKernel, PetscBool);
 /* y = P x (x, y over all contact components, layout of ops->r) */
 PETSC_EXTERN PetscErrorCode KergsKernelProject(KergsKernel, Vec x, Vec y);
 /* the MATSHELL Z = omega P (valid until the next SetUp) */

@@ -94,6 +94,7 @@ PETSC_EXTERN PetscErrorCode KergsSolverGetActive(KergsSolver, const PetscBool **
    the time step then keeps H alive from assembly to the velocity update and assembles the whole W (otherwise W
    couples the active contacts only). */
 PETSC_EXTERN PetscErrorCode KergsSolverNeedsH(KergsSolver, PetscBool *);
+PETSC_EXTERN PetscErrorCode KergsSolverNeedsFullW(KergsSolver, PetscBool *);
 /* -solver_max_it and -solver_tol */
 PETSC_EXTERN PetscErrorCode KergsSolverGetTolerances(KergsSolver, PetscReal *tol, PetscInt *max_it);
 PETSC_EXTERN PetscErrorCode KergsSolverGetIterationName(KergsSolver, const char **);

@@ -102,6 +102,13 @@ PetscErrorCode KergsKernelSetActive(KergsKernel k, const PetscBool *active)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsKernelSetActiveOnly(KergsKernel k, PetscBool only)
+{
+  PetscFunctionBeginUser;
+  k->active_only = only;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsKernelSetOmega(KergsKernel k, PetscReal omega)
 {
   PetscFunctionBeginUser;

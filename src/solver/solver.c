@@ -72,6 +72,7 @@ PetscErrorCode KergsSolverSetType(KergsSolver s, KergsSolverType type)
   PetscCall(PetscMemzero(&s->ops, sizeof(s->ops)));
   s->data            = NULL;
   s->needs_H         = PETSC_FALSE;
+  s->needs_full_W    = PETSC_FALSE;
   s->fixed_criterion = PETSC_FALSE;
   s->iteration_name  = "sweeps";
   PetscCall(PetscStrncpy(s->type, type, sizeof(s->type)));
@@ -388,6 +389,13 @@ PetscErrorCode KergsSolverNeedsH(KergsSolver s, PetscBool *needs)
 {
   PetscFunctionBeginUser;
   *needs = s->needs_H;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverNeedsFullW(KergsSolver s, PetscBool *needs)
+{
+  PetscFunctionBeginUser;
+  *needs = s->needs_full_W;
   PetscFunctionReturn(0);
 }
 

@@ -106,8 +106,9 @@ PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun r)
   PetscCall(KergsSolverNeedsH(r->solver, &needs_H));
   PetscCheck(
       !needs_H, r->comm, PETSC_ERR_SUP,
-      "-solver_type %s needs the scene's H_f (the kernel of H_f regularises W, its predictors read the bodies): an FCLib problem holds W "
-      "(or M and H without the bodies' geometry); solve it with -solver_type nlgs or newton",
+      "-solver_type %s needs the scene's H_f here (the kernel projector of nlkergs, nlgsjac and of newton's -solver_prox kernel, the "
+      "predictors read the bodies): an FCLib problem holds W (or M and H without the bodies' geometry); solve it with -solver_type nlgs "
+      "or newton (-solver_prox identity, the default)",
       type);
   PetscCall(KergsResultsSetSceneName(r->results, r->name));
   PetscCall(KergsResultsSetFromOptions(r->results));

@@ -166,7 +166,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   KergsSolveStats ss;
   PetscLogDouble  t0, t1, t2;
   PetscReal      *vold, *wold, *wvold;
-  PetscBool       due, keepH, needsH;
+  PetscBool       due, keepH, needsH, needsFullW;
   PetscInt        step;
 
   PetscFunctionBeginUser;
@@ -184,9 +184,10 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   /* v^d, then W: unless kept, H is freed before W exists, built again for the update once W is freed, and freed after
      it. W couples the active contacts only, unless the solver works on the whole W (the kernel-regularised types). */
   PetscCall(KergsSolverNeedsH(st->solver, &needsH));
+  PetscCall(KergsSolverNeedsFullW(st->solver, &needsFullW));
   keepH = (PetscBool)(st->keep_H || needsH);
   PetscCall(KergsOperatorsAssembleH(st->ops, sc, st->contacts, keepH));
-  PetscCall(KergsOperatorsAssembleW(st->ops, sc, st->contacts, (PetscBool)!needsH));
+  PetscCall(KergsOperatorsAssembleW(st->ops, sc, st->contacts, (PetscBool)!needsFullW));
   PetscCall(KergsOperatorsGetImpulses(st->ops, st->contacts)); /* warm start */
   PetscCall(PetscTime(&t2));
   PetscCall(KergsSolverSetStepNumber(st->solver, step + 1)); /* numbered as the step lines, for -solver_monitor */

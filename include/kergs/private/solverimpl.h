@@ -34,9 +34,10 @@ struct _p_KergsSolver {
   const char    *iteration_name;  /* what -solver_max_it counts: "sweeps" or "Newton steps" */
   KergsSweep     sweep;           /* Gauss-Seidel on W; also computes the physical residual */
   KergsSweep     iterate_sweep;   /* when set, the sweeps run on this one instead (nlkergs: on W~) */
-  PetscBool      needs_H;         /* the type reads H_f, H_g during its solve (kernel projector, predictors), and W over all
-                                     pairs of contacts: the time step keeps H alive from assembly to the velocity update and
-                                     assembles the whole W (otherwise W couples the active contacts only) */
+  PetscBool      needs_H;         /* the type reads H_f, H_g during its solve (kernel projector, predictors): the time step
+                                     keeps H alive from assembly to the velocity update */
+  PetscBool needs_full_W;         /* the type works on W over all pairs of potential contacts (the kernel-regularised
+                                     types); otherwise W couples the active contacts only */
   /* monitors (KergsSolverMonitorSet); the last iteration's call is held back until the solve's exit, so that its residual
      is the one recorded (KergsSolverMonitor) */
   KergsSolverMonitorFn monitor[KERGS_SOLVER_MAXMONITORS];

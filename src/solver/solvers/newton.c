@@ -28,7 +28,7 @@
    -solver_newton_switch_tol). Convergence is the natural residual of the original problem (-solver_tol, default 1e-10). */
 #include "newton.h"
 
-static const char *const NewtonProxes[] = {"none", "identity", "NewtonProx", "NEWTON_PROX_", NULL};
+static const char *const NewtonProxes[] = {"none", "identity", "kernel", "NewtonProx", "NEWTON_PROX_", NULL};
 
 /* ------------------------------------------------------------------------------------------------ */
 /* The Alart-Curnier function over the local contacts (KergsLawAlartCurnier, src/solver/law.c)       */
@@ -132,6 +132,9 @@ static PetscErrorCode DestroyStepObjects(Newton *nt)
   PetscCall(VecDestroy(&nt->rc));
   PetscCall(VecDestroy(&nt->ueff));
   PetscCall(VecDestroy(&nt->rplain));
+  PetscCall(MatDestroy(&nt->Jprox));
+  PetscCall(VecDestroy(&nt->kx));
+  PetscCall(VecDestroy(&nt->kpx));
   PetscFunctionReturn(0);
 }
 
@@ -145,6 +148,10 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
 
   PetscFunctionBeginUser;
   PetscCall(KergsSolverSetUpSweep(s, scene, contacts, ops)); /* active set, mu, and the residual's sweep on W */
+  if (nt->prox == NEWTON_PROX_KERNEL) {                      /* P over the active contacts, for the proximal term sigma P (r - r_c) */
+    PetscCall(KergsKernelSetActive(nt->kernel, s->active));
+    PetscCall(KergsKernelSetUp(nt->kernel, scene, contacts, ops));
+  }
   PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
   PetscCall(KergsOperatorsGetLayout(ops, &layout));
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
@@ -179,7 +186,11 @@ static PetscErrorCode ProximalVelocity(Newton *nt, Vec r, Vec u, Vec ueff)
 {
   PetscFunctionBeginUser;
   PetscCall(VecCopy(u, ueff));
-  if (nt->sigma > 0) {
+  if (nt->sigma > 0 && nt->prox == NEWTON_PROX_KERNEL) { /* u + sigma P (r - r_c) */
+    PetscCall(VecWAXPY(nt->kx, -1.0, nt->rc, r));
+    PetscCall(KergsKernelProject(nt->kernel, nt->kx, nt->kpx));
+    PetscCall(VecAXPY(ueff, nt->sigma, nt->kpx));
+  } else if (nt->sigma > 0) {
     PetscCall(VecAXPY(ueff, nt->sigma, r));
     PetscCall(VecAXPY(ueff, -nt->sigma, nt->rc));
   }
@@ -314,7 +325,8 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
   PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit));
   for (PetscInt k = 0; k < count && PetscSqrtReal(2.0 * merit) > ftol; k++) {
-    PetscCall(NewtonAssembleJacobian(s, nt, n, nc, nt->shift, nt->sigma));
+    /* -solver_prox kernel: J with the smallest sigma, the preconditioner of J_P (NewtonSolveDirection) */
+    PetscCall(NewtonAssembleJacobian(s, nt, n, nc, nt->shift, nt->prox == NEWTON_PROX_KERNEL ? nt->sigma_pc : nt->sigma));
     PetscCall(NewtonSolveDirection(nt, n, nc, &solved));
     if (!solved) {
       *ok   = PETSC_FALSE;
@@ -470,18 +482,19 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
+  nt->sigma_pc = nt->sigma_min * wmean; /* -solver_prox kernel: J factored with the smallest sigma */
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
   nt->smooth_steps = 0;
-  smoothing        = (PetscBool)(nt->smoothing && nt->prox == NEWTON_PROX_IDENTITY); /* the phase hands over to the proximal iterations */
+  smoothing        = (PetscBool)(nt->smoothing && nt->prox != NEWTON_PROX_NONE); /* the phase hands over to the proximal iterations */
   while (res > s->tol && nglobal > 0 && steps < s->max_it) {
     PetscReal before = res, inner_tol;
     PetscCall(VecCopy(r, nt->rc));
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res)); /* |e| at the centre (after a rejected outer iteration too) */
     /* the first attempt is plain Newton (the smallest sigma): enough when the warm start lies on the solution's piece
        of F, and the residual (absolute at r = 0) says little about the distance to the solution */
-    nt->sigma = nt->prox == NEWTON_PROX_IDENTITY
+    nt->sigma = nt->prox != NEWTON_PROX_NONE
                     ? (nt->outer == 0 ? nt->sigma_min : PetscClipInterval(alpha * res, nt->sigma_min, nt->sigma_max)) * wmean
                     : 0.0;
     /* |F| scales with rho where the natural residual's map uses 1 / W_nn: a smaller rho asks for a smaller |F| */
@@ -500,7 +513,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
     nt->outer++;
     ok = (PetscBool)(PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */
-    if (nt->outer == 1 && nt->prox == NEWTON_PROX_IDENTITY && res >= before) {
+    if (nt->outer == 1 && nt->prox != NEWTON_PROX_NONE && res >= before) {
       /* plain Newton from the warm start went elsewhere (along W's near-kernel, where sigma_min barely holds it): back */
       PetscCall(MoveTo(nt, nt->rc, r, u, vd));
       res = before;
@@ -586,8 +599,11 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              &nt->project, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_switch_tol", "NLGS sweeps first, until the natural residual is at most this, then Newton", "",
                              nt->switch_tol, &nt->switch_tol, NULL));
-  PetscCall(PetscOptionsEnum("-solver_prox", "Proximal term of the outer iterations: identity (W + sigma I), none (plain Newton)", "",
-                             NewtonProxes, (PetscEnum)nt->prox, (PetscEnum *)&nt->prox, NULL));
+  PetscCall(
+      PetscOptionsEnum("-solver_prox",
+                       "Proximal term of the outer iterations: identity (W + sigma I), kernel (W + sigma P, P the projector on ker W), "
+                       "none (plain Newton)",
+                       "", NewtonProxes, (PetscEnum)nt->prox, (PetscEnum *)&nt->prox, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_alpha", "sigma of the proximal term W + sigma I: alpha * natural residual * mean W_nn", "",
                              nt->alpha, &nt->alpha, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
@@ -649,6 +665,13 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCheck(nt->max_backtracks >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_max_backtracks %" PetscInt_FMT " must be non-negative", nt->max_backtracks);
   PetscCall(KSPSetFromOptions(nt->ksp));
+  s->needs_H = (PetscBool)(nt->prox == NEWTON_PROX_KERNEL); /* the kernel projector factors H_f H_f^T */
+  if (nt->prox == NEWTON_PROX_KERNEL && !nt->kernel) {
+    PetscCall(KergsKernelCreate(s->comm, &nt->kernel));
+    PetscCall(KergsKernelSetFromOptions(nt->kernel)); /* -kernel_solver and the like */
+    PetscCall(KergsKernelSetActiveOnly(nt->kernel, PETSC_TRUE));
+  }
+  PetscCall(KSPSetFromOptions(nt->kprox));
   PetscCall(NewtonPresortApplies(s, nt, &nt->presort));
   if (nt->presort) { /* J arrives in W's AMD order (PresortContacts, newton_linear.c) */
     PC pc;
@@ -693,6 +716,8 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
   PetscCall(DestroyStepObjects(nt));
   PetscCall(KSPDestroy(&nt->ksp));
   PetscCall(KSPDestroy(&nt->kreuse));
+  PetscCall(KSPDestroy(&nt->kprox));
+  PetscCall(KergsKernelDestroy(&nt->kernel));
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
   PetscCall(PetscFree2(nt->Aused, nt->Bused));
   PetscCall(PetscFree2(nt->Afact, nt->Bfact));

@@ -6,6 +6,8 @@
 #include "newton.h"
 #include <string.h>
 
+static PetscErrorCode KernelJacobianMult(Mat, Vec, Vec); /* J_P (-solver_prox kernel), below */
+
 /* The local (diagonal) part of a parallel matrix, or the matrix itself, and the off-process part (NULL on one rank). */
 static PetscErrorCode GetParts(Mat M, PetscInt nc, Mat *Ad, Mat *Ao)
 {
@@ -250,7 +252,7 @@ PetscErrorCode NewtonPresortApplies(KergsSolver s, Newton *nt, PetscBool *applie
   *applies = PETSC_FALSE;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
   PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_factor_mat_ordering_type", &chosen));
-  if (size > 1 || nt->user_pc || chosen) PetscFunctionReturn(0);
+  if (size > 1 || nt->user_pc || chosen || nt->prox == NEWTON_PROX_KERNEL) PetscFunctionReturn(0); /* J_P's MatMult uses J */
   PetscCall(KSPGetType(nt->ksp, &ktype));
   PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(PCGetType(pc, &ptype));
@@ -306,6 +308,16 @@ PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscI
   nt->factored = nt->stale = PETSC_FALSE;
   PetscCall(ChooseLinearSolver(s, nt));
   PetscCall(EnableNullPivots(nt));
+  if (nt->prox == NEWTON_PROX_KERNEL) { /* J_P, a shell on J's layout */
+    PetscInt m, N;
+    PetscCall(MatGetLocalSize(nt->J, &m, NULL));
+    PetscCall(MatGetSize(nt->J, &N, NULL));
+    PetscCall(MatCreateShell(s->comm, m, m, N, N, nt, &nt->Jprox));
+    PetscCall(MatShellSetOperation(nt->Jprox, MATOP_MULT, (void (*)(void))KernelJacobianMult));
+    PetscCall(MatCreateVecs(nt->J, &nt->kx, &nt->kpx));
+    PetscCall(KSPReset(nt->kprox));
+    PetscCall(KSPSetOperators(nt->kprox, nt->Jprox, nt->Jprox));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -378,7 +390,8 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscB
 
   PetscFunctionBeginUser;
   *solved = PETSC_FALSE;
-  if (nt->reuse_its <= 0 || !nt->factored || !nt->stale || nt->sigma_used != nt->sigma_fact) PetscFunctionReturn(0);
+  if (nt->prox == NEWTON_PROX_KERNEL || nt->reuse_its <= 0 || !nt->factored || !nt->stale || nt->sigma_used != nt->sigma_fact)
+    PetscFunctionReturn(0);
   /* GMRES needs about one iteration per changed block row: try only when few changed */
   changed = ChangedBlocks(nt, n, nc, nt->Afact, nt->Bfact);
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)nt->ksp)));
@@ -403,6 +416,63 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscB
 /* Solve J d = -F: with the last factorization while it serves (ReuseDirection), else by ksp, which factors J again. A
    failed solve (a Krylov method on an ill-conditioned J, a singular factorization) is not an error: the inner Newton
    stops and the outer iteration retries with a larger proximal term, which conditions J better. */
+/* J_P x = A x + B (W x + sigma P x) + shift x = J x + B (sigma P x - sigma_pc x), J = A + B (W + sigma_pc I) + shift I
+   as assembled (-solver_prox kernel). */
+static PetscErrorCode KernelJacobianMult(Mat M, Vec x, Vec y)
+{
+  Newton            *nt;
+  PetscInt           n, nc;
+  const PetscScalar *xl, *pl;
+  PetscScalar       *yl;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(M, &nt));
+  PetscCall(MatGetBlockSize(nt->J, &nc));
+  PetscCall(VecGetLocalSize(x, &n));
+  n /= nc;
+  PetscCall(MatMult(nt->J, x, y));
+  PetscCall(KergsKernelProject(nt->kernel, x, nt->kpx));
+  PetscCall(VecGetArrayRead(x, &xl));
+  PetscCall(VecGetArrayRead(nt->kpx, &pl));
+  PetscCall(VecGetArray(y, &yl));
+  for (PetscInt a = 0; a < n; a++) {
+    const PetscReal *Ba = nt->Bused + a * nc * nc;
+    for (PetscInt c = 0; c < nc; c++)
+      for (PetscInt e = 0; e < nc; e++) yl[a * nc + c] += Ba[c * nc + e] * (nt->sigma * pl[a * nc + e] - nt->sigma_pc * xl[a * nc + e]);
+  }
+  PetscCall(VecRestoreArray(y, &yl));
+  PetscCall(VecRestoreArrayRead(nt->kpx, &pl));
+  PetscCall(VecRestoreArrayRead(x, &xl));
+  PetscFunctionReturn(0);
+}
+
+/* -solver_prox kernel: J_P d = -F by GMRES (kprox), preconditioned by the factorization of J (sigma_pc, the smallest
+   sigma). For stick contacts J_P and J agree on W's range up to sigma_pc and differ by sigma / sigma_pc on its kernel,
+   which would leave two clusters of eigenvalues; slip and open contacts spread them, and GMRES needs about 240
+   iterations per Newton step on confine500 (docs/solver.md, "Singular W"). J is factored again when it changed. */
+static PetscErrorCode KernelDirection(Newton *nt, KSPConvergedReason *reason)
+{
+  PC       pc;
+  PetscInt its;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PCSetReusePreconditioner(pc, PETSC_FALSE));
+  PetscCall(PCSetFailedReason(pc, PC_NOERROR));
+  if (nt->stale || !nt->factored) nt->factorizations++;
+  PetscCall(ConfigureSubdomainSolvers(nt));
+  PetscCall(KSPSetUp(nt->ksp));
+  nt->factored = PETSC_TRUE;
+  nt->stale    = PETSC_FALSE;
+  PetscCall(VecScale(nt->F, -1.0));
+  PetscCall(KSPSolve(nt->kprox, nt->F, nt->d));
+  PetscCall(VecScale(nt->F, -1.0));
+  PetscCall(KSPGetConvergedReason(nt->kprox, reason));
+  PetscCall(KSPGetIterationNumber(nt->kprox, &its));
+  nt->linear_its += its;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode NewtonSolveDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBool *solved)
 {
   KSPConvergedReason reason;
@@ -411,6 +481,14 @@ PetscErrorCode NewtonSolveDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBo
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&t0));
+  if (nt->prox == NEWTON_PROX_KERNEL && nt->sigma > 0) {
+    PetscCall(KernelDirection(nt, &reason));
+    *solved = (PetscBool)(reason > 0);
+    if (!*solved) nt->failed_linear++;
+    PetscCall(PetscTime(&t1));
+    nt->linear_seconds += t1 - t0;
+    PetscFunctionReturn(0);
+  }
   PetscCall(ReuseDirection(nt, n, nc, solved));
   if (!*solved) {
     PetscCall(KSPGetPC(nt->ksp, &pc));
@@ -470,5 +548,19 @@ PetscErrorCode NewtonCreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCall(PCShellSetApply(pc, ApplyStaleFactor));
   PetscCall(PCShellSetName(pc, "the last factorization of J"));
   PetscCall(KSPSetErrorIfNotConverged(nt->kreuse, PETSC_FALSE));
+  /* -solver_prox kernel: GMRES on J_P, preconditioned on the right by ksp's factorization */
+  PetscCall(KSPCreate(s->comm, &nt->kprox));
+  PetscCall(KSPSetOptionsPrefix(nt->kprox, "solver_prox_"));
+  PetscCall(KSPSetType(nt->kprox, KSPGMRES));
+  PetscCall(KSPSetPCSide(nt->kprox, PC_RIGHT));
+  PetscCall(KSPSetNormType(nt->kprox, KSP_NORM_UNPRECONDITIONED));
+  PetscCall(KSPSetTolerances(nt->kprox, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, 3000)); /* about 240 iterations a step on confine500 */
+  PetscCall(KSPGMRESSetRestart(nt->kprox, 300));
+  PetscCall(KSPGetPC(nt->kprox, &pc));
+  PetscCall(PCSetType(pc, PCSHELL));
+  PetscCall(PCShellSetContext(pc, nt));
+  PetscCall(PCShellSetApply(pc, ApplyStaleFactor));
+  PetscCall(PCShellSetName(pc, "the factorization of J with the smallest sigma"));
+  PetscCall(KSPSetErrorIfNotConverged(nt->kprox, PETSC_FALSE));
   PetscFunctionReturn(0);
 }

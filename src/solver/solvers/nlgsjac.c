@@ -110,6 +110,7 @@ PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver s)
   PetscFunctionBeginUser;
   PetscCall(KergsRegularisedCreate(s->comm, &reg));
   s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */
+  s->needs_full_W       = PETSC_TRUE; /* W~ = W + omega N N^T over every potential contact (Algorithm 1) */
   s->data               = reg;
   s->ops.setfromoptions = SolverSetFromOptions_NLGSJac;
   s->ops.setup          = SolverSetUp_NLGSJac;

@@ -125,6 +125,7 @@ PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver s)
   PetscCall(KergsRegularisedCreate(s->comm, &nk->reg));
   PetscCall(KergsSweepCreate(s->comm, &nk->sweep));
   s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */
+  s->needs_full_W       = PETSC_TRUE; /* W~ = W + omega N N^T over every potential contact (Algorithm 1) */
   s->data               = nk;
   s->ops.setfromoptions = SolverSetFromOptions_NLKerGS;
   s->ops.setup          = SolverSetUp_NLKerGS;
