@@ -90,10 +90,11 @@ PETSC_EXTERN PetscErrorCode KergsSolverSetStepNumber(KergsSolver, PetscInt);
 PETSC_EXTERN PetscErrorCode KergsSolverGetType(KergsSolver, KergsSolverType *);
 /* Per local contact, whether it was active in the last solve (valid until the next solve) */
 PETSC_EXTERN PetscErrorCode KergsSolverGetActive(KergsSolver, const PetscBool **active);
-/* Whether the type reads H_f and H_g during its solve and W over all pairs of contacts (the kernel-regularised types):
-   the time step then keeps H alive from assembly to the velocity update and assembles the whole W (otherwise W
-   couples the active contacts only). */
+/* Whether the type reads H_f and H_g during its solve (the kernel projector of the regularised types and of newton's
+   -solver_prox kernel, the predictors): the time step then keeps H alive from assembly to the velocity update. */
 PETSC_EXTERN PetscErrorCode KergsSolverNeedsH(KergsSolver, PetscBool *);
+/* Whether the type works on W over all pairs of potential contacts (the kernel-regularised types): the time step then
+   assembles the whole W; otherwise W couples the active contacts only. */
 PETSC_EXTERN PetscErrorCode KergsSolverNeedsFullW(KergsSolver, PetscBool *);
 /* -solver_max_it and -solver_tol */
 PETSC_EXTERN PetscErrorCode KergsSolverGetTolerances(KergsSolver, PetscReal *tol, PetscInt *max_it);

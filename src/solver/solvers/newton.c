@@ -13,8 +13,9 @@
 
    W is singular in a confined packing (its kernel: the self-equilibrated force networks), and so is J where stick
    contacts carry a hyperstatic network: plain Newton then stalls. The outer iterations solve, by Newton, the proximal
-   problem with W + sigma I and v^d - sigma r_c around the current point r_c (-solver_prox identity), whose Jacobian
-   J = A + B (W + sigma I) is nonsingular; at the fixed point the proximal term vanishes, so the answer solves the
+   problem with W + sigma I and v^d - sigma r_c around the current point r_c (-solver_prox identity; or W + sigma P and
+   v^d - sigma P r_c with -solver_prox kernel, P the projector on ker W, its Newton systems by GMRES in newton_linear.c),
+   whose Jacobian J = A + B (W + sigma I) is nonsingular; at the fixed point the proximal term vanishes, so the answer solves the
    original problem. sigma = alpha * natural residual * mean W_nn (within [sigma_min, sigma_max]) follows the residual
    down, so that the convergence is fast near the solution; alpha shrinks after a solved proximal problem and grows
    tenfold after a failed one (which restarts from the centre when it made things worse). The inner Newton steps are
@@ -325,8 +326,8 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
   PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit));
   for (PetscInt k = 0; k < count && PetscSqrtReal(2.0 * merit) > ftol; k++) {
-    /* -solver_prox kernel: J with the smallest sigma, the preconditioner of J_P (NewtonSolveDirection) */
-    PetscCall(NewtonAssembleJacobian(s, nt, n, nc, nt->shift, nt->prox == NEWTON_PROX_KERNEL ? nt->sigma_pc : nt->sigma));
+    /* with -solver_prox kernel, this J (sigma I) is the preconditioner of J_P (sigma P): NewtonSolveDirection */
+    PetscCall(NewtonAssembleJacobian(s, nt, n, nc, nt->shift, nt->sigma));
     PetscCall(NewtonSolveDirection(nt, n, nc, &solved));
     if (!solved) {
       *ok   = PETSC_FALSE;
@@ -454,7 +455,8 @@ static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, Petsc
 
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
    -solver_newton_switch_tol. Then outer iterations: each solves, by at most -solver_prox_inner_max Newton steps, the
-   proximal problem with W + sigma I and v^d - sigma r_c around the current r_c = r, and moves r_c to its solution. The
+   proximal problem with W + sigma I (or W + sigma P) and v^d - sigma r_c around the current r_c = r, and moves r_c to
+   its solution. The
    proximal term makes every inner Jacobian nonsingular (without it, -solver_prox none, J is singular where stick
    contacts carry a hyperstatic network); at the fixed point it vanishes, so r solves the original problem. The first
    outer iteration is plain Newton (sigma_min), kept only if it lowered the natural residual. -solver_max_it caps the
@@ -482,7 +484,6 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
-  nt->sigma_pc = nt->sigma_min * wmean; /* -solver_prox kernel: J factored with the smallest sigma */
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
@@ -604,8 +605,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                        "Proximal term of the outer iterations: identity (W + sigma I), kernel (W + sigma P, P the projector on ker W), "
                        "none (plain Newton)",
                        "", NewtonProxes, (PetscEnum)nt->prox, (PetscEnum *)&nt->prox, NULL));
-  PetscCall(PetscOptionsReal("-solver_prox_alpha", "sigma of the proximal term W + sigma I: alpha * natural residual * mean W_nn", "",
-                             nt->alpha, &nt->alpha, NULL));
+  PetscCall(PetscOptionsReal("-solver_prox_alpha", "sigma of the proximal term W + sigma I (or P): alpha * natural residual * mean W_nn",
+                             "", nt->alpha, &nt->alpha, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_max", "Largest sigma / mean W_nn", "", nt->sigma_max, &nt->sigma_max, NULL));
   PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));

@@ -13,10 +13,9 @@ typedef struct {
   KSP ksp; /* J d = -F; prefix solver_ */
   /* -solver_prox kernel: the proximal term sigma P (r - r_c), P the projector on ker W over the active contacts */
   KergsKernel kernel;   /* P, through a factorization of H_f H_f^T per step */
-  KSP         kprox;    /* J_P d = -F by GMRES preconditioned by the factorization of J (sigma_pc); prefix solver_prox_ */
+  KSP         kprox;    /* J_P d = -F by GMRES preconditioned by the factorization of J (sigma I); prefix solver_prox_ */
   Mat         Jprox;    /* J_P = A + B (W + sigma P) + shift I, a MATSHELL */
   Vec         kx, kpx;  /* work: x and P x */
-  PetscReal   sigma_pc; /* the sigma of the factored J, the preconditioner: the smallest, sigma_min mean W_nn */
   KSP         kreuse;   /* J d = -F by GMRES preconditioned by the last factorization of an earlier J; prefix solver_reuse_ */
   Mat         Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
   /* one rank, kergs's LU: J is stored with its block rows and columns in W's AMD order, factored in that (natural)

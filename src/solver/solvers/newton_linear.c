@@ -416,8 +416,8 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscB
 /* Solve J d = -F: with the last factorization while it serves (ReuseDirection), else by ksp, which factors J again. A
    failed solve (a Krylov method on an ill-conditioned J, a singular factorization) is not an error: the inner Newton
    stops and the outer iteration retries with a larger proximal term, which conditions J better. */
-/* J_P x = A x + B (W x + sigma P x) + shift x = J x + B (sigma P x - sigma_pc x), J = A + B (W + sigma_pc I) + shift I
-   as assembled (-solver_prox kernel). */
+/* J_P x = A x + B (W x + sigma P x) + shift x = J x - sigma B (x - P x), J = A + B (W + sigma I) + shift I as assembled
+   (-solver_prox kernel). */
 static PetscErrorCode KernelJacobianMult(Mat M, Vec x, Vec y)
 {
   Newton            *nt;
@@ -438,7 +438,7 @@ static PetscErrorCode KernelJacobianMult(Mat M, Vec x, Vec y)
   for (PetscInt a = 0; a < n; a++) {
     const PetscReal *Ba = nt->Bused + a * nc * nc;
     for (PetscInt c = 0; c < nc; c++)
-      for (PetscInt e = 0; e < nc; e++) yl[a * nc + c] += Ba[c * nc + e] * (nt->sigma * pl[a * nc + e] - nt->sigma_pc * xl[a * nc + e]);
+      for (PetscInt e = 0; e < nc; e++) yl[a * nc + c] -= nt->sigma * Ba[c * nc + e] * (xl[a * nc + e] - pl[a * nc + e]);
   }
   PetscCall(VecRestoreArray(y, &yl));
   PetscCall(VecRestoreArrayRead(nt->kpx, &pl));
@@ -446,10 +446,12 @@ static PetscErrorCode KernelJacobianMult(Mat M, Vec x, Vec y)
   PetscFunctionReturn(0);
 }
 
-/* -solver_prox kernel: J_P d = -F by GMRES (kprox), preconditioned by the factorization of J (sigma_pc, the smallest
-   sigma). For stick contacts J_P and J agree on W's range up to sigma_pc and differ by sigma / sigma_pc on its kernel,
-   which would leave two clusters of eigenvalues; slip and open contacts spread them, and GMRES needs about 240
-   iterations per Newton step on confine500 (docs/solver.md, "Singular W"). J is factored again when it changed. */
+/* -solver_prox kernel: J_P d = -F by GMRES (kprox), preconditioned by the factorization of J = A + B (W + sigma I) +
+   shift I, the identity term's Jacobian at the same sigma: the two agree on ker W and on the stiff modes of W's range,
+   and differ on its soft modes (eigenvalues lambda of W well below sigma), where the preconditioned operator has
+   eigenvalues near lambda / (lambda + sigma); GMRES needs 4 to 5 iterations per Newton step on confine500. (The
+   factorization of J with the smallest sigma, nearly singular on ker W, needed hundreds and stalled the outer
+   iterations.) J is factored again when it changed. */
 static PetscErrorCode KernelDirection(Newton *nt, KSPConvergedReason *reason)
 {
   PC       pc;
@@ -462,6 +464,7 @@ static PetscErrorCode KernelDirection(Newton *nt, KSPConvergedReason *reason)
   if (nt->stale || !nt->factored) nt->factorizations++;
   PetscCall(ConfigureSubdomainSolvers(nt));
   PetscCall(KSPSetUp(nt->ksp));
+  PetscCall(PCSetUp(pc)); /* KSPSetUp does not set the PC up again once the KSP is set up; PCSetUp factors J when it changed */
   nt->factored = PETSC_TRUE;
   nt->stale    = PETSC_FALSE;
   PetscCall(VecScale(nt->F, -1.0));
@@ -554,8 +557,8 @@ PetscErrorCode NewtonCreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCall(KSPSetType(nt->kprox, KSPGMRES));
   PetscCall(KSPSetPCSide(nt->kprox, PC_RIGHT));
   PetscCall(KSPSetNormType(nt->kprox, KSP_NORM_UNPRECONDITIONED));
-  PetscCall(KSPSetTolerances(nt->kprox, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, 3000)); /* about 240 iterations a step on confine500 */
-  PetscCall(KSPGMRESSetRestart(nt->kprox, 300));
+  PetscCall(KSPSetTolerances(nt->kprox, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, 1000));
+  PetscCall(KSPGMRESSetRestart(nt->kprox, 100));
   PetscCall(KSPGetPC(nt->kprox, &pc));
   PetscCall(PCSetType(pc, PCSHELL));
   PetscCall(PCShellSetContext(pc, nt));
