@@ -446,6 +446,20 @@ static PetscErrorCode KernelJacobianMult(Mat M, Vec x, Vec y)
   PetscFunctionReturn(0);
 }
 
+/* Before ksp factors J (again): its preconditioner is to be set up anew, without the failure of an earlier set-up
+   (additive Schwarz keeps a subdomain's failed factorization as its own failure through later set-ups, PETSc 3.18:
+   without this, one failed solve would fail every later one, however good J), and the subdomain solvers chosen. */
+static PetscErrorCode PrepareFactorization(Newton *nt, PC *pc)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetPC(nt->ksp, pc));
+  PetscCall(PCSetReusePreconditioner(*pc, PETSC_FALSE));
+  PetscCall(PCSetFailedReason(*pc, PC_NOERROR));
+  if (nt->stale || !nt->factored) nt->factorizations++;
+  PetscCall(ConfigureSubdomainSolvers(nt));
+  PetscFunctionReturn(0);
+}
+
 /* -solver_prox kernel: J_P d = -F by GMRES (kprox), preconditioned by the factorization of J = A + B (W + sigma I) +
    shift I, the identity term's Jacobian at the same sigma: the two agree on ker W and on the stiff modes of W's range,
    and differ on its soft modes (eigenvalues lambda of W well below sigma), where the preconditioned operator has
@@ -454,25 +468,15 @@ static PetscErrorCode KernelJacobianMult(Mat M, Vec x, Vec y)
    iterations.) J is factored again when it changed. */
 static PetscErrorCode KernelDirection(Newton *nt, KSPConvergedReason *reason)
 {
-  PC       pc;
-  PetscInt its;
+  PC pc;
 
   PetscFunctionBeginUser;
-  PetscCall(KSPGetPC(nt->ksp, &pc));
-  PetscCall(PCSetReusePreconditioner(pc, PETSC_FALSE));
-  PetscCall(PCSetFailedReason(pc, PC_NOERROR));
-  if (nt->stale || !nt->factored) nt->factorizations++;
-  PetscCall(ConfigureSubdomainSolvers(nt));
+  PetscCall(PrepareFactorization(nt, &pc));
   PetscCall(KSPSetUp(nt->ksp));
   PetscCall(PCSetUp(pc)); /* KSPSetUp does not set the PC up again once the KSP is set up; PCSetUp factors J when it changed */
   nt->factored = PETSC_TRUE;
   nt->stale    = PETSC_FALSE;
-  PetscCall(VecScale(nt->F, -1.0));
-  PetscCall(KSPSolve(nt->kprox, nt->F, nt->d));
-  PetscCall(VecScale(nt->F, -1.0));
-  PetscCall(KSPGetConvergedReason(nt->kprox, reason));
-  PetscCall(KSPGetIterationNumber(nt->kprox, &its));
-  nt->linear_its += its;
+  PetscCall(SolveNewtonSystem(nt, nt->kprox, reason)); /* J in the contacts' order: no presort with the kernel term */
   PetscFunctionReturn(0);
 }
 
@@ -488,34 +492,47 @@ PetscErrorCode NewtonSolveDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBo
     PetscCall(KernelDirection(nt, &reason));
     *solved = (PetscBool)(reason > 0);
     if (!*solved) nt->failed_linear++;
-    PetscCall(PetscTime(&t1));
-    nt->linear_seconds += t1 - t0;
-    PetscFunctionReturn(0);
-  }
-  PetscCall(ReuseDirection(nt, n, nc, solved));
-  if (!*solved) {
-    PetscCall(KSPGetPC(nt->ksp, &pc));
-    PetscCall(PCSetReusePreconditioner(pc, PETSC_FALSE));
-    /* additive Schwarz keeps a subdomain's failed factorization as its own failure through later set-ups (PETSc
-       3.18): without this, one failed solve would fail every later one, however good J */
-    PetscCall(PCSetFailedReason(pc, PC_NOERROR));
-    if (nt->stale || !nt->factored) nt->factorizations++;
-    PetscCall(ConfigureSubdomainSolvers(nt));
-    PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
-    nt->factored   = PETSC_TRUE;
-    nt->stale      = PETSC_FALSE;
-    nt->sigma_fact = nt->sigma_used;
-    PetscCall(PetscArraycpy(nt->Afact, nt->Aused, n * nc * nc));
-    PetscCall(PetscArraycpy(nt->Bfact, nt->Bused, n * nc * nc));
-    *solved = (PetscBool)(reason >= 0);
+  } else {
+    PetscCall(ReuseDirection(nt, n, nc, solved));
     if (!*solved) {
-      nt->failed_linear++;
-      PetscCall(PetscInfo(NULL, "newton: the linear solve of a Newton step failed (%s): a larger proximal term next\n",
-                          KSPConvergedReasons[reason]));
+      PetscCall(PrepareFactorization(nt, &pc));
+      PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
+      nt->factored   = PETSC_TRUE;
+      nt->stale      = PETSC_FALSE;
+      nt->sigma_fact = nt->sigma_used;
+      PetscCall(PetscArraycpy(nt->Afact, nt->Aused, n * nc * nc));
+      PetscCall(PetscArraycpy(nt->Bfact, nt->Bused, n * nc * nc));
+      *solved = (PetscBool)(reason >= 0);
+      if (!*solved) {
+        nt->failed_linear++;
+        PetscCall(PetscInfo(NULL, "newton: the linear solve of a Newton step failed (%s): a larger proximal term next\n",
+                            KSPConvergedReasons[reason]));
+      }
     }
   }
   PetscCall(PetscTime(&t1));
   nt->linear_seconds += t1 - t0;
+  PetscFunctionReturn(0);
+}
+
+/* GMRES on the unpreconditioned residual, preconditioned on the right by ksp's factorization as it stands
+   (ApplyStaleFactor); a failed solve is not an error. */
+static PetscErrorCode CreateFactorPreconditionedGMRES(KergsSolver s, Newton *nt, const char *prefix, const char *name, KSP *ksp)
+{
+  PC pc;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPCreate(s->comm, ksp));
+  PetscCall(KSPSetOptionsPrefix(*ksp, prefix));
+  PetscCall(KSPSetType(*ksp, KSPGMRES));
+  PetscCall(KSPSetPCSide(*ksp, PC_RIGHT));
+  PetscCall(KSPSetNormType(*ksp, KSP_NORM_UNPRECONDITIONED));
+  PetscCall(KSPGetPC(*ksp, &pc));
+  PetscCall(PCSetType(pc, PCSHELL));
+  PetscCall(PCShellSetContext(pc, nt));
+  PetscCall(PCShellSetApply(pc, ApplyStaleFactor));
+  PetscCall(PCShellSetName(pc, name));
+  PetscCall(KSPSetErrorIfNotConverged(*ksp, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
 
@@ -539,31 +556,11 @@ PetscErrorCode NewtonCreateLinearSolver(KergsSolver s, Newton *nt)
   PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGAMD)); /* 1.6-2.5 times faster than nd here; natural on one rank
                                                                  when J arrives presorted (PresortContacts) */
   PetscCall(KSPSetErrorIfNotConverged(nt->ksp, PETSC_FALSE));
-  /* the reuse solver: GMRES on the unpreconditioned residual, preconditioned on the right by ksp's last factorization */
-  PetscCall(KSPCreate(s->comm, &nt->kreuse));
-  PetscCall(KSPSetOptionsPrefix(nt->kreuse, "solver_reuse_"));
-  PetscCall(KSPSetType(nt->kreuse, KSPGMRES));
-  PetscCall(KSPSetPCSide(nt->kreuse, PC_RIGHT));
-  PetscCall(KSPSetNormType(nt->kreuse, KSP_NORM_UNPRECONDITIONED));
-  PetscCall(KSPGetPC(nt->kreuse, &pc));
-  PetscCall(PCSetType(pc, PCSHELL));
-  PetscCall(PCShellSetContext(pc, nt));
-  PetscCall(PCShellSetApply(pc, ApplyStaleFactor));
-  PetscCall(PCShellSetName(pc, "the last factorization of J"));
-  PetscCall(KSPSetErrorIfNotConverged(nt->kreuse, PETSC_FALSE));
-  /* -solver_prox kernel: GMRES on J_P, preconditioned on the right by ksp's factorization */
-  PetscCall(KSPCreate(s->comm, &nt->kprox));
-  PetscCall(KSPSetOptionsPrefix(nt->kprox, "solver_prox_"));
-  PetscCall(KSPSetType(nt->kprox, KSPGMRES));
-  PetscCall(KSPSetPCSide(nt->kprox, PC_RIGHT));
-  PetscCall(KSPSetNormType(nt->kprox, KSP_NORM_UNPRECONDITIONED));
+  /* the reuse solver: GMRES on J preconditioned by ksp's last factorization of an earlier J */
+  PetscCall(CreateFactorPreconditionedGMRES(s, nt, "solver_reuse_", "the last factorization of J", &nt->kreuse));
+  /* -solver_prox kernel: GMRES on J_P preconditioned by ksp's factorization of J (sigma I) */
+  PetscCall(CreateFactorPreconditionedGMRES(s, nt, "solver_prox_", "the factorization of J with sigma I", &nt->kprox));
   PetscCall(KSPSetTolerances(nt->kprox, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, 1000));
   PetscCall(KSPGMRESSetRestart(nt->kprox, 100));
-  PetscCall(KSPGetPC(nt->kprox, &pc));
-  PetscCall(PCSetType(pc, PCSHELL));
-  PetscCall(PCShellSetContext(pc, nt));
-  PetscCall(PCShellSetApply(pc, ApplyStaleFactor));
-  PetscCall(PCShellSetName(pc, "the factorization of J with the smallest sigma"));
-  PetscCall(KSPSetErrorIfNotConverged(nt->kprox, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
