@@ -387,12 +387,9 @@ static PetscErrorCode TestRanks(const char *linear, const char *what)
 {
   char         opts[PETSC_MAX_PATH_LEN], label[128];
   KergsStepper all, one;
-  PetscReal   *va, *vo, diff = 0, scale = 0;
-  PetscInt     n;
-  PetscMPIInt  size;
+  PetscReal    diff = 0, scale = 0;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   PetscCall(PetscSNPrintf(opts, sizeof(opts),
                           "-options_file cases/confine500.opts -friction 0 -steps 3 -solver_type newton -solver_tol 1e-12 %s", linear));
   PetscCall(PetscSNPrintf(label, sizeof(label), "frictionless confine500, %s: velocities on every rank = on one rank (relative)", what));
@@ -400,17 +397,8 @@ static PetscErrorCode TestRanks(const char *linear, const char *what)
   for (PetscInt s = 0; s < 3; s++) PetscCall(KergsStepperStep(all));
   PetscCall(MakeStepperOn(PETSC_COMM_SELF, opts, &one));
   for (PetscInt s = 0; s < 3; s++) PetscCall(KergsStepperStep(one));
-  n = all->scene->ndisks;
-  PetscCall(PetscMalloc2(KERGS_DIM * n, &va, KERGS_DIM * n, &vo));
-  PetscCall(GatherById(all->scene, all->scene->v, KERGS_DIM, va));
-  PetscCall(GatherById(one->scene, one->scene->v, KERGS_DIM, vo));
-  for (PetscInt i = 0; i < KERGS_DIM * n; i++) {
-    diff  = PetscMax(diff, PetscAbsReal(va[i] - vo[i]));
-    scale = PetscMax(scale, PetscAbsReal(vo[i]));
-  }
+  PetscCall(VelocityDifference(all, one, &diff, &scale));
   PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-8 * scale), label, diff / scale, 1e-8));
-  (void)size;
-  PetscCall(PetscFree2(va, vo));
   PetscCall(KergsStepperDestroy(&all));
   PetscCall(KergsStepperDestroy(&one));
   PetscFunctionReturn(0);

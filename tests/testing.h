@@ -249,6 +249,73 @@ static inline PetscErrorCode GatherById(KergsScene sc, const PetscReal *owned, P
   PetscFunctionReturn(0);
 }
 
+/* The largest difference between the disks' velocities of two runs of one scene, grain by grain (GatherById: any
+   partitions, any numbers of ranks), and the largest velocity of the second run, the reference. */
+static inline PetscErrorCode VelocityDifference(KergsStepper a, KergsStepper b, PetscReal *diff, PetscReal *scale)
+{
+  const PetscInt n = KERGS_DIM * b->scene->ndisks;
+  PetscReal     *va, *vb;
+
+  PetscFunctionBeginUser;
+  PetscCheck(a->scene->ndisks == b->scene->ndisks, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ, "VelocityDifference: two scenes of different sizes");
+  PetscCall(PetscMalloc2(n + 1, &va, n + 1, &vb));
+  PetscCall(GatherById(a->scene, a->scene->v, KERGS_DIM, va));
+  PetscCall(GatherById(b->scene, b->scene->v, KERGS_DIM, vb));
+  *diff = *scale = 0.0;
+  for (PetscInt i = 0; i < n; i++) {
+    *diff  = PetscMax(*diff, PetscAbsReal(va[i] - vb[i]));
+    *scale = PetscMax(*scale, PetscAbsReal(vb[i]));
+  }
+  PetscCall(PetscFree2(va, vb));
+  PetscFunctionReturn(0);
+}
+
+/* One disk and one wall, 5 steps each with the solver that `solver` sets up (type, tolerance 1e-10 and its own options),
+   `label` naming it in the checks: open (moving away), resting (closing, stick), on a slope below and above tan = mu
+   (stick, slip; rotation locked). Every step converged to 1e-10, and the physics right: it flies off, it is at rest, or
+   it slides down at g (sin - mu cos). The accurate types tresca and snesvi run it; newton's own test also bounds its
+   Newton steps. */
+static inline PetscErrorCode CheckOneContactCases(const char *solver, const char *label)
+{
+  const char *disk = "-gravity 0,-10 -dt 1e-3 -disks_source list -disks_radius 0.1 -alert 0.01 -friction 0.5";
+  struct {
+    const char *what, *opts;
+  } cases[] = {
+      {"open (the disk leaves the floor)", "-disks_x 0,0.1 -disks_velocity 0,5 -walls floor -wall_floor_a -5,0 -wall_floor_b 5,0"},
+      {"stick (the disk rests on the floor)", "-disks_x 0,0.0999999 -walls floor -wall_floor_a -5,0 -wall_floor_b 5,0"},
+      {"stick on a slope (tan 0.31 < mu 0.5)", "-disks_lock_rotation -disks_x -0.029552,0.095534 -walls slope -wall_slope_a "
+                                               "-9.553365,-2.955202 -wall_slope_b 9.553365,2.955202 -wall_slope_infinite"},
+      {"slip on a slope (tan 0.84 > mu 0.5)", "-disks_lock_rotation -disks_x -0.064422,0.076484 -walls slope -wall_slope_a "
+                                              "-7.648422,-6.442177 -wall_slope_b 7.648422,6.442177 -wall_slope_infinite"},
+  };
+
+  PetscFunctionBeginUser;
+  for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+    PetscInt     maxits, nconv;
+    PetscReal    maxres, v[KERGS_DIM];
+    KergsStepper st;
+    char         opts[1024];
+    PetscCall(PetscSNPrintf(opts, sizeof(opts), "%s %s %s -steps 5", disk, cases[i].opts, solver));
+    PetscCall(RunSteps(opts, 5, &st, &maxits, &maxres, &nconv));
+    PetscCall(Checkf((PetscBool)(nconv == 5 && maxres <= 1e-10), maxres, 1e-10, "%s, one contact, %s: 5 steps converged (largest residual)",
+                     label, cases[i].what));
+    PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->v, KERGS_DIM, v));
+    if (i == 0)
+      PetscCall(Checkf((PetscBool)(v[1] > 4.9), v[1], 4.95, "%s, one contact, %s: flies off, only gravity slows it", label, cases[i].what));
+    if (i == 1 || i == 2)
+      PetscCall(Checkf((PetscBool)(PetscAbsReal(v[0]) + PetscAbsReal(v[1]) < 1e-9), PetscAbsReal(v[0]) + PetscAbsReal(v[1]), 0,
+                       "%s, one contact, %s: at rest", label, cases[i].what));
+    if (i == 3) { /* slides down at g (sin - mu cos), 5 steps */
+      const PetscReal a = 0.7, want = 10 * (PetscSinReal(a) - 0.5 * PetscCosReal(a)) * 5e-3,
+                      got = -(v[0] * PetscCosReal(a) + v[1] * PetscSinReal(a));
+      PetscCall(Checkf((PetscBool)(PetscAbsReal(got - want) < 1e-6 * want), got, want, "%s, one contact, %s: slides at g(sin - mu cos)",
+                       label, cases[i].what));
+    }
+    PetscCall(KergsStepperDestroy(&st));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* The closing line and the exit code of a test program. */
 static inline int Finish(void)
 {
