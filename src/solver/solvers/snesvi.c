@@ -23,6 +23,7 @@
 
 typedef struct {
   SNES       snes;          /* this step's solver; prefix solver_ */
+  char       snestype[64];  /* its type, as the options chose it (SolverSetFromOptions_SnesVI) */
   Mat        Wa;            /* W over the active contacts' components, AIJ */
   Mat        T, J;          /* dr/dz (block diagonal) and the Jacobian diag(row_scale) Wa T */
   IS         is;            /* the active components, global indices of r */
@@ -436,22 +437,25 @@ static PetscErrorCode SolverSetFromOptions_SnesVI(PetscOptionItems *PetscOptions
              "-solver_snesvi_shift %g must be non-negative", (double)vi->shift);
   PetscCall(SNESDestroy(&vi->snes));
   PetscCall(CreateSNES(s, vi));
+  {
+    SNESType type;
+    PetscCall(SNESGetType(vi->snes, &type));
+    PetscCall(PetscStrncpy(vi->snestype, type, sizeof(vi->snestype)));
+  }
   PetscCall(SNESDestroy(&vi->snes));
   PetscFunctionReturn(0);
 }
 
 static PetscErrorCode SolverView_SnesVI(KergsSolver s, PetscViewer viewer)
 {
-  SnesVI *vi       = (SnesVI *)s->data;
-  char    type[64] = SNESVINEWTONRSLS;
+  SnesVI *vi = (SnesVI *)s->data;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscOptionsGetString(NULL, "solver_", "-snes_type", type, sizeof(type), NULL));
   PetscCall(
       PetscViewerASCIIPrintf(viewer,
                              "PETSc SNES %s on the complementarity problem in z = (r_n / s, theta), r_t = mu r_n theta, F = rho u / s, "
                              "Jacobian shift %g\n",
-                             type, (double)vi->shift));
+                             vi->snestype, (double)vi->shift));
   PetscFunctionReturn(0);
 }
 
