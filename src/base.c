@@ -1,6 +1,7 @@
 /* kergs: log events of the phases of a step, registered once, the personalised exchange of records, and the
    allocator's policy. */
 #include <kergs/base.h>
+#include <petscviewer.h>
 #include <kergs/version.h> /* generated at build time (cmake/version.cmake) */
 #include <stdlib.h>
 #include <string.h>
@@ -107,6 +108,32 @@ PetscErrorCode KergsOptionsCheckInt(MPI_Comm comm, const char prefix[], const ch
                "Option -%s%s: %s is out of the range of this build's integers (PetscInt is %d-bit: at most %" PetscInt_FMT ")",
                prefix ? prefix : "", name + 1, token, (int)(8 * sizeof(PetscInt)), (PetscInt)PETSC_MAX_INT);
   }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOptionsInt(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], const char man[],
+                               PetscInt current, PetscInt *value, PetscBool *set)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsOptionsCheckInt(PetscOptionsObject->comm, PetscOptionsObject->prefix, opt));
+  PetscCall(PetscOptionsInt(opt, text, man, current, value, set));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsViewFromOptions(MPI_Comm comm, const char prefix[], const char option[], PetscErrorCode (*view)(void *, PetscViewer),
+                                    void *obj)
+{
+  PetscViewer       viewer;
+  PetscViewerFormat format;
+  PetscBool         set;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsGetViewer(comm, NULL, prefix, option, &viewer, &format, &set));
+  if (!set) PetscFunctionReturn(0);
+  PetscCall(PetscViewerPushFormat(viewer, format));
+  PetscCall((*view)(obj, viewer));
+  PetscCall(PetscViewerPopFormat(viewer));
+  PetscCall(PetscViewerDestroy(&viewer));
   PetscFunctionReturn(0);
 }
 

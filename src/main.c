@@ -98,7 +98,7 @@ static PetscErrorCode RunFCLib(KergsExitStatus *status)
   PetscCall(KergsFCLibRunSetFromOptions(run));
   PetscCall(KergsFCLibRunGetSolver(run, &solver));
   PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
-  PetscCall(KergsSolverView(solver, PETSC_VIEWER_STDOUT_WORLD));
+  PetscCall(KergsSolverViewFromOptions(solver, "-solver_view"));
   PetscCall(KergsFCLibRunSolve(run, status));
   PetscCall(KergsFCLibRunDestroy(&run));
   PetscFunctionReturn(0);
@@ -107,8 +107,6 @@ static PetscErrorCode RunFCLib(KergsExitStatus *status)
 static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
 {
   KergsStepper stepper;
-  KergsScene   scene;
-  KergsSolver  solver;
   PetscBool    want_help = PETSC_FALSE, restart, fclib;
   char         checkpoint[PETSC_MAX_PATH_LEN];
 
@@ -126,16 +124,13 @@ static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
   PetscCall(KergsStepperCreate(PETSC_COMM_WORLD, &stepper));
   PetscCall(AddOptionsFiles(stepper, argc, argv));
   PetscCall(KergsStepperSetFromOptions(stepper));
-  PetscCall(KergsStepperGetScene(stepper, &scene));
-  PetscCall(KergsStepperGetSolver(stepper, &solver));
   /* with -help, the options of every solver type, not only of the chosen one */
   if (want_help) {
     PetscCall(KergsSolverPrintHelpAllTypes(PETSC_COMM_WORLD));
     PetscCall(KergsFCLibRunPrintHelp(PETSC_COMM_WORLD));
   } else {
     PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
-    PetscCall(KergsSceneView(scene, PETSC_VIEWER_STDOUT_WORLD));
-    PetscCall(KergsSolverView(solver, PETSC_VIEWER_STDOUT_WORLD));
+    PetscCall(KergsStepperViewFromOptions(stepper));
     PetscCall(KergsStepperRun(stepper));
     PetscCall(KergsStepperGetExitStatus(stepper, status));
   }

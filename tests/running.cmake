@@ -6,9 +6,11 @@ kergs_bad_input(solver_count_overflow "Option .solver_max_it: 3000000000 is out 
 # a checkpoint that is missing, or a file that is not a checkpoint
 kergs_bad_input(missing_checkpoint "Checkpoint file .-restart. [^ ]*no_such.checkpoint.h5 does not exist" -restart tests/data/no_such.checkpoint.h5)
 kergs_bad_input(not_a_checkpoint "deposit500.h5 is not a kergs checkpoint" -restart cases/deposit500.h5)
-# the solver types' integer options are checked from the stepper (src/solver/ stays untouched): none may be missing
-add_test(NAME int_options COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/check_int_options.sh WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-set_tests_properties(int_options PROPERTIES LABELS layout TIMEOUT 60)
+# a solver type checks its own integer options where it reads them (KergsOptionsInt), kernel and predictor options too
+kergs_bad_input(newton_count_overflow "Option .solver_newton_reuse_its: 3000000000 is out of the range"
+                -options_file cases/confine5.opts -solver_type newton -solver_newton_reuse_its 3000000000)
+kergs_bad_input(kernel_count_overflow "Option .kernel_diag_batch: -3000000000 is out of the range"
+                -options_file cases/confine5.opts -solver_type nlgsjac -kernel_diag_batch -3000000000)
 
 # tests/check_batch.py drives the kergs executable through mpiexec and reads the files with h5py (Debian's python3):
 # restart (bit for bit on 2 ranks, 2 -> 1 and 1 -> 2 to the solver's tolerance), signals (SIGTERM, SIGINT to the ranks,

@@ -32,6 +32,15 @@ PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const Pe
    option `name` (under prefix, may be NULL) must fit in PetscInt, otherwise an error on comm names the option and the
    largest value allowed. Options that are not given, and values that are not numbers, pass. */
 PETSC_EXTERN PetscErrorCode KergsOptionsCheckInt(MPI_Comm, const char prefix[], const char name[]);
+/* PetscOptionsInt inside an options block, with the option's value checked for overflow first (KergsOptionsCheckInt):
+   integer options are read through this, so that a wrapped count is never used. */
+PETSC_EXTERN PetscErrorCode KergsOptionsInt(PetscOptionItems *, const char opt[], const char text[], const char man[], PetscInt current,
+                                            PetscInt *value, PetscBool *set);
+/* As PetscObjectViewFromOptions for kergs's objects: when option (under prefix, may be NULL) is given, with PETSc's
+   viewer syntax (-x_view, -x_view ::ascii_info_detail, -x_view ascii:FILE), view obj there with view(obj, viewer).
+   Collective on comm. */
+PETSC_EXTERN PetscErrorCode KergsViewFromOptions(MPI_Comm, const char prefix[], const char option[],
+                                                 PetscErrorCode (*view)(void *, PetscViewer), void *obj);
 /* The largest number of disks this build can hold: KERGS_DIM values per disk must be indexable by PetscInt. */
 #define KERGS_MAX_DISKS (PETSC_MAX_INT / KERGS_DIM)
 /* Provenance of a run, as the output files record it (docs/results.md): the version of the sources, captured at build

@@ -23,6 +23,8 @@ typedef struct _p_KergsKernel *KergsKernel;
 
 PETSC_EXTERN PetscErrorCode KergsKernelCreate(MPI_Comm, KergsKernel *);
 PETSC_EXTERN PetscErrorCode KergsKernelSetFromOptions(KergsKernel);
+/* Its options become -<prefix>kernel_... (the owning solver's prefix) */
+PETSC_EXTERN PetscErrorCode KergsKernelSetOptionsPrefix(KergsKernel, const char[]);
 /* Build and factor A for this step's H_f (ops->HfT); counts and timings as above. Collective. */
 PETSC_EXTERN PetscErrorCode KergsKernelSetUp(KergsKernel, KergsScene, KergsContacts, KergsOperators);
 PETSC_EXTERN PetscErrorCode KergsKernelSetOmega(KergsKernel, PetscReal omega);

@@ -92,8 +92,8 @@ PETSC_EXTERN PetscErrorCode KergsPartitionMeasure(KergsPartition, KergsScene, Ke
    them) and one summary line. */
 PETSC_EXTERN PetscErrorCode KergsPartitionObserve(KergsPartition, KergsScene, KergsContacts, PetscReal sweep_seconds,
                                                   PetscReal compute_seconds, KergsPartitionMeasures *m);
-/* Whether -partition_view was given */
-PETSC_EXTERN PetscErrorCode KergsPartitionGetView(KergsPartition, PetscBool *);
+/* The viewer of -partition_view (NULL when not given): the stepper views the partition there at the end of the run */
+PETSC_EXTERN PetscErrorCode KergsPartitionGetView(KergsPartition, PetscViewer *);
 PETSC_EXTERN PetscErrorCode KergsPartitionView(KergsPartition, PetscViewer);
 PETSC_EXTERN PetscErrorCode KergsPartitionDestroy(KergsPartition *);
 

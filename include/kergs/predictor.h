@@ -43,6 +43,8 @@ PETSC_EXTERN PetscErrorCode KergsPredictorRegister(const char[], PetscErrorCode 
 PETSC_EXTERN PetscErrorCode KergsPredictorCreate(MPI_Comm, KergsPredictor *);
 PETSC_EXTERN PetscErrorCode KergsPredictorSetType(KergsPredictor, KergsPredictorType);
 PETSC_EXTERN PetscErrorCode KergsPredictorSetFromOptions(KergsPredictor);
+/* Its options become -<prefix>predictor_... (the owning solver's prefix) */
+PETSC_EXTERN PetscErrorCode KergsPredictorSetOptionsPrefix(KergsPredictor, const char[]);
 /* r~ over all contact components (layout of ops->r); tangential components are zero. Collective.
    active: per local contact (the solver's array); NULL: active when g^- <= 0 (the paper's gap rule).
    Inactive contacts get r~ = 0. Nothing is solved when no contact is active. */

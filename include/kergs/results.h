@@ -41,6 +41,8 @@ PETSC_EXTERN PetscErrorCode KergsResultsEndStep(KergsResults);
 PETSC_EXTERN PetscErrorCode KergsResultsFlush(KergsResults);
 /* Record a text of the run (a type name, ...) as a string attribute of /stats; the last value given is kept. */
 PETSC_EXTERN PetscErrorCode KergsResultsRecordText(KergsResults, const char name[], const char value[]);
+/* The same, as a string attribute of the dataset of statistic stat (recorded by then), e.g. the names of its values */
+PETSC_EXTERN PetscErrorCode KergsResultsRecordStatisticText(KergsResults, const char stat[], const char name[], const char value[]);
 /* The statistic `name` of step row `row` (-1: the last completed row), as recorded so far; *found tells whether it was
    recorded (NaN for a row where it was not). Rows already flushed to the file are no longer held in memory, except the
    last completed one; with -output_none every row is. */

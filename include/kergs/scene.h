@@ -77,6 +77,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneSetDisks(KergsScene, PetscInt n, const Pet
 /* Errors naming the grain, wall, material pair or option at fault; overlaps are not checked here. */
 PETSC_EXTERN PetscErrorCode KergsSceneCheck(KergsScene);
 PETSC_EXTERN PetscErrorCode KergsSceneView(KergsScene, PetscViewer);
+/* name given (-scene_view [viewer]): view the scene there. Collective. */
+PETSC_EXTERN PetscErrorCode KergsSceneViewFromOptions(KergsScene, const char name[]);
 PETSC_EXTERN PetscErrorCode KergsSceneDestroy(KergsScene *);
 PETSC_EXTERN PetscErrorCode KergsSceneFriction(KergsScene, PetscInt mat_a, PetscInt mat_b, PetscReal *mu);
 /* Driven wall: its program's velocity at time t (zero before the first piece or without program).

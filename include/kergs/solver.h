@@ -37,29 +37,50 @@ typedef struct {
   char value[64];
 } KergsNamedText;
 
+/* Why a solve stopped (KergsSolveStats.reason), in the manner of KSPConvergedReason: positive when the step's problem
+   is solved (by which criterion), negative when it is not (why), 0 while the solve runs. -solver_converged_reason
+   prints it after every solve; /stats records it as converged_reason, its names as that dataset's attribute. */
+typedef enum {
+  KERGS_SOLVER_DIVERGED_NANORINF = -6,     /* the impulses or their residual are not finite */
+  KERGS_SOLVER_DIVERGED_KERNEL   = -5,     /* the kernel projector misses ker H_f (the regularised types): the time loop
+                                              stops with status 5 */
+  KERGS_SOLVER_DIVERGED_LINEAR_SOLVE = -4, /* a linear solve the type cannot do without failed */
+  KERGS_SOLVER_DIVERGED_INFEASIBLE   = -3, /* the step's problem has no solution */
+  KERGS_SOLVER_DIVERGED_RESIDUAL     = -2, /* the type's own criterion was met, but r does not solve the original problem:
+                                              natural residual above -solver_residual_tol or velocity error above
+                                              -solver_velocity_tol (docs/solver.md) */
+  KERGS_SOLVER_DIVERGED_MAX_IT       = -1, /* -solver_max_it iterations without meeting the criterion */
+  KERGS_SOLVER_CONVERGED_ITERATING   = 0,
+  KERGS_SOLVER_CONVERGED_QUAD        = 1, /* -solver_criterion quad below -solver_tol, and the original problem solved */
+  KERGS_SOLVER_CONVERGED_MAXM        = 2, /* maxm below -solver_tol, and the original problem solved */
+  KERGS_SOLVER_CONVERGED_NATURAL     = 3, /* the natural residual below -solver_tol (and the original problem solved) */
+  KERGS_SOLVER_CONVERGED_NO_CONTACTS = 4  /* nothing to solve: the step has no contact */
+} KergsSolverConvergedReason;
+/* The names, indexed by reason: KergsSolverConvergedReasons[KERGS_SOLVER_DIVERGED_MAX_IT] is "DIVERGED_MAX_IT". */
+PETSC_EXTERN const char *const *KergsSolverConvergedReasons;
+#define KERGS_SOLVER_REASON_MIN KERGS_SOLVER_DIVERGED_NANORINF
+#define KERGS_SOLVER_REASON_MAX KERGS_SOLVER_CONVERGED_NO_CONTACTS
+
 /* What a solve found and cost (KergsSolverSolve). */
 typedef struct {
-  PetscInt  iterations;
-  PetscBool criterion_met;         /* the type's own criterion fell below -solver_tol before -solver_max_it */
-  PetscBool converged;             /* criterion met, and r solves the original problem: residual <= -solver_residual_tol and
-                                      velocity_error <= -solver_velocity_tol (docs/solver.md) */
-  PetscReal       criterion;       /* value of the chosen criterion at exit */
-  PetscReal       residual;        /* natural-map residual of the original problem, recomputed from r at exit */
-  PetscReal       velocity_error;  /* the law's worst violation in velocity, relative to the problem's (kergs/sweep.h) */
-  PetscReal       seconds;         /* whole solve: set-up, sweeps, final residual */
-  PetscReal       sweep_seconds;   /* the sweeps alone */
-  PetscReal       compute_seconds; /* this rank's arithmetic in the sweeps (no waiting for messages or reductions) */
-  PetscInt        nextra;          /* the type's own figures of the step (kernel, predictor, omega, ...) */
-  KergsNamedValue extra[KERGS_SOLVE_MAXEXTRA];
-  PetscInt        ntext; /* the type's own texts (predictor type, ...) */
-  KergsNamedText  text[KERGS_SOLVE_MAXTEXT];
-  PetscBool       failed; /* the type could not build what its solve needs (a kernel projector that misses ker H_f): the
-                             step is not converged and the time loop stops after it with status 5 */
-  char failure[256];      /* what failed, when failed */
+  PetscInt                   iterations;
+  KergsSolverConvergedReason reason;
+  PetscReal                  criterion;       /* value of the chosen criterion at exit */
+  PetscReal                  residual;        /* natural-map residual of the original problem, recomputed from r at exit */
+  PetscReal                  velocity_error;  /* the law's worst violation in velocity, relative to the problem's (kergs/sweep.h) */
+  PetscReal                  seconds;         /* whole solve: set-up, sweeps, final residual */
+  PetscReal                  sweep_seconds;   /* the sweeps alone */
+  PetscReal                  compute_seconds; /* this rank's arithmetic in the sweeps (no waiting for messages or reductions) */
+  PetscInt                   nextra;          /* the type's own figures of the step (kernel, predictor, omega, ...) */
+  KergsNamedValue            extra[KERGS_SOLVE_MAXEXTRA];
+  PetscInt                   ntext; /* the type's own texts (predictor type, ...) */
+  KergsNamedText             text[KERGS_SOLVE_MAXTEXT];
 } KergsSolveStats;
 /* Add a named figure or text to the statistics of a solve (for the types). */
 PETSC_EXTERN PetscErrorCode KergsSolveStatsAdd(KergsSolveStats *, const char name[], PetscReal value);
 PETSC_EXTERN PetscErrorCode KergsSolveStatsAddText(KergsSolveStats *, const char name[], const char value[]);
+/* A one-line description of a reason, for messages ("-solver_max_it reached", ...) */
+PETSC_EXTERN const char *KergsSolverConvergedReasonDescription(KergsSolverConvergedReason);
 
 typedef struct _p_KergsSolver *KergsSolver;
 
@@ -69,6 +90,9 @@ PETSC_EXTERN PetscErrorCode KergsSolverSetType(KergsSolver, KergsSolverType);
 PETSC_EXTERN PetscErrorCode KergsSolverSetFromOptions(KergsSolver);
 PETSC_EXTERN PetscErrorCode KergsSolverSolve(KergsSolver, KergsScene, KergsContacts, KergsOperators, KergsSolveStats *);
 PETSC_EXTERN PetscErrorCode KergsSolverView(KergsSolver, PetscViewer);
+PETSC_EXTERN PetscErrorCode KergsSolverViewFromOptions(KergsSolver, const char name[]);
+PETSC_EXTERN PetscErrorCode KergsSolverSetOptionsPrefix(KergsSolver, const char[]);
+PETSC_EXTERN PetscErrorCode KergsSolverGetOptionsPrefix(KergsSolver, const char *[]);
 PETSC_EXTERN PetscErrorCode KergsSolverDestroy(KergsSolver *);
 /* With -help: print the options of every registered type, not only of the chosen one. Collective. */
 PETSC_EXTERN PetscErrorCode KergsSolverPrintHelpAllTypes(MPI_Comm);

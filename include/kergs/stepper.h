@@ -24,6 +24,8 @@ typedef enum {
 
 PETSC_EXTERN PetscErrorCode KergsStepperCreate(MPI_Comm, KergsStepper *);
 PETSC_EXTERN PetscErrorCode KergsStepperSetFromOptions(KergsStepper);
+/* One line saying what runs, then -scene_view and -solver_view if given. Collective. */
+PETSC_EXTERN PetscErrorCode KergsStepperViewFromOptions(KergsStepper);
 PETSC_EXTERN PetscErrorCode KergsStepperStep(KergsStepper);
 /* The whole run: the time loop with its snapshots, checkpoints (-checkpoint_*), progress lines (-progress_*) and signals
    (SIGTERM, SIGINT, SIGUSR1: the loop finishes the step, writes a checkpoint and closes the files); the results file is

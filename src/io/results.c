@@ -514,11 +514,22 @@ PetscErrorCode KergsResultsRecord(KergsResults res, const char name[], PetscReal
 
 PetscErrorCode KergsResultsRecordText(KergsResults res, const char name[], const char value[])
 {
+  PetscFunctionBeginUser;
+  PetscCall(KergsResultsRecordStatisticText(res, NULL, name, value));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsResultsRecordStatisticText(KergsResults res, const char stat[], const char name[], const char value[])
+{
   PetscInt  j;
   PetscBool same = PETSC_FALSE;
 
   PetscFunctionBeginUser;
-  for (j = 0; j < res->ntexts && !same; j++) PetscCall(PetscStrcmp(res->textname[j], name, &same));
+  if (!stat) stat = "";
+  for (j = 0; j < res->ntexts && !same; j++) {
+    PetscCall(PetscStrcmp(res->textname[j], name, &same));
+    if (same) PetscCall(PetscStrcmp(res->textstat[j], stat, &same));
+  }
   if (same)
     j--;
   else {
@@ -526,9 +537,12 @@ PetscErrorCode KergsResultsRecordText(KergsResults res, const char name[], const
                "Too many texts (at most %d) when adding \"%s\" to %s", KERGS_RESULTS_MAXTEXTS, name, res->path);
     PetscCheck(name[0] && strlen(name) < sizeof(res->textname[0]) && !strchr(name, '/'), res->comm, PETSC_ERR_ARG_WRONG,
                "Text name \"%s\" must be non-empty, shorter than %d characters and without '/'", name, (int)sizeof(res->textname[0]));
+    PetscCheck(strlen(stat) < sizeof(res->textstat[0]), res->comm, PETSC_ERR_ARG_WRONG, "Statistic name \"%s\" is too long", stat);
     j = res->ntexts++;
     PetscCall(PetscStrncpy(res->textname[j], name, sizeof(res->textname[0])));
+    PetscCall(PetscStrncpy(res->textstat[j], stat, sizeof(res->textstat[0])));
   }
+  PetscCheck(strlen(value) < sizeof(res->textvalue[0]), res->comm, PETSC_ERR_ARG_WRONG, "Text \"%s\" is too long", name);
   PetscCall(PetscStrncpy(res->textvalue[j], value, sizeof(res->textvalue[0])));
   PetscFunctionReturn(0);
 }
@@ -633,8 +647,11 @@ static PetscErrorCode AppendRows(KergsResults res)
   }
   CallHDF5(H5Gclose(group));
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, "/stats", "nrows", PETSC_INT, &res->nrows));
-  for (PetscInt j = 0; j < res->ntexts; j++)
-    PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, "/stats", res->textname[j], PETSC_STRING, res->textvalue[j]));
+  for (PetscInt j = 0; j < res->ntexts; j++) {
+    char parent[80];
+    PetscCall(PetscSNPrintf(parent, sizeof(parent), "/stats%s%s", res->textstat[j][0] ? "/" : "", res->textstat[j]));
+    PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, parent, res->textname[j], PETSC_STRING, res->textvalue[j]));
+  }
   PetscCall(PetscViewerHDF5WriteAttribute(res->viewer, "/", "nsnapshots", PETSC_INT, &res->nsnapshots));
   CallHDF5(H5Fflush(file, H5F_SCOPE_GLOBAL));
   PetscFunctionReturn(0);

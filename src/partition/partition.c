@@ -42,10 +42,10 @@ PetscErrorCode KergsPartitionCreate(MPI_Comm comm, KergsPartition *partition)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsPartitionGetView(KergsPartition p, PetscBool *view)
+PetscErrorCode KergsPartitionGetView(KergsPartition p, PetscViewer *viewer)
 {
   PetscFunctionBeginUser;
-  *view = p->view;
+  *viewer = p->viewer;
   PetscFunctionReturn(0);
 }
 
@@ -66,8 +66,10 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
                              p->edgecut_growth, &p->edgecut_growth, NULL));
   PetscCall(PetscOptionsInt("-partition_check_every", "Steps between two checks of the partition (0: never repartition)", "",
                             p->check_every, &p->check_every, NULL));
-  PetscCall(PetscOptionsBool("-partition_view", "Print per step and rank: grains, ghosts, contacts, work, sweep time; and the edge cut", "",
-                             p->view, &p->view, NULL));
+  PetscCall(PetscViewerDestroy(&p->viewer));
+  PetscCall(PetscOptionsViewer(
+      "-partition_view", "Print per step and rank: grains, ghosts, contacts, work, sweep time; and the edge cut (PETSc viewer syntax)",
+      "KergsPartitionView", &p->viewer, &p->view_format, NULL));
   PetscCall(PetscOptionsBool(
       "-partition_metis_curve",
       "Join consecutive grains along a Hilbert curve by light edges in METIS's graph (locality for grains without contacts)", "",
@@ -95,6 +97,7 @@ PetscErrorCode KergsPartitionDestroy(KergsPartition *p)
 {
   PetscFunctionBeginUser;
   if (!p || !*p) PetscFunctionReturn(0);
+  PetscCall(PetscViewerDestroy(&(*p)->viewer));
   PetscCall(PetscFree(*p));
   PetscFunctionReturn(0);
 }
@@ -286,19 +289,21 @@ PetscErrorCode KergsPartitionObserve(KergsPartition p, KergsScene sc, KergsConta
   PetscCall(KergsPartitionMeasure(p, sc, ct, m));
   m->repartitions = p->state.nrepartitions;
   if (out) *out = *m;
-  if (!p->view) PetscFunctionReturn(0);
+  if (!p->viewer) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_rank(p->comm, &rank));
-  PetscCall(PetscSynchronizedPrintf(p->comm,
-                                    "[partition] step %5" PetscInt_FMT " rank %3d: grains %6" PetscInt_FMT " ghosts %6" PetscInt_FMT
-                                    " contacts %7" PetscInt_FMT " work %8.0f sweep %.3g s (arithmetic %.3g s)\n",
-                                    scstep, rank, m->my_grains, m->my_ghosts, m->my_contacts, (double)m->my_work, (double)sweep_seconds,
-                                    (double)compute_seconds));
-  PetscCall(PetscSynchronizedFlush(p->comm, PETSC_STDOUT));
-  PetscCall(PetscPrintf(p->comm,
-                        "[partition] step %5" PetscInt_FMT ": %s, edge cut %" PetscInt_FMT " of %" PetscInt_FMT
-                        " contact edges, imbalance %.4f, ghosts %" PetscInt_FMT ", repartitions %" PetscInt_FMT "\n",
-                        scstep, KergsPartitionTypes[p->state.last_method], m->edgecut, m->edges, (double)m->imbalance, m->ghosts,
-                        p->state.nrepartitions));
+  PetscCall(PetscViewerASCIIPushSynchronized(p->viewer));
+  PetscCall(PetscViewerASCIISynchronizedPrintf(
+      p->viewer,
+      "[partition] step %5" PetscInt_FMT " rank %3d: grains %6" PetscInt_FMT " ghosts %6" PetscInt_FMT " contacts %7" PetscInt_FMT
+      " work %8.0f sweep %.3g s (arithmetic %.3g s)\n",
+      scstep, rank, m->my_grains, m->my_ghosts, m->my_contacts, (double)m->my_work, (double)sweep_seconds, (double)compute_seconds));
+  PetscCall(PetscViewerFlush(p->viewer));
+  PetscCall(PetscViewerASCIIPopSynchronized(p->viewer));
+  PetscCall(PetscViewerASCIIPrintf(p->viewer,
+                                   "[partition] step %5" PetscInt_FMT ": %s, edge cut %" PetscInt_FMT " of %" PetscInt_FMT
+                                   " contact edges, imbalance %.4f, ghosts %" PetscInt_FMT ", repartitions %" PetscInt_FMT "\n",
+                                   scstep, KergsPartitionTypes[p->state.last_method], m->edgecut, m->edges, (double)m->imbalance, m->ghosts,
+                                   p->state.nrepartitions));
   PetscFunctionReturn(0);
 }
 

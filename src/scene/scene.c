@@ -541,6 +541,8 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
   PetscFunctionBeginUser;
   PetscCall(
       PetscOptionsString("-scene_name", "Name of the scene (used in output)", NULL, scene->name, scene->name, sizeof(scene->name), NULL));
+  PetscCall(PetscOptionsName("-scene_view", "Print the scene (disks, walls, materials) at the start of the run (PETSc viewer syntax)",
+                             "KergsSceneView", NULL));
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-gravity", "Gravity acceleration gx,gy (m/s^2)", scene->gravity, NULL));
   PetscCall(PetscOptionsReal("-dt", "Time step (s)", NULL, scene->dt, &scene->dt, NULL));
   PetscCall(PetscOptionsInt("-steps", "Number of time steps", NULL, scene->nsteps, &scene->nsteps, NULL));
@@ -1008,6 +1010,20 @@ static PetscErrorCode SceneViewMaterials(KergsScene scene, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
     PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
   }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SceneViewAdapter(void *scene, PetscViewer viewer)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneView((KergsScene)scene, viewer));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneViewFromOptions(KergsScene scene, const char name[])
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsViewFromOptions(scene->comm, NULL, name, SceneViewAdapter, scene));
   PetscFunctionReturn(0);
 }
 

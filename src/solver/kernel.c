@@ -61,7 +61,7 @@ PetscErrorCode KergsKernelSetFromOptions(KergsKernel k)
     PetscCall(PetscStrcmp(k->solver, solvers[i], &same));
     if (same) which = i;
   }
-  PetscOptionsBegin(k->comm, NULL, "Kernel projector options (P = I - H_f^T (H_f H_f^T)^+ H_f)", NULL);
+  PetscOptionsBegin(k->comm, k->prefix[0] ? k->prefix : NULL, "Kernel projector options (P = I - H_f^T (H_f H_f^T)^+ H_f)", NULL);
   PetscCall(PetscOptionsEList(
       "-kernel_solver", "Sparse Cholesky package for H_f H_f^T: auto (cholmod on 1 rank, mumps on several), cholmod (1 rank only), mumps",
       "KergsKernelSetUp", solvers, 3, solvers[which], &which, NULL));
@@ -73,7 +73,7 @@ PetscErrorCode KergsKernelSetFromOptions(KergsKernel k)
   PetscCall(PetscOptionsBool("-kernel_active_only",
                              "Kernel of H_f over the active contacts only (default: every potential contact, as in Algorithm 1)",
                              "KergsKernelSetActive", k->active_only, &k->active_only, NULL));
-  PetscCall(PetscOptionsInt("-kernel_diag_batch", "Exact diagonal: contacts per rank in one block of right-hand sides",
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-kernel_diag_batch", "Exact diagonal: contacts per rank in one block of right-hand sides",
                             "KergsKernelComputeDiagonalBlocks", k->diag_batch, &k->diag_batch, NULL));
   PetscCall(PetscOptionsReal("-kernel_null_pivot_tol",
                              "Pivots below this times |A| are null (MUMPS CNTL(3)); CHOLMOD is rejected above condition 1/tol",
@@ -146,6 +146,21 @@ PetscErrorCode KergsKernelReset(KergsKernel k)
   k->pattern_n = k->pattern_nnz = -1;
   k->cholmod_pause              = 0;
   PetscCall(PetscStrncpy(k->used, "none", sizeof(k->used)));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsKernelSetOptionsPrefix(KergsKernel k, const char prefix[])
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscStrncpy(k->prefix, prefix ? prefix : "", sizeof(k->prefix)));
+  PetscFunctionReturn(0);
+}
+
+/* The prefix of the factorization's options: the kernel's, then kernel_ (-kernel_mat_mumps_icntl_14) */
+static PetscErrorCode FactorPrefix(KergsKernel k, char prefix[], size_t len)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(prefix, len, "%s%s", k->prefix, KERGS_KERNEL_FACTOR_PREFIX));
   PetscFunctionReturn(0);
 }
 
@@ -337,6 +352,7 @@ static PetscErrorCode BuildReducedOperator(KergsKernel k, const KernelInput *in)
   const PetscInt *dofs;
   PetscScalar    *s;
   PetscInt        n;
+  char            prefix[256];
 
   PetscFunctionBeginUser;
   PetscCall(MatCreateSubMatrix(in->HfT, k->keep_cols, k->keep_rows, MAT_INITIAL_MATRIX, &k->Hr));
@@ -357,7 +373,8 @@ static PetscErrorCode BuildReducedOperator(KergsKernel k, const KernelInput *in)
   PetscCall(MatTransposeMatMult(k->Hr, k->Hr, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &k->A));
   /* symmetric, but not MAT_SPD: MUMPS would then skip its null-pivot detection */
   PetscCall(MatSetOption(k->A, MAT_SYMMETRIC, PETSC_TRUE));
-  PetscCall(MatSetOptionsPrefixFactor(k->A, KERGS_KERNEL_FACTOR_PREFIX));
+  PetscCall(FactorPrefix(k, prefix, sizeof(prefix)));
+  PetscCall(MatSetOptionsPrefixFactor(k->A, prefix));
   PetscCall(VecScatterCreate(in->r, k->keep_cols, k->xr, NULL, &k->to_reduced));
   PetscCall(MatGetSize(k->A, &k->kept_dofs, NULL));
   PetscCall(MatGetSize(k->Hr, &k->kept_comps, NULL));
@@ -482,10 +499,13 @@ static PetscErrorCode FactorFresh(KergsKernel k, const char *solver, PetscBool *
     PetscCall(MatMumpsSetCntl(k->F, 3, k->null_pivot_tol)); /* relative threshold of a null pivot */
   } else {
     PetscBool set;
+    char      prefix[256], name[300];
     /* CHOLMOD prints "not positive definite" itself; its errors reach PETSc's error handler anyway, and a
        rejection is logged with -info: silent unless the user asks */
-    PetscCall(PetscOptionsHasName(NULL, KERGS_KERNEL_FACTOR_PREFIX, "-mat_cholmod_print", &set));
-    if (!set) PetscCall(PetscOptionsSetValue(NULL, "-" KERGS_KERNEL_FACTOR_PREFIX "mat_cholmod_print", "0"));
+    PetscCall(FactorPrefix(k, prefix, sizeof(prefix)));
+    PetscCall(PetscOptionsHasName(NULL, prefix, "-mat_cholmod_print", &set));
+    PetscCall(PetscSNPrintf(name, sizeof(name), "-%smat_cholmod_print", prefix));
+    if (!set) PetscCall(PetscOptionsSetValue(NULL, name, "0"));
   }
   /* both packages order the matrix themselves; the natural ordering is what PETSc's interface asks for */
   PetscCall(MatGetOrdering(k->A, MATORDERINGNATURAL, &rperm, &cperm));

@@ -75,7 +75,7 @@ PetscErrorCode KergsPredictorSetFromOptions(KergsPredictor p)
 
   PetscFunctionBeginUser;
   if (p->type[0]) PetscCall(PetscStrncpy(type, p->type, sizeof(type)));
-  PetscOptionsBegin(p->comm, NULL, "Predictor options (NLKerGS-P, Algorithm 3)", NULL);
+  PetscOptionsBegin(p->comm, p->prefix[0] ? p->prefix : NULL, "Predictor options (NLKerGS-P, Algorithm 3)", NULL);
   PetscCall(
       PetscOptionsFList("-predictor_type",
                         "Prediction r~ of the impulses: none, linear (Algorithm 4), unilateral (exact frictionless), elastic (Algorithm 5)",
@@ -117,7 +117,8 @@ PetscErrorCode KergsPredictorCreateKSP(KergsPredictor p)
   if (p->ksp) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_size(p->comm, &size));
   PetscCall(KSPCreate(p->comm, &p->ksp));
-  PetscCall(KSPSetOptionsPrefix(p->ksp, "predictor_"));
+  PetscCall(KSPSetOptionsPrefix(p->ksp, p->prefix));
+  PetscCall(KSPAppendOptionsPrefix(p->ksp, "predictor_"));
   PetscCall(KSPSetType(p->ksp, KSPPREONLY));
   PetscCall(KSPGetPC(p->ksp, &pc));
   PetscCall(PCSetType(pc, PCCHOLESKY));
@@ -380,6 +381,13 @@ PetscErrorCode KergsPredictorView(KergsPredictor p, PetscViewer viewer)
   PetscCall(PetscViewerASCIIPrintf(viewer, "last prediction: %" PetscInt_FMT " active contacts, %.3g s%s\n", p->nactive, (double)p->seconds,
                                    p->converged ? "" : " (not converged)"));
   PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsPredictorSetOptionsPrefix(KergsPredictor p, const char prefix[])
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscStrncpy(p->prefix, prefix ? prefix : "", sizeof(p->prefix)));
   PetscFunctionReturn(0);
 }
 

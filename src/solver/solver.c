@@ -6,6 +6,40 @@
 
 const char *const KergsCriteria[] = {"quad", "maxm", "natural", "KergsCriterion", "KERGS_CRITERION_", NULL};
 
+/* indexed from KERGS_SOLVER_REASON_MIN, as PETSc's KSPConvergedReasons */
+static const char *const ReasonNamesShifted[] = {"DIVERGED_NANORINF", "DIVERGED_KERNEL",   "DIVERGED_LINEAR_SOLVE", "DIVERGED_INFEASIBLE",
+                                                 "DIVERGED_RESIDUAL", "DIVERGED_MAX_IT",   "CONVERGED_ITERATING",   "CONVERGED_QUAD",
+                                                 "CONVERGED_MAXM",    "CONVERGED_NATURAL", "CONVERGED_NO_CONTACTS"};
+const char *const       *KergsSolverConvergedReasons = ReasonNamesShifted - KERGS_SOLVER_REASON_MIN;
+
+const char *KergsSolverConvergedReasonDescription(KergsSolverConvergedReason reason)
+{
+  switch (reason) {
+  case KERGS_SOLVER_DIVERGED_NANORINF:
+    return "the impulses or their residual are not finite";
+  case KERGS_SOLVER_DIVERGED_KERNEL:
+    return "the kernel projector misses ker H_f (-kernel_check_tol; the step's kernel_check_error in /stats); try another "
+           "-kernel_null_pivot_tol";
+  case KERGS_SOLVER_DIVERGED_LINEAR_SOLVE:
+    return "a linear solve failed";
+  case KERGS_SOLVER_DIVERGED_INFEASIBLE:
+    return "the step's problem has no solution";
+  case KERGS_SOLVER_DIVERGED_RESIDUAL:
+    return "the criterion was met but the original problem is not solved (-solver_residual_tol, -solver_velocity_tol)";
+  case KERGS_SOLVER_DIVERGED_MAX_IT:
+    return "-solver_max_it reached";
+  case KERGS_SOLVER_CONVERGED_ITERATING:
+    return "still iterating";
+  case KERGS_SOLVER_CONVERGED_QUAD:
+  case KERGS_SOLVER_CONVERGED_MAXM:
+  case KERGS_SOLVER_CONVERGED_NATURAL:
+    return "-solver_tol met";
+  case KERGS_SOLVER_CONVERGED_NO_CONTACTS:
+    return "no contact";
+  }
+  return "unknown reason";
+}
+
 static PetscFunctionList SolverList = NULL;
 #define KERGS_SOLVER_MAXTYPES 16
 static char     SolverNames[KERGS_SOLVER_MAXTYPES][64]; /* the registered names, in order, for -help */
@@ -87,12 +121,12 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
 
   PetscFunctionBeginUser;
   if (s->type[0]) PetscCall(PetscStrncpy(type, s->type, sizeof(type)));
-  PetscOptionsBegin(s->comm, NULL, "Contact solver options", NULL);
+  PetscOptionsBegin(s->comm, s->prefix, "Contact solver options", NULL);
   PetscCall(PetscOptionsFList("-solver_type", "Solver of the per-step contact problem", "KergsSolverSetType", SolverList, type, type,
                               sizeof(type), &set));
   /* the type first: it may set its own defaults of the common options, which the options then override */
   if (!s->ops.solve || set) PetscCall(KergsSolverSetType(s, type));
-  PetscCall(PetscOptionsInt("-solver_max_it",
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_max_it",
                             "Maximum number of iterations per step: sweeps (NLGS, NLGS-Jac; the paper caps at 150), Newton steps", "",
                             s->max_it, &s->max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_tol", "Tolerance of the convergence criterion", "", s->tol, &s->tol, NULL));
@@ -108,6 +142,12 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
                              "LMGC90 Maxm), natural (natural-map residual, Siconos)",
                              "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
   PetscCall(KergsSolverMonitorSetFromOptions(PetscOptionsObject, s));
+  PetscCall(PetscViewerDestroy(&s->reason_viewer));
+  PetscCall(PetscOptionsViewer("-solver_converged_reason", "Print why each solve stopped (KergsSolverConvergedReason)", "KergsSolverSolve",
+                               &s->reason_viewer, &s->reason_format, NULL));
+  PetscCall(PetscOptionsName("-solver_view",
+                             "Print the solver's settings at the start of the run (PETSc viewer syntax: ::ascii_info_detail, ascii:FILE)",
+                             "KergsSolverView", NULL));
   if (s->ops.setfromoptions) PetscCall((*s->ops.setfromoptions)(PetscOptionsObject, s));
   PetscOptionsEnd();
   if (s->fixed_criterion) s->criterion = KERGS_CRITERION_NATURAL; /* -solver_criterion does not apply (docs/solver.md) */
@@ -185,10 +225,10 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
   PetscCall(PetscTime(&t0));
   PetscCall(KergsOperatorsGetContactVectors(ops, &r, &v, &vd));
   PetscCall(VecGetSize(r, &nglobal));
-  stats->iterations    = 0;
-  stats->criterion_met = PETSC_TRUE;
+  stats->iterations = 0;
+  stats->reason     = KERGS_SOLVER_CONVERGED_NO_CONTACTS;
   if (nglobal > 0) {
-    stats->criterion_met = PETSC_FALSE;
+    stats->reason = KERGS_SOLVER_DIVERGED_MAX_IT;
     for (PetscInt k = 1; k <= s->max_it; k++) {
       if (s->ops.presweep) PetscCall((*s->ops.presweep)(s, ops, extra));
       PetscCall(KergsSweepRun(s->iterate_sweep ? s->iterate_sweep : s->sweep, r, vd, extra, Wdiag, &m));
@@ -207,7 +247,7 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
       /* the natural residual of the original problem is known here only when it is the criterion (s->sweep is on W) */
       PetscCall(KergsSolverMonitor(s, k, value, s->criterion == KERGS_CRITERION_NATURAL ? value : (PetscReal)NAN));
       if (value < s->tol) {
-        stats->criterion_met = PETSC_TRUE;
+        PetscCall(KergsSolverCriterionMet(s, stats));
         break;
       }
     }
@@ -223,6 +263,18 @@ PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *
   PetscFunctionReturn(0);
 }
 
+/* For the types: the criterion fell below -solver_tol (the reason names the criterion; a step without contacts keeps
+   its own). */
+PetscErrorCode KergsSolverCriterionMet(KergsSolver s, KergsSolveStats *stats)
+{
+  static const KergsSolverConvergedReason by_criterion[] = {KERGS_SOLVER_CONVERGED_QUAD, KERGS_SOLVER_CONVERGED_MAXM,
+                                                            KERGS_SOLVER_CONVERGED_NATURAL};
+
+  PetscFunctionBeginUser;
+  if (stats->reason != KERGS_SOLVER_CONVERGED_NO_CONTACTS) stats->reason = by_criterion[s->criterion];
+  PetscFunctionReturn(0);
+}
+
 /* Whatever the type and its own criterion, a step converges only if r solves the original problem (W, not a
    regularised one): natural residual and velocity error recomputed from r (the sweep on W holds the active set). */
 static PetscErrorCode DecideConvergence(KergsSolver s, KergsOperators ops, KergsSolveStats *stats)
@@ -235,7 +287,26 @@ static PetscErrorCode DecideConvergence(KergsSolver s, KergsOperators ops, Kergs
   PetscCall(KergsSweepResiduals(s->sweep, r, vd, v, &res));
   stats->residual       = res.natural;
   stats->velocity_error = res.velocity;
-  stats->converged      = (PetscBool)(stats->criterion_met && res.natural <= s->residual_tol && res.velocity <= s->velocity_tol);
+  if (PetscIsInfOrNanReal(res.natural) || PetscIsInfOrNanReal(res.velocity))
+    stats->reason = KERGS_SOLVER_DIVERGED_NANORINF;
+  else if (stats->reason > 0 && !(res.natural <= s->residual_tol && res.velocity <= s->velocity_tol))
+    stats->reason = KERGS_SOLVER_DIVERGED_RESIDUAL;
+  PetscFunctionReturn(0);
+}
+
+/* -solver_converged_reason: one line per solve, as -ksp_converged_reason */
+static PetscErrorCode ConvergedReasonView(KergsSolver s, const KergsSolveStats *stats)
+{
+  PetscViewer viewer = s->reason_viewer;
+
+  PetscFunctionBeginUser;
+  if (!viewer) PetscFunctionReturn(0);
+  PetscCall(PetscViewerPushFormat(viewer, s->reason_format));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact %s%ssolve %s due to %s in step %" PetscInt_FMT " after %" PetscInt_FMT " %s: %s\n",
+                                   s->prefix ? s->prefix : "", s->prefix ? " " : "", stats->reason > 0 ? "converged" : "did not converge",
+                                   KergsSolverConvergedReasons[stats->reason], s->step, stats->iterations, s->iteration_name,
+                                   KergsSolverConvergedReasonDescription(stats->reason)));
+  PetscCall(PetscViewerPopFormat(viewer));
   PetscFunctionReturn(0);
 }
 
@@ -295,6 +366,7 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscCall(KergsSolverMonitorFlush(s, stats->residual));
   PetscCall(RecordLawWork(s, ops, stats));
   if (s->ops.stats) PetscCall((*s->ops.stats)(s, stats));
+  PetscCall(ConvergedReasonView(s, stats));
   /* the sweep lives for one solve: drop its reference to this step's W, so that W is freed at the start of the
      next assembly instead of coexisting with the next step's W (the peak memory) */
   PetscCall(KergsSweepReset(s->sweep));
@@ -306,14 +378,64 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
 
 PetscErrorCode KergsSolverView(KergsSolver s, PetscViewer viewer)
 {
+  PetscViewerFormat format;
+
   PetscFunctionBeginUser;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact solver: %s, at most %" PetscInt_FMT " %s, criterion %s < %g\n", s->type, s->max_it,
-                                   s->iteration_name, KergsCriteria[s->criterion], (double)s->tol));
+  PetscCall(PetscViewerGetFormat(viewer, &format));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Contact solver%s%s: %s, at most %" PetscInt_FMT " %s, criterion %s < %g\n",
+                                   s->prefix ? " " : "", s->prefix ? s->prefix : "", s->type, s->max_it, s->iteration_name,
+                                   KergsCriteria[s->criterion], (double)s->tol));
+  if (format == PETSC_VIEWER_ASCII_INFO_DETAIL)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  converged: natural residual <= %g and relative velocity error <= %g\n",
+                                     (double)s->residual_tol, (double)s->velocity_tol));
   if (s->ops.view) {
     PetscCall(PetscViewerASCIIPushTab(viewer));
     PetscCall((*s->ops.view)(s, viewer));
     PetscCall(PetscViewerASCIIPopTab(viewer));
   }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SolverViewAdapter(void *s, PetscViewer viewer)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsSolverView((KergsSolver)s, viewer));
+  PetscFunctionReturn(0);
+}
+
+/* name (with the solver's prefix) given, as -solver_view [viewer]: view the solver there. Collective. */
+PetscErrorCode KergsSolverViewFromOptions(KergsSolver s, const char name[])
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsViewFromOptions(s->comm, s->prefix, name, SolverViewAdapter, s));
+  PetscFunctionReturn(0);
+}
+
+/* As KSPSetOptionsPrefix: every option of the solver, its type, kernel, predictor and inner PETSc solvers is then read
+   as -<prefix>solver_..., so that two solvers of one program take different options. Before KergsSolverSetFromOptions. */
+PetscErrorCode KergsSolverSetOptionsPrefix(KergsSolver s, const char prefix[])
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(s->prefix));
+  if (prefix && prefix[0]) {
+    PetscCheck(prefix[0] != '-', s->comm, PETSC_ERR_ARG_WRONG, "Options prefix %s must not start with a hyphen", prefix);
+    PetscCall(PetscStrallocpy(prefix, &s->prefix));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverGetOptionsPrefix(KergsSolver s, const char *prefix[])
+{
+  PetscFunctionBeginUser;
+  *prefix = s->prefix;
+  PetscFunctionReturn(0);
+}
+
+/* The prefix of an inner object's options: the solver's prefix, then `inner` ("solver_", "solver_tresca_"). */
+PetscErrorCode KergsSolverInnerPrefix(KergsSolver s, const char inner[], char prefix[], size_t len)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(prefix, len, "%s%s", s->prefix ? s->prefix : "", inner));
   PetscFunctionReturn(0);
 }
 
@@ -323,6 +445,8 @@ PetscErrorCode KergsSolverDestroy(KergsSolver *s)
   if (!*s) PetscFunctionReturn(0);
   if ((*s)->ops.destroy) PetscCall((*(*s)->ops.destroy)(*s));
   PetscCall(KergsSolverMonitorCancel(*s));
+  PetscCall(PetscViewerDestroy(&(*s)->reason_viewer));
+  PetscCall(PetscFree((*s)->prefix));
   PetscCall(KergsSweepDestroy(&(*s)->sweep));
   PetscCall(PetscFree3((*s)->mu, (*s)->active, (*s)->gapvel));
   PetscCall(PetscFree(*s));

@@ -236,7 +236,7 @@ PetscErrorCode KergsFCLibRunSolve(KergsFCLibRun r, KergsExitStatus *status)
   PetscCall(KergsResultsClose(r->results));
   PetscCall(PetscPrintf(
       r->comm, "fclib %s contacts %6" PetscInt_FMT " iterations %4" PetscInt_FMT "%s residual %8.2e velocity error %8.2e solve %.3g s\n",
-      r->name, r->problem.ncontacts, ss.iterations, ss.converged ? "  " : " !", (double)ss.residual, (double)ss.velocity_error,
+      r->name, r->problem.ncontacts, ss.iterations, ss.reason > 0 ? "  " : " !", (double)ss.residual, (double)ss.velocity_error,
       (double)ss.seconds));
   if (dr >= 0)
     PetscCall(PetscPrintf(r->comm,
@@ -244,8 +244,8 @@ PetscErrorCode KergsFCLibRunSolve(KergsFCLibRun r, KergsExitStatus *status)
                           (double)dr, (double)du));
   PetscCall(KergsResultsGetPath(r->results, &out, &enabled));
   if (enabled) PetscCall(PetscPrintf(r->comm, "kergs: results in %s\n", out));
-  *status = (ss.converged || !r->error_on_nonconvergence) ? KERGS_EXIT_DONE : KERGS_EXIT_NOT_CONVERGED;
-  PetscCall(PetscPrintf(r->comm, "kergs: %s, exit status %d\n", ss.converged ? "done" : "done, not converged", (int)*status));
+  *status = (ss.reason > 0 || !r->error_on_nonconvergence) ? KERGS_EXIT_DONE : KERGS_EXIT_NOT_CONVERGED;
+  PetscCall(PetscPrintf(r->comm, "kergs: %s, exit status %d\n", ss.reason > 0 ? "done" : "done, not converged", (int)*status));
   PetscFunctionReturn(0);
 }
 

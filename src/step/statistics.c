@@ -62,13 +62,33 @@ static PetscErrorCode MeasureViolation(KergsStepper st, PetscReal *mean, PetscRe
   PetscFunctionReturn(0);
 }
 
-/* The solve's statistics: common figures, then the type's own figures and texts. */
+/* "-6:DIVERGED_NANORINF,...,4:CONVERGED_NO_CONTACTS": the attribute that names converged_reason's values */
+static PetscErrorCode ReasonNames(char names[], size_t len)
+{
+  size_t used = 0;
+
+  PetscFunctionBeginUser;
+  names[0] = 0;
+  for (PetscInt r = KERGS_SOLVER_REASON_MIN; r <= KERGS_SOLVER_REASON_MAX; r++) {
+    PetscCall(PetscSNPrintf(names + used, len - used, "%s%" PetscInt_FMT ":%s", r > KERGS_SOLVER_REASON_MIN ? "," : "", r,
+                            KergsSolverConvergedReasons[r]));
+    PetscCall(PetscStrlen(names, &used));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The solve's statistics: common figures, then the type's own figures and texts. converged is 1 when the reason is
+   positive: the column the scripts count. */
 PetscErrorCode KergsStepperRecordSolve(KergsResults res, const KergsSolveStats *ss)
 {
+  char names[512];
+
   PetscFunctionBeginUser;
+  PetscCall(ReasonNames(names, sizeof(names)));
   PetscCall(KergsResultsRecord(res, "iterations", (PetscReal)ss->iterations));
-  PetscCall(KergsResultsRecord(res, "converged", ss->converged ? 1.0 : 0.0));
-  PetscCall(KergsResultsRecord(res, "criterion_met", ss->criterion_met ? 1.0 : 0.0));
+  PetscCall(KergsResultsRecord(res, "converged", ss->reason > 0 ? 1.0 : 0.0));
+  PetscCall(KergsResultsRecord(res, "converged_reason", (PetscReal)ss->reason));
+  PetscCall(KergsResultsRecordStatisticText(res, "converged_reason", "names", names));
   PetscCall(KergsResultsRecord(res, "residual", ss->residual));
   PetscCall(KergsResultsRecord(res, "velocity_error", ss->velocity_error));
   PetscCall(KergsResultsRecord(res, "criterion", ss->criterion));
@@ -113,7 +133,7 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   PetscCall(KergsPartitionObserve(st->partition, st->scene, st->contacts, ss->sweep_seconds, ss->compute_seconds, &pm));
   PetscCall(KergsSolverGetType(st->solver, &type));
   st->max_violation = PetscMax(st->max_violation, max);
-  if (!ss->converged) st->nonconverged++;
+  if (ss->reason <= 0) st->nonconverged++;
   st->last_contacts      = ncontacts;
   st->last_sweeps        = ss->iterations;
   st->last_residual      = ss->residual;
@@ -145,7 +165,7 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
     PetscCall(PetscPrintf(st->comm,
                           "step %5" PetscInt_FMT " t %-10.5g contacts %6" PetscInt_FMT " active %6" PetscInt_FMT " sweeps %4" PetscInt_FMT
                           "%s residual %8.2e violation mean %8.2e max %8.2e solve %.3g s\n",
-                          step, (double)time, ncontacts, nactive, ss->iterations, ss->converged ? "  " : " !", (double)ss->residual,
+                          step, (double)time, ncontacts, nactive, ss->iterations, ss->reason > 0 ? "  " : " !", (double)ss->residual,
                           (double)mean, (double)max, (double)ss->seconds));
   PetscFunctionReturn(0);
 }

@@ -30,29 +30,6 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   PetscFunctionReturn(0);
 }
 
-/* The integer options of the solver types (read in src/solver/), checked for 32-bit overflow here, next to the time
-   loop's own; the other components check theirs where they read them (KergsOptionsCheckInt). */
-static PetscErrorCode CheckSolverIntegerOptions(MPI_Comm comm)
-{
-  static const char *names[] = {"-solver_max_it",
-                                "-predictor_unilateral_max_it",
-                                "-kernel_diag_batch",
-                                "-solver_omega_power_its",
-                                "-solver_nlkergs_max_size",
-                                "-solver_newton_max_backtracks",
-                                "-solver_prox_inner_max",
-                                "-solver_newton_max_sweeps",
-                                "-solver_newton_stall_steps",
-                                "-solver_newton_smoothing_raises",
-                                "-solver_newton_redundant_max",
-                                "-solver_newton_reuse_its",
-                                NULL};
-
-  PetscFunctionBeginUser;
-  for (PetscInt i = 0; names[i]; i++) PetscCall(KergsOptionsCheckInt(comm, NULL, names[i]));
-  PetscFunctionReturn(0);
-}
-
 PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
 {
   const char *name;
@@ -63,7 +40,6 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(KergsStepperBatchOptions(st)); /* first: a restart changes how the scene reads its options */
   if (st->restart_path[0] && !help) PetscCall(KergsSceneSetRestoring(st->scene, PETSC_TRUE));
   PetscCall(KergsSceneSetFromOptions(st->scene));
-  PetscCall(CheckSolverIntegerOptions(st->comm)); /* before the solver reads them: a wrapped count is never used */
   PetscCall(KergsSolverSetFromOptions(st->solver));
   PetscCall(KergsSceneGetName(st->scene, &name));
   PetscCall(KergsResultsSetSceneName(st->results, name)); /* default -output: results/<scene>.h5 */
@@ -107,6 +83,39 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(KergsProvenanceSetOptions(st->comm)); /* the options as given, before any object adds its own */
   PetscCall(KergsStepperCheckPaths(st));          /* before the run writes anything */
   if (st->restart_path[0]) PetscCall(KergsStepperRestore(st));
+  PetscFunctionReturn(0);
+}
+
+/* What runs, in one line (scene, size, steps, ranks, solver), then the views asked for on the command line
+   (-scene_view, -solver_view, in PETSc's viewer syntax), as PETSc prints -ksp_view on request only. */
+PetscErrorCode KergsStepperViewFromOptions(KergsStepper st)
+{
+  const char     *name;
+  KergsSolverType type;
+  KergsDisks      D;
+  PetscInt        nwalls, nsteps, max_it;
+  PetscReal       dt, theta, tol;
+  PetscMPIInt     size;
+  const char     *counted;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetName(st->scene, &name));
+  PetscCall(KergsSceneGetDisks(st->scene, &D));
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, NULL));
+  PetscCall(KergsSceneGetStep(st->scene, NULL, NULL, &nsteps));
+  PetscCall(KergsSceneGetTimeStep(st->scene, &dt, &theta));
+  PetscCall(KergsSolverGetType(st->solver, &type));
+  PetscCall(KergsSolverGetTolerances(st->solver, &tol, &max_it));
+  PetscCall(KergsSolverGetIterationName(st->solver, &counted));
+  PetscCallMPI(MPI_Comm_size(st->comm, &size));
+  PetscCall(PetscPrintf(st->comm,
+                        "kergs: scene %s, %" PetscInt_FMT " disks, %" PetscInt_FMT " walls, %" PetscInt_FMT
+                        " steps of %g s on %d rank%s; solver %s "
+                        "to %g in at most %" PetscInt_FMT " %s (-scene_view, -solver_view for details)\n",
+                        name[0] ? name : "unnamed", D.ndisks, nwalls, nsteps, (double)dt, (int)size, size > 1 ? "s" : "", type, (double)tol,
+                        max_it, counted));
+  PetscCall(KergsSceneViewFromOptions(st->scene, "-scene_view"));
+  PetscCall(KergsSolverViewFromOptions(st->solver, "-solver_view"));
   PetscFunctionReturn(0);
 }
 
@@ -251,7 +260,8 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   KergsResultsState rs;
   KergsPoll         poll;
   PetscReal         ek, vmax;
-  PetscBool         rest = PETSC_FALSE, view, enabled, stopped = PETSC_FALSE;
+  PetscBool         rest = PETSC_FALSE, enabled, stopped = PETSC_FALSE;
+  PetscViewer       view;
   PetscInt          step, nsteps, max_it;
   const char       *counted;
   const char       *path;
@@ -330,7 +340,7 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
                         step, rest ? " (at rest)" : "", st->nonconverged, max_it, counted, (double)st->max_violation, (double)ek,
                         (double)vmax));
   PetscCall(KergsPartitionGetView(st->partition, &view));
-  if (view) PetscCall(KergsPartitionView(st->partition, PETSC_VIEWER_STDOUT_(st->comm)));
+  if (view) PetscCall(KergsPartitionView(st->partition, view));
   PetscCall(KergsResultsGetPath(st->results, &path, &enabled));
   if (enabled) PetscCall(PetscPrintf(st->comm, "kergs: results in %s\n", path));
   PetscCall(KergsResultsGetXdmfPath(st->results, &path));

@@ -234,9 +234,9 @@ static PetscErrorCode WatchStep(KergsStepper st, const KergsSolveStats *ss)
     PetscFunctionReturn(0);
   }
   PetscCall(WatchAlert(st, step));
-  if (ss->failed) { /* decided from global figures by the type: the same on every rank */
-    PetscCall(
-        PetscSNPrintf(st->failure, sizeof(st->failure), "the contact solver failed in step %" PetscInt_FMT ": %s", step, ss->failure));
+  if (ss->reason == KERGS_SOLVER_DIVERGED_KERNEL) { /* decided from global figures by the type: the same on every rank */
+    PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure), "the contact solver failed in step %" PetscInt_FMT ": %s, %s", step,
+                            KergsSolverConvergedReasons[ss->reason], KergsSolverConvergedReasonDescription(ss->reason)));
     st->failure_status = KERGS_EXIT_SOLVER_FAILED;
     st->failure_kind   = "contact solver failed";
     PetscFunctionReturn(0);

@@ -7,9 +7,10 @@
 
 struct _p_KergsKernel {
   MPI_Comm        comm;
-  char            solver[32]; /* -kernel_solver: auto, cholmod, mumps */
-  char            used[32];   /* the factorization package actually used this step */
-  KergsKernelDiag diagtype;   /* -kernel_diag */
+  char            prefix[256]; /* options prefix (KergsKernelSetOptionsPrefix), before kernel_ */
+  char            solver[32];  /* -kernel_solver: auto, cholmod, mumps */
+  char            used[32];    /* the factorization package actually used this step */
+  KergsKernelDiag diagtype;    /* -kernel_diag */
   PetscReal       omega;
   /* this step's reduced problem */
   Mat        Hr;                   /* reduced H_f^T: kept contact components x kept DOFs */

@@ -11,10 +11,11 @@ struct _p_KergsPartition {
   PetscReal          imbalance_tol;  /* -partition_imbalance_tol (default 1.10) */
   PetscReal          edgecut_growth; /* -partition_edgecut_growth (default 1.25) */
   PetscInt           check_every;    /* -partition_check_every: steps between checks (0: never) */
-  PetscBool          view;           /* -partition_view: one line per rank and step */
-  PetscInt           metis_seed;     /* -partition_metis_seed */
-  PetscBool          metis_curve;    /* -partition_metis_curve: Hilbert-curve edges in METIS's graph */
-  KergsPartitionWork work;           /* -partition_work (default model) */
+  PetscViewer        viewer;         /* -partition_view [viewer]: one line per rank and step, and the view at the end */
+  PetscViewerFormat  view_format;
+  PetscInt           metis_seed;  /* -partition_metis_seed */
+  PetscBool          metis_curve; /* -partition_metis_curve: Hilbert-curve edges in METIS's graph */
+  KergsPartitionWork work;        /* -partition_work (default model) */
   /* state: what a checkpoint keeps (KergsPartitionGetState)
      initialized: the initial partition was done; provisional: type metis, METIS not run yet (replaced once the graph is
      dense enough); edgecut_base: edge cut right after the last partition (-1: unknown, set at the next check);

@@ -26,6 +26,7 @@ typedef struct {
 
 struct _p_KergsPredictor {
   MPI_Comm          comm;
+  char              prefix[256]; /* options prefix (KergsPredictorSetOptionsPrefix), before predictor_ */
   char              type[64];
   KergsPredictorOps ops;
   void             *data;

@@ -27,8 +27,9 @@ struct _p_KergsResults {
   char           scenename[PETSC_MAX_PATH_LEN]; /* names the default output path results/<scenename>.h5 */
   PetscInt       last_snapshot_step;            /* step of the latest snapshot (-1: none yet) */
   PetscInt       ntexts;                        /* texts of the run (KergsResultsRecordText), string attributes of /stats */
-  char           textname[KERGS_RESULTS_MAXTEXTS][64], textvalue[KERGS_RESULTS_MAXTEXTS][256];
-  char           end[256]; /* how the run ended (KergsResultsSetEnd), the root attribute `end` at close */
+  char           textname[KERGS_RESULTS_MAXTEXTS][64], textvalue[KERGS_RESULTS_MAXTEXTS][512];
+  char           textstat[KERGS_RESULTS_MAXTEXTS][64]; /* the statistic whose dataset holds the text (empty: /stats itself) */
+  char           end[256];                             /* how the run ended (KergsResultsSetEnd), the root attribute `end` at close */
   /* restart (KergsResultsSetContinue): the checkpointed run's results file and its state at the checkpoint */
   char              source[PETSC_MAX_PATH_LEN];
   KergsResultsState source_state;

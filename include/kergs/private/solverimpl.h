@@ -23,6 +23,7 @@ typedef struct {
 struct _p_KergsSolver {
   MPI_Comm       comm;
   char           type[64];
+  char          *prefix; /* options prefix (KergsSolverSetOptionsPrefix), prepended to every option of the solver */
   KergsSolverOps ops;
   void          *data;
   PetscInt       max_it;
@@ -43,18 +44,20 @@ struct _p_KergsSolver {
   KergsSolverMonitorFn monitor[KERGS_SOLVER_MAXMONITORS];
   void                *monitorctx[KERGS_SOLVER_MAXMONITORS];
   PetscErrorCode (*monitordestroy[KERGS_SOLVER_MAXMONITORS])(void **);
-  PetscInt       nmonitors;
-  PetscBool      monitor_options; /* -solver_monitor's monitor is set */
-  PetscInt       step;            /* KergsSolverSetStepNumber */
-  PetscLogDouble solve_start;
-  PetscBool      held; /* an iteration's monitor call is held back */
-  PetscInt       held_it;
-  PetscReal      held_criterion, held_residual, held_seconds;
-  PetscReal     *mu;         /* per local contact */
-  PetscBool     *active;     /* per local contact */
-  PetscReal     *gapvel;     /* per local contact: the gap rule's normal velocity offset added to v^d (predictive) */
-  PetscInt64     shifted_id; /* the v^d (its object id) that already holds them: a second set-up on the same problem
-                                does not add them twice */
+  PetscInt          nmonitors;
+  PetscBool         monitor_options; /* -solver_monitor's monitor is set */
+  PetscViewer       reason_viewer;   /* -solver_converged_reason */
+  PetscViewerFormat reason_format;
+  PetscInt          step; /* KergsSolverSetStepNumber */
+  PetscLogDouble    solve_start;
+  PetscBool         held; /* an iteration's monitor call is held back */
+  PetscInt          held_it;
+  PetscReal         held_criterion, held_residual, held_seconds;
+  PetscReal        *mu;         /* per local contact */
+  PetscBool        *active;     /* per local contact */
+  PetscReal        *gapvel;     /* per local contact: the gap rule's normal velocity offset added to v^d (predictive) */
+  PetscInt64        shifted_id; /* the v^d (its object id) that already holds them: a second set-up on the same problem
+                                   does not add them twice */
   PetscInt nalloc;
 };
 
@@ -63,6 +66,10 @@ PETSC_INTERN PetscErrorCode KergsSolverSetUpSweep(KergsSolver, KergsScene, Kergs
 /* Shared by the types: run sweeps until the criterion or max_it, extra/diag as in KergsSweepRun; when the type
    has a presweep hook, extra (one entry per local component) is updated by it before every sweep. */
 PETSC_INTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *);
+/* For the types: the criterion fell below -solver_tol; sets stats->reason to the criterion's CONVERGED_ value. */
+PETSC_INTERN PetscErrorCode KergsSolverCriterionMet(KergsSolver, KergsSolveStats *);
+/* For the types: the options prefix of an inner object (kernel, predictor, KSP, SNES, Tao): the solver's prefix then inner */
+PETSC_INTERN PetscErrorCode KergsSolverInnerPrefix(KergsSolver, const char inner[], char prefix[], size_t len);
 /* For the types: iteration `it` of the solve ended with the type's criterion at `criterion` and the natural residual of
    the original problem at `residual` (NaN when the type did not compute it). Nothing when no monitor is set. */
 PETSC_INTERN PetscErrorCode KergsSolverMonitor(KergsSolver, PetscInt it, PetscReal criterion, PetscReal residual);

@@ -23,8 +23,8 @@ static PetscErrorCode PredictorSetFromOptions_Unilateral(PetscOptionItems *Petsc
   PetscCall(PetscOptionsReal("-predictor_unilateral_tol",
                              "Stop the NLGS sweeps when the W-weighted relative change of r_n (quad) is below this", "", u->tol, &u->tol,
                              NULL));
-  PetscCall(PetscOptionsInt("-predictor_unilateral_max_it", "Maximum number of NLGS sweeps of the unilateral predictor", "", u->max_it,
-                            &u->max_it, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-predictor_unilateral_max_it", "Maximum number of NLGS sweeps of the unilateral predictor",
+                            "", u->max_it, &u->max_it, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(u->tol > 0 && PetscIsNormalReal(u->tol), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-predictor_unilateral_tol %g must be a positive finite number", (double)u->tol);

@@ -551,9 +551,10 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
       }
     }
   }
-  stats->iterations    = steps;
-  stats->criterion     = res;
-  stats->criterion_met = (PetscBool)(res <= s->tol || nglobal == 0);
+  stats->iterations = steps;
+  stats->criterion  = res;
+  stats->reason     = nglobal == 0 ? KERGS_SOLVER_CONVERGED_NO_CONTACTS : KERGS_SOLVER_DIVERGED_MAX_IT;
+  if (res <= s->tol) PetscCall(KergsSolverCriterionMet(s, stats));
   PetscCall(PetscTime(&t1));
   stats->sweep_seconds = t1 - t0;
   PetscFunctionReturn(0);
@@ -594,8 +595,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "", nt->shift, &nt->shift, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_armijo", "Sufficient decrease of the merit 1/2 |F|^2 in the line search", "", nt->armijo,
                              &nt->armijo, NULL));
-  PetscCall(PetscOptionsInt("-solver_newton_max_backtracks", "Halvings of a Newton step before the smallest one is taken anyway", "",
-                            nt->max_backtracks, &nt->max_backtracks, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_max_backtracks",
+                            "Halvings of a Newton step before the smallest one is taken anyway", "", nt->max_backtracks,
+                            &nt->max_backtracks, NULL));
   PetscCall(PetscOptionsBool("-solver_newton_project", "Line search along the path projected on the Coulomb cones", "", nt->project,
                              &nt->project, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_switch_tol", "NLGS sweeps first, until the natural residual is at most this, then Newton", "",
@@ -609,19 +611,20 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "", nt->alpha, &nt->alpha, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_min", "Smallest sigma / mean W_nn", "", nt->sigma_min, &nt->sigma_min, NULL));
   PetscCall(PetscOptionsReal("-solver_prox_sigma_max", "Largest sigma / mean W_nn", "", nt->sigma_max, &nt->sigma_max, NULL));
-  PetscCall(PetscOptionsInt("-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max, &nt->inner_max, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_prox_inner_max", "Newton steps per outer iteration", "", nt->inner_max,
+                            &nt->inner_max, NULL));
   PetscCall(
-      PetscOptionsInt("-solver_newton_redundant_max",
+      KergsOptionsInt(PetscOptionsObject, "-solver_newton_redundant_max",
                       "Several ranks: J gathered whole on every rank and factored there up to this many rows, else GMRES with additive "
                       "Schwarz (overlap 1)",
                       "", nt->redundant_max, &nt->redundant_max, NULL));
-  PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_type", &nt->user_pc));
-  PetscCall(PetscOptionsInt("-solver_newton_reuse_its",
+  PetscCall(PetscOptionsHasName(NULL, PetscOptionsObject->prefix, "-solver_pc_type", &nt->user_pc));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_reuse_its",
                             "GMRES iterations (relative tolerance 1e-8) preconditioned by the last factorization of J before J is factored "
                             "again, tried when at most half as many contacts changed piece (with additive Schwarz on several ranks: its "
                             "set-up kept under the same rule) (0: factor every changed J)",
                             "", nt->reuse_its, &nt->reuse_its, NULL));
-  PetscCall(PetscOptionsInt("-solver_newton_stall_steps",
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_stall_steps",
                             "Newton steps in a row that each cut |F| by less than a tenth and end an outer iteration's Newton (0: never)",
                             "", nt->stall_steps, &nt->stall_steps, NULL));
   PetscCall(PetscOptionsBool("-solver_newton_smoothing", "Smoothing Newton steps first, then the proximal iterations if still needed", "",
@@ -630,11 +633,12 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "", nt->smooth_kappa, &nt->smooth_kappa, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_smoothing_eps", "Smoothing Newton: first eps / largest |rho v^d_n|", "", nt->smooth_eps,
                              &nt->smooth_eps, NULL));
-  PetscCall(PetscOptionsInt("-solver_newton_smoothing_raises",
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_smoothing_raises",
                             "Smoothing Newton: stalls of a solve that raise eps a hundredfold instead of ending the phase", "",
                             nt->smooth_raises, &nt->smooth_raises, NULL));
-  PetscCall(PetscOptionsInt("-solver_newton_max_sweeps", "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol",
-                            "", nt->max_sweeps, &nt->max_sweeps, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_max_sweeps",
+                            "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol", "", nt->max_sweeps,
+                            &nt->max_sweeps, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(nt->alpha > 0 && PetscIsNormalReal(nt->alpha), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_prox_alpha %g must be positive",
              (double)nt->alpha);
@@ -669,6 +673,7 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   s->needs_H = (PetscBool)(nt->prox == NEWTON_PROX_KERNEL); /* the kernel projector factors H_f H_f^T */
   if (nt->prox == NEWTON_PROX_KERNEL && !nt->kernel) {
     PetscCall(KergsKernelCreate(s->comm, &nt->kernel));
+    PetscCall(KergsKernelSetOptionsPrefix(nt->kernel, s->prefix));
     PetscCall(KergsKernelSetFromOptions(nt->kernel)); /* -kernel_solver and the like */
     PetscCall(KergsKernelSetActiveOnly(nt->kernel, PETSC_TRUE));
   }

@@ -246,12 +246,14 @@ PetscErrorCode NewtonPresortApplies(KergsSolver s, Newton *nt, PetscBool *applie
   KSPType       ktype;
   PCType        ptype;
   MatSolverType stype;
+  const char   *prefix;
   PetscBool     preonly, lu, petsc, chosen;
 
   PetscFunctionBeginUser;
   *applies = PETSC_FALSE;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
-  PetscCall(PetscOptionsHasName(NULL, "solver_", "-pc_factor_mat_ordering_type", &chosen));
+  PetscCall(KSPGetOptionsPrefix(nt->ksp, &prefix));
+  PetscCall(PetscOptionsHasName(NULL, prefix, "-pc_factor_mat_ordering_type", &chosen));
   if (size > 1 || nt->user_pc || chosen || nt->prox == NEWTON_PROX_KERNEL) PetscFunctionReturn(0); /* J_P's MatMult uses J */
   PetscCall(KSPGetType(nt->ksp, &ktype));
   PetscCall(KSPGetPC(nt->ksp, &pc));
@@ -517,11 +519,13 @@ PetscErrorCode NewtonSolveDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBo
 
 /* GMRES on the unpreconditioned residual, preconditioned on the right by ksp's factorization as it stands
    (ApplyStaleFactor); a failed solve is not an error. */
-static PetscErrorCode CreateFactorPreconditionedGMRES(KergsSolver s, Newton *nt, const char *prefix, const char *name, KSP *ksp)
+static PetscErrorCode CreateFactorPreconditionedGMRES(KergsSolver s, Newton *nt, const char *inner, const char *name, KSP *ksp)
 {
-  PC pc;
+  PC   pc;
+  char prefix[256];
 
   PetscFunctionBeginUser;
+  PetscCall(KergsSolverInnerPrefix(s, inner, prefix, sizeof(prefix)));
   PetscCall(KSPCreate(s->comm, ksp));
   PetscCall(KSPSetOptionsPrefix(*ksp, prefix));
   PetscCall(KSPSetType(*ksp, KSPGMRES));
@@ -544,11 +548,13 @@ PetscErrorCode NewtonCreateLinearSolver(KergsSolver s, Newton *nt)
 {
   PC          pc;
   PetscMPIInt size;
+  char        prefix[256];
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCall(KergsSolverInnerPrefix(s, "solver_", prefix, sizeof(prefix)));
   PetscCall(KSPCreate(s->comm, &nt->ksp));
-  PetscCall(KSPSetOptionsPrefix(nt->ksp, "solver_"));
+  PetscCall(KSPSetOptionsPrefix(nt->ksp, prefix));
   PetscCall(KSPSetType(nt->ksp, KSPPREONLY));
   PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(PCSetType(pc, PCLU));

@@ -19,8 +19,8 @@ static PetscErrorCode SolverSetFromOptions_NLKerGS(PetscOptionItems *PetscOption
 
   PetscFunctionBeginUser;
   PetscOptionsHeadBegin(PetscOptionsObject, "NLKerGS-P on a stored W~ (verification)");
-  PetscCall(PetscOptionsInt("-solver_nlkergs_max_size", "Largest number of contact components for which W~ is stored densely", "",
-                            nk->max_size, &nk->max_size, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_nlkergs_max_size",
+                            "Largest number of contact components for which W~ is stored densely", "", nk->max_size, &nk->max_size, NULL));
   PetscCall(KergsRegularisedSetFromOptions(PetscOptionsObject, s, nk->reg));
   PetscFunctionReturn(0);
 }

@@ -20,13 +20,16 @@ PetscErrorCode KergsRegularisedSetFromOptions(PetscOptionItems *PetscOptionsObje
                              reg->omega_fixed, &reg->omega_fixed, NULL));
   PetscCall(PetscOptionsReal("-solver_omega_factor", "Automatic omega as this fraction of ||W||_2 (the paper: 1/20)", "", reg->omega_factor,
                              &reg->omega_factor, NULL));
-  PetscCall(PetscOptionsInt("-solver_omega_power_its", "Power iterations estimating ||W||_2", "", reg->power_its, &reg->power_its, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_omega_power_its", "Power iterations estimating ||W||_2", "", reg->power_its,
+                            &reg->power_its, NULL));
   PetscCheck(reg->omega_fixed >= 0 && PetscIsNormalReal(reg->omega_fixed + 1), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_omega %g must be a finite number >= 0", (double)reg->omega_fixed);
   PetscCheck(reg->omega_factor > 0 && PetscIsNormalReal(reg->omega_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_omega_factor %g must be positive", (double)reg->omega_factor);
   PetscCheck(reg->power_its >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_omega_power_its %" PetscInt_FMT " must be at least 1",
              reg->power_its);
+  PetscCall(KergsKernelSetOptionsPrefix(reg->kernel, s->prefix));
+  PetscCall(KergsPredictorSetOptionsPrefix(reg->predictor, s->prefix));
   PetscCall(KergsKernelSetFromOptions(reg->kernel));
   PetscCall(KergsPredictorSetFromOptions(reg->predictor));
   PetscFunctionReturn(0);
@@ -133,13 +136,11 @@ PetscErrorCode KergsRegularisedStats(KergsRegularised *reg, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "factor_seconds", k.factor_seconds));
   PetscCall(KergsSolveStatsAdd(st, "diag_seconds", k.diag_seconds));
   PetscCall(KergsSolveStatsAdd(st, "predict_seconds", reg->predict_seconds));
+  PetscCall(KergsSolveStatsAdd(st, "kernel_check_error", k.check_error));
   if (k.check_failed) {
-    st->failed    = PETSC_TRUE;
-    st->converged = PETSC_FALSE;
-    PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
-                            "the kernel projector (%s) misses ker H_f: |H_f P x| / |H_f x| = %g > -kernel_check_tol %g; try another "
-                            "-kernel_null_pivot_tol",
-                            k.package, (double)k.check_error, (double)k.check_tol));
+    st->reason = KERGS_SOLVER_DIVERGED_KERNEL;
+    PetscCall(PetscInfo(NULL, "the kernel projector (%s) misses ker H_f: |H_f P x| / |H_f x| = %g > -kernel_check_tol %g\n", k.package,
+                        (double)k.check_error, (double)k.check_tol));
   }
   PetscFunctionReturn(0);
 }

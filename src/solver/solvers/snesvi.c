@@ -214,10 +214,12 @@ static PetscErrorCode ConfigureLinearSolver(KergsSolver s, SNES snes)
 static PetscErrorCode CreateSNES(KergsSolver s, SnesVI *vi)
 {
   PetscBool vitype, rsls, chosen;
+  char      prefix[256];
 
   PetscFunctionBeginUser;
+  PetscCall(KergsSolverInnerPrefix(s, "solver_", prefix, sizeof(prefix)));
   PetscCall(SNESCreate(s->comm, &vi->snes));
-  PetscCall(SNESSetOptionsPrefix(vi->snes, "solver_"));
+  PetscCall(SNESSetOptionsPrefix(vi->snes, prefix));
   PetscCall(SNESSetType(vi->snes, SNESVINEWTONRSLS));
   PetscCall(ConfigureLinearSolver(s, vi->snes));
   PetscCall(SNESSetMaxLinearSolveFailures(vi->snes, PETSC_MAX_INT));
@@ -226,7 +228,7 @@ static PetscErrorCode CreateSNES(KergsSolver s, SnesVI *vi)
   PetscCall(PetscObjectTypeCompareAny((PetscObject)vi->snes, &vitype, SNESVINEWTONRSLS, SNESVINEWTONSSLS, ""));
   PetscCheck(vitype, s->comm, PETSC_ERR_ARG_WRONG, "-solver_snes_type must be vinewtonrsls or vinewtonssls for -solver_type snesvi");
   PetscCall(PetscObjectTypeCompare((PetscObject)vi->snes, SNESVINEWTONRSLS, &rsls));
-  PetscCall(PetscOptionsHasName(NULL, "solver_", "-snes_linesearch_type", &chosen));
+  PetscCall(PetscOptionsHasName(NULL, prefix, "-snes_linesearch_type", &chosen));
   if (rsls && !chosen) {
     SNESLineSearch ls;
     PetscCall(SNESGetLineSearch(vi->snes, &ls));
@@ -401,9 +403,10 @@ static PetscErrorCode SolverSolve_SnesVI(KergsSolver s, KergsScene scene, KergsC
                           SNESConvergedReasons[vi->reason], (double)vi->res));
     }
   }
-  stats->iterations    = vi->its;
-  stats->criterion     = vi->res;
-  stats->criterion_met = (PetscBool)(vi->res <= s->tol);
+  stats->iterations = vi->its;
+  stats->criterion  = vi->res;
+  stats->reason     = KERGS_SOLVER_DIVERGED_MAX_IT;
+  if (vi->res <= s->tol) PetscCall(KergsSolverCriterionMet(s, stats));
   PetscCall(DestroyStepObjects(vi));
   vi->r = vi->v = vi->vd = NULL;
   PetscCall(PetscTime(&t1));

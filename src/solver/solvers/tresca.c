@@ -79,9 +79,12 @@ static PetscErrorCode DestroyStepObjects(Tresca *tr)
    solver_tresca_, so that any -solver_tresca_tao_* option applies. */
 static PetscErrorCode CreateTao(KergsSolver s, Tresca *tr)
 {
+  char prefix[256];
+
   PetscFunctionBeginUser;
+  PetscCall(KergsSolverInnerPrefix(s, "solver_tresca_", prefix, sizeof(prefix)));
   PetscCall(TaoCreate(s->comm, &tr->tao));
-  PetscCall(TaoSetOptionsPrefix(tr->tao, "solver_tresca_"));
+  PetscCall(TaoSetOptionsPrefix(tr->tao, prefix));
   PetscCall(TaoSetType(tr->tao, tr->taotype));
   /* the types' own caps (TRON 50, BQPIP 100, GPCG 500) leave a frictionless problem, one QP, unsolved on confine500;
      -solver_tresca_tao_max_it overrides */
@@ -277,9 +280,10 @@ static PetscErrorCode SolverSolve_Tresca(KergsSolver s, KergsScene scene, KergsC
     PetscCall(PetscInfo(NULL, "tresca: outer %" PetscInt_FMT ": natural residual %g -> %g, %" PetscInt_FMT " TAO iterations so far\n",
                         tr->outer, (double)before, (double)res.natural, tr->tao_its));
   }
-  stats->iterations    = tr->outer;
-  stats->criterion     = res.natural;
-  stats->criterion_met = (PetscBool)(res.natural <= s->tol || nglobal == 0);
+  stats->iterations = tr->outer;
+  stats->criterion  = res.natural;
+  stats->reason     = nglobal == 0 ? KERGS_SOLVER_CONVERGED_NO_CONTACTS : KERGS_SOLVER_DIVERGED_MAX_IT;
+  if (res.natural <= s->tol) PetscCall(KergsSolverCriterionMet(s, stats));
   PetscCall(PetscTime(&t1));
   stats->sweep_seconds = t1 - t0;
   PetscFunctionReturn(0);
