@@ -26,6 +26,7 @@ from checks import check, failures
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
+STRAIGHT = os.path.join(ROOT, "cases", "confine5_straight.opts")
 CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
 BOUND_FACTOR = 2.0  # interpenetration <= BOUND_FACTOR * max relative speed * dt + OVERLAP_FLOOR * smallest radius
 OVERLAP_FLOOR = 0.05  # the default -initial_overlap_tol: what kergs accepts in a packing
@@ -99,6 +100,15 @@ CASES = {
                              r"the contact solver failed in step 1: DIVERGED_KERNEL, the kernel projector misses ker H_f"),
     "kernel_check_nlkergs": ("watch", 1, ["-options_file", CONFINE5, "-solver_type", "nlkergs", "-kernel_check_tol", 1e-300], 5,
                              r"the contact solver failed in step 1: DIVERGED_KERNEL, the kernel projector misses ker H_f"),
+    # the straight row cannot shorten: newton's step 1 is proved infeasible, the run stops there with status 5, naming
+    # the grains and walls of the network, and keeps nothing of the step (no row of statistics)
+    "infeasible_newton": ("watch", 2, ["-options_file", STRAIGHT, "-solver_type", "newton"], 5,
+                          r"step 1 has no solution: the 5 grains 0-4 between walls left, right hold a compressive", {"rows": 0}),
+    "infeasible_tresca": ("watch", 1, ["-options_file", STRAIGHT, "-solver_type", "tresca"], 5, r"step 1 has no solution", {"rows": 0}),
+    # -on_infeasible continue applies the runaway impulses; the energy watch, which then leaves out the driven wall's work
+    # (those impulses'), stops the run as a blow-up
+    "infeasible_continue": ("watch", 1, ["-options_file", STRAIGHT, "-solver_type", "newton", "-on_infeasible", "continue"], 2,
+                            r"blow-up in step 1: the kinetic energy", {"rows": 1}),
     "outside_box": ("watch", 1, ["-options_file", CONFINE500, "-box", "0,0,0.4,1.2"], 1,
                     r"starts outside the container: its centre is behind wall box_right"),
     # -- time steps from 1e-7 to 1e-1 of the characteristic time ----------------------------------------------------
@@ -258,8 +268,12 @@ def run_case(k, name, row):
                       f"{name}: {'some' if expect['not_converged'] else 'no'} step reported not converged (got {nnot})")
         else:
             with h5py.File(out, "r") as f:
-                check(f.attrs.get("end") is not None and len(f["snapshots"]) >= 2,
+                # the initial snapshot and the last one (the same when the run stopped in its first step)
+                check(f.attrs.get("end") is not None and len(f["snapshots"]) >= (1 if expect.get("rows") == 0 else 2),
                       f"{name}: the results file is closed with its end and last snapshot ({f.attrs.get('end')})")
+                if "rows" in expect:
+                    rows = len(f["stats/step"][()]) if "stats/step" in f else 0
+                    check(rows == expect["rows"], f"{name}: {expect['rows']} row(s) of statistics (got {rows})")
 
 
 SCRIPTED = {"column": test_column}

@@ -112,6 +112,9 @@ PETSC_EXTERN PetscErrorCode KergsSolverSetStepNumber(KergsSolver, PetscInt);
 
 /* Accessors. */
 PETSC_EXTERN PetscErrorCode KergsSolverGetType(KergsSolver, KergsSolverType *);
+/* After a solve that ended DIVERGED_INFEASIBLE: per local contact, its weight (0 to 1) in the compressive
+   self-equilibrated network that proves the step has no solution; NULL otherwise. Valid until the next solve. */
+PETSC_EXTERN PetscErrorCode KergsSolverGetInfeasibleNetwork(KergsSolver, const PetscReal **weights);
 /* Per local contact, whether it was active in the last solve (valid until the next solve) */
 PETSC_EXTERN PetscErrorCode KergsSolverGetActive(KergsSolver, const PetscBool **active);
 /* Whether the type reads H_f and H_g during its solve (the kernel projector of the regularised types and of newton's

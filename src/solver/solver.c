@@ -83,13 +83,14 @@ PetscErrorCode KergsSolverCreate(MPI_Comm comm, KergsSolver *solver)
   PetscFunctionBeginUser;
   PetscCall(SolverRegisterAll());
   PetscCall(PetscNew(&s));
-  s->comm         = comm;
-  s->max_it       = 150; /* the paper's cap */
-  s->tol          = 1e-4;
-  s->residual_tol = 5e-2;
-  s->velocity_tol = 1e-2;
-  s->shifted_id   = -1; /* no v^d holds gap offsets yet */
-  s->criterion    = KERGS_CRITERION_QUAD;
+  s->comm             = comm;
+  s->max_it           = 150; /* the paper's cap */
+  s->tol              = 1e-4;
+  s->residual_tol     = 5e-2;
+  s->infeasible_ratio = 1e4;
+  s->velocity_tol     = 1e-2;
+  s->shifted_id       = -1; /* no v^d holds gap offsets yet */
+  s->criterion        = KERGS_CRITERION_QUAD;
   PetscCall(KergsSweepCreate(comm, &s->sweep));
   *solver = s;
   PetscFunctionReturn(0);
@@ -141,6 +142,11 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
                              "Convergence criterion: quad (W-weighted relative change of r, LMGC90 Quad), maxm (largest change over mean, "
                              "LMGC90 Maxm), natural (natural-map residual, Siconos)",
                              "", KergsCriteria, (PetscEnum)s->criterion, (PetscEnum *)&s->criterion, NULL));
+  PetscCall(PetscOptionsReal("-solver_infeasible_ratio",
+                             "A failed step is infeasible when any solution would need impulses this many times the problem's scale "
+                             "(sqrt(active contacts) times its largest free velocity over its mean W_nn), proved by a compressive "
+                             "self-equilibrated network that the free velocities close (inf: never)",
+                             "KergsSolverSolve", s->infeasible_ratio, &s->infeasible_ratio, NULL));
   PetscCall(KergsSolverMonitorSetFromOptions(PetscOptionsObject, s));
   PetscCall(PetscViewerDestroy(&s->reason_viewer));
   PetscCall(PetscOptionsViewer("-solver_converged_reason", "Print why each solve stopped (KergsSolverConvergedReason)", "KergsSolverSolve",
@@ -156,6 +162,8 @@ PetscErrorCode KergsSolverSetFromOptions(KergsSolver s)
              (double)s->tol);
   PetscCheck(s->residual_tol > 0 && PetscIsNormalReal(s->residual_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_residual_tol %g must be a positive number", (double)s->residual_tol);
+  PetscCheck(s->infeasible_ratio > 0 && !PetscIsNanReal(s->infeasible_ratio), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_infeasible_ratio %g must be positive (inf: never infeasible)", (double)s->infeasible_ratio);
   PetscCheck(s->velocity_tol > 0 && PetscIsNormalReal(s->velocity_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_velocity_tol %g must be a positive number", (double)s->velocity_tol);
   PetscFunctionReturn(0);
@@ -294,6 +302,102 @@ static PetscErrorCode DecideConvergence(KergsSolver s, KergsOperators ops, Kergs
   PetscFunctionReturn(0);
 }
 
+/* A Farkas certificate of infeasibility from the impulses of a failed solve. On a problem without a solution every
+   type's impulses run away along a compressive self-equilibrated network: w >= 0 on the normal components of the
+   active contacts with W w ~ 0 that the free velocities close, q = w . v^d_n < 0. For any solution r (u = W r + v^d,
+   u_n >= 0) 0 <= w . u = (W w) . r + q, so that |r|_2 >= -q / |W w|_2: no solution has impulses below that bound,
+   whatever the friction. The step is infeasible when the bound exceeds -solver_infeasible_ratio times the problem's
+   impulse scale: sqrt(active contacts) times the impulse that stops its fastest contact (largest free velocity over
+   the mean W_nn), the size of |r|_2 when every contact carries that impulse. Measured on confine5_straight's first
+   steps: 1.5e4 to 1e6 times for newton, tresca and snesvi; capped NLGS leaves too little evidence (2 to 1,100 times:
+   DIVERGED_MAX_IT); feasible steps that capped NLGS fails on, confine500's: at most 0.3. The weights of w, largest 1,
+   are kept per local contact in s->infeasible (KergsSolverGetInfeasibleNetwork). */
+static PetscErrorCode DetectInfeasible(KergsSolver s, KergsOperators ops, KergsSolveStats *stats)
+{
+  const PetscScalar *r, *vd, *g;
+  PetscScalar       *w;
+  KergsDofLayout     layout;
+  PetscReal          loc[5] = {0, 0, 0, 0, 0}, glob[5]; /* max w, q, |W w|^2, max |v^d_n|, sum W_nn */
+  PetscReal          wmax, rnorm, bound, scale;
+  PetscInt           n, nc, nactive;
+  Vec                rv, vdv, wv, gv;
+  Mat                W;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &rv, NULL, &vdv));
+  PetscCall(KergsOperatorsGetW(ops, &W, NULL));
+  PetscCall(VecGetLocalSize(rv, &n));
+  nc = layout.ncomp;
+  n /= nc;
+  PetscCall(VecDuplicate(rv, &wv));
+  PetscCall(VecDuplicate(rv, &gv));
+  PetscCall(VecGetArrayRead(rv, &r));
+  PetscCall(VecGetArray(wv, &w));
+  for (PetscInt a = 0; a < n; a++) {
+    for (PetscInt c = 0; c < nc; c++) w[a * nc + c] = 0.0;
+    if (s->active[a]) w[a * nc] = PetscMax(PetscRealPart(r[a * nc]), 0.0);
+    loc[0] = PetscMax(loc[0], PetscRealPart(w[a * nc]));
+    loc[1] += PetscSqr(PetscRealPart(w[a * nc]));
+  }
+  PetscCall(VecRestoreArrayRead(rv, &r));
+  PetscCall(VecRestoreArray(wv, &w));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &loc[0], 1, MPIU_REAL, MPIU_MAX, s->comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &loc[1], 1, MPIU_REAL, MPIU_SUM, s->comm));
+  wmax  = loc[0];
+  rnorm = PetscSqrtReal(loc[1]);
+  PetscCall(PetscFree(s->infeasible));
+  if (!(wmax > 0 && PetscIsNormalReal(wmax))) {
+    PetscCall(VecDestroy(&wv));
+    PetscCall(VecDestroy(&gv));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(VecScale(wv, 1.0 / wmax));
+  PetscCall(MatMult(W, wv, gv));
+  {
+    PetscReal *diag;
+    PetscCall(PetscMalloc1(n * nc * nc, &diag));
+    PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, diag));
+    PetscCall(VecGetArrayRead(wv, (const PetscScalar **)&w));
+    PetscCall(VecGetArrayRead(gv, &g));
+    PetscCall(VecGetArrayRead(vdv, &vd));
+    nactive = 0;
+    loc[1] = loc[2] = loc[3] = loc[4] = 0.0;
+    for (PetscInt a = 0; a < n; a++) {
+      if (!s->active[a]) continue;
+      nactive++;
+      loc[1] += PetscRealPart(w[a * nc]) * PetscRealPart(vd[a * nc]);
+      for (PetscInt c = 0; c < nc; c++) loc[2] += PetscSqr(PetscRealPart(g[a * nc + c]));
+      loc[3] = PetscMax(loc[3], PetscAbsReal(PetscRealPart(vd[a * nc])));
+      loc[4] += diag[a * nc * nc]; /* W_nn */
+    }
+    PetscCall(VecRestoreArrayRead(vdv, &vd));
+    PetscCall(VecRestoreArrayRead(gv, &g));
+    PetscCall(VecRestoreArrayRead(wv, (const PetscScalar **)&w));
+    PetscCall(PetscFree(diag));
+  }
+  glob[0] = (PetscReal)nactive;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &glob[0], 1, MPIU_REAL, MPIU_SUM, s->comm));
+  PetscCall(MPIU_Allreduce(&loc[1], &glob[1], 2, MPIU_REAL, MPIU_SUM, s->comm));
+  PetscCall(MPIU_Allreduce(&loc[3], &glob[3], 1, MPIU_REAL, MPIU_MAX, s->comm));
+  PetscCall(MPIU_Allreduce(&loc[4], &glob[4], 1, MPIU_REAL, MPIU_SUM, s->comm));
+  scale = glob[4] > 0 ? glob[3] / (glob[4] / glob[0]) * PetscSqrtReal(glob[0]) : 0.0;
+  bound = glob[1] < 0 ? (glob[2] > 0 ? -glob[1] / PetscSqrtReal(glob[2]) : PETSC_INFINITY) : 0.0;
+  PetscCall(PetscInfo(NULL, "infeasibility test: w . v^d_n %g, |W w| %g, impulse bound %g, impulse scale %g, |r_n| %g\n", (double)glob[1],
+                      (double)PetscSqrtReal(glob[2]), (double)bound, (double)scale, (double)rnorm));
+  PetscCall(KergsSolveStatsAdd(stats, "infeasible_impulse_ratio", scale > 0 ? bound / scale : 0.0));
+  if (scale > 0 && bound > s->infeasible_ratio * scale) {
+    stats->reason = KERGS_SOLVER_DIVERGED_INFEASIBLE;
+    PetscCall(PetscMalloc1(n, &s->infeasible));
+    PetscCall(VecGetArrayRead(wv, (const PetscScalar **)&w));
+    for (PetscInt a = 0; a < n; a++) s->infeasible[a] = PetscRealPart(w[a * nc]);
+    PetscCall(VecRestoreArrayRead(wv, (const PetscScalar **)&w));
+  }
+  PetscCall(VecDestroy(&wv));
+  PetscCall(VecDestroy(&gv));
+  PetscFunctionReturn(0);
+}
+
 /* -solver_converged_reason: one line per solve, as -ksp_converged_reason */
 static PetscErrorCode ConvergedReasonView(KergsSolver s, const KergsSolveStats *stats)
 {
@@ -363,6 +467,8 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   if (s->ops.setup) PetscCall((*s->ops.setup)(s, scene, contacts, ops));
   PetscCall((*s->ops.solve)(s, scene, contacts, ops, stats));
   PetscCall(DecideConvergence(s, ops, stats));
+  PetscCall(PetscFree(s->infeasible));
+  if (stats->reason < 0 && stats->reason != KERGS_SOLVER_DIVERGED_NANORINF) PetscCall(DetectInfeasible(s, ops, stats));
   PetscCall(KergsSolverMonitorFlush(s, stats->residual));
   PetscCall(RecordLawWork(s, ops, stats));
   if (s->ops.stats) PetscCall((*s->ops.stats)(s, stats));
@@ -446,6 +552,7 @@ PetscErrorCode KergsSolverDestroy(KergsSolver *s)
   if ((*s)->ops.destroy) PetscCall((*(*s)->ops.destroy)(*s));
   PetscCall(KergsSolverMonitorCancel(*s));
   PetscCall(PetscViewerDestroy(&(*s)->reason_viewer));
+  PetscCall(PetscFree((*s)->infeasible));
   PetscCall(PetscFree((*s)->prefix));
   PetscCall(KergsSweepDestroy(&(*s)->sweep));
   PetscCall(PetscFree3((*s)->mu, (*s)->active, (*s)->gapvel));
@@ -499,6 +606,13 @@ PetscErrorCode KergsSolverGetType(KergsSolver s, KergsSolverType *type)
 {
   PetscFunctionBeginUser;
   *type = s->type;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverGetInfeasibleNetwork(KergsSolver s, const PetscReal **weights)
+{
+  PetscFunctionBeginUser;
+  *weights = s->infeasible;
   PetscFunctionReturn(0);
 }
 

@@ -201,12 +201,19 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(PetscTime(&t2));
   PetscCall(KergsSolverSetStepNumber(st->solver, step + 1)); /* numbered as the step lines, for -solver_monitor */
   PetscCall(KergsSolverSolve(st->solver, sc, st->contacts, st->ops, &ss));
-  PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
   if (step + 1 == st->fclib_step) { /* the step that the line "step N" reports: N = step + 1 */
     const PetscBool *active;
     PetscCall(KergsSolverGetActive(st->solver, &active));
     PetscCall(KergsFCLibExport(sc, st->contacts, st->ops, active, st->fclib_path));
   }
+  if (ss.reason == KERGS_SOLVER_DIVERGED_INFEASIBLE && !st->on_infeasible_continue) {
+    /* no answer to apply: the state, the contacts' impulses and the results stay those of the previous step */
+    PetscCall(KergsStepperReportInfeasible(st, step + 1));
+    PetscCall(KergsOperatorsReleaseW(st->ops));
+    PetscCall(KergsOperatorsReleaseH(st->ops));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
   PetscCall(PetscLogEventBegin(KERGS_Update, 0, 0, 0, 0));
   if (!keepH) {
     PetscCall(KergsOperatorsReleaseW(st->ops));
@@ -214,7 +221,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   }
   PetscCall(SaveVelocities(sc, &vold, &wold, &wvold));
   PetscCall(KergsOperatorsUpdateVelocities(st->ops, sc));
-  PetscCall(KergsStepperExternalWork(st, vold, wvold, &st->work));
+  PetscCall(KergsStepperExternalWork(st, vold, wvold, &st->work, &st->driven_work));
   if (!keepH) PetscCall(KergsOperatorsReleaseH(st->ops));
   PetscCall(KergsSceneAdvance(sc, vold, wold, wvold));
   PetscCall(PetscFree3(vold, wold, wvold));

@@ -22,6 +22,15 @@ PetscErrorCode KergsStepperWatchOptions(KergsStepper st)
                              "", st->divergence_tol, &st->divergence_tol, NULL));
   PetscCall(PetscOptionsInt("-solver_divergence_steps", "Diverged steps in a row that stop the run with status 5", "", st->divergence_steps,
                             &st->divergence_steps, NULL));
+  {
+    static const char *const actions[] = {"stop", "continue"};
+    PetscInt                 action    = st->on_infeasible_continue ? 1 : 0;
+    PetscCall(PetscOptionsEList("-on_infeasible",
+                                "A step the solver proves has no solution (DIVERGED_INFEASIBLE): stop (status 5, results kept to the "
+                                "previous step) or continue (its answer applied, the step recorded as not converged)",
+                                "", actions, 2, actions[action], &action, NULL));
+    st->on_infeasible_continue = (PetscBool)(action == 1);
+  }
   PetscOptionsEnd();
   PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-solver_divergence_steps"));
   PetscCheck(st->blowup_overlap >= 0 && !PetscIsInfOrNanReal(st->blowup_overlap), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -129,12 +138,13 @@ PetscErrorCode KergsStepperEnergy(KergsStepper st, PetscReal *ek, PetscReal *vma
 /* The work done on the bodies during the step, after the velocity update (V+ in place, V- given): gravity on the
    disks, dt g.(theta v+ + (1 - theta) v-) m; the driven walls' impulses times their velocities; the free walls'
    applied forces times their displacements. Collective. */
-PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[], const PetscReal wvold[], PetscReal *work)
+PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[], const PetscReal wvold[], PetscReal *work,
+                                        PetscReal *driven_work)
 {
   KergsDisks       D;
   const KergsWall *walls;
   KergsContact    *c;
-  PetscReal        g[KERGS_DIM], dt, theta, wk = 0;
+  PetscReal        g[KERGS_DIM], dt, theta, wk[2] = {0, 0}, sums[2]; /* all, driven walls */
   PetscInt         nwalls, n;
   PetscBool        frictional;
   PetscMPIInt      rank;
@@ -149,20 +159,23 @@ PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[],
   PetscCall(KergsContactsGetLocal(st->contacts, &n, &c));
   for (PetscInt i = 0; i < D.nowned; i++)
     for (PetscInt d = 0; d < KERGS_DIM; d++)
-      wk += dt * D.mass[i] * g[d] * (theta * D.v[KERGS_DIM * i + d] + (1 - theta) * vold[KERGS_DIM * i + d]);
+      wk[0] += dt * D.mass[i] * g[d] * (theta * D.v[KERGS_DIM * i + d] + (1 - theta) * vold[KERGS_DIM * i + d]);
   for (PetscInt k = 0; k < n; k++) {
     const KergsWall *w;
     if (c[k].kind != KERGS_CONTACT_DISK_WALL) continue;
     w = &walls[c[k].b];
     if (w->kind != KERGS_WALL_DRIVEN) continue;
-    for (PetscInt d = 0; d < KERGS_DIM; d++) wk += (c[k].r[0] * c[k].n[d] + (frictional ? c[k].r[1] * c[k].t[d] : 0.0)) * w->v[d];
+    for (PetscInt d = 0; d < KERGS_DIM; d++) wk[1] += (c[k].r[0] * c[k].n[d] + (frictional ? c[k].r[1] * c[k].t[d] : 0.0)) * w->v[d];
   }
   if (rank == 0) /* the walls are replicated: counted once */
     for (PetscInt w = 0; w < nwalls; w++)
       if (walls[w].kind == KERGS_WALL_FREE)
         for (PetscInt d = 0; d < KERGS_DIM; d++)
-          wk += dt * walls[w].force[d] * (theta * walls[w].v[d] + (1 - theta) * wvold[KERGS_DIM * w + d]);
-  PetscCall(MPIU_Allreduce(&wk, work, 1, MPIU_REAL, MPIU_SUM, st->comm));
+          wk[0] += dt * walls[w].force[d] * (theta * walls[w].v[d] + (1 - theta) * wvold[KERGS_DIM * w + d]);
+  wk[0] += wk[1];
+  PetscCall(MPIU_Allreduce(wk, sums, 2, MPIU_REAL, MPIU_SUM, st->comm));
+  *work        = sums[0];
+  *driven_work = sums[1];
   PetscFunctionReturn(0);
 }
 
@@ -222,7 +235,12 @@ static PetscErrorCode WatchStep(KergsStepper st, const KergsSolveStats *ss)
   /* the energy at the start plus the work done: what the kinetic energy at the end can be, if no contact created
      energy (contacts of the law dissipate or keep it); the floor, the scene's own energy scale, keeps rounding at rest
      from counting */
-  explained = st->ek_start + PetscAbsReal(st->work) + st->energy_floor;
+  /* a driven wall's work is that of the contact impulses on it: on a step proved infeasible (applied under
+     -on_infeasible continue) they are the solver's runaway impulses, and would explain anything. Other steps that did
+     not converge keep it: capped NLGS's bounded impulses on confine500 push the grains as the wall does, and without
+     the wall's work its first step would count as a blow-up (measured) */
+  explained = st->ek_start + PetscAbsReal(ss->reason == KERGS_SOLVER_DIVERGED_INFEASIBLE ? st->work - st->driven_work : st->work) +
+              st->energy_floor;
   if (st->blowup_energy > 0 && st->ek_end > st->blowup_energy * explained) {
     PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
                             "blow-up in step %" PetscInt_FMT
@@ -282,5 +300,98 @@ PetscErrorCode KergsStepperWatch(KergsStepper st, const KergsSolveStats *ss)
   PetscCall(PetscLogEventBegin(KERGS_Watch, 0, 0, 0, 0));
   PetscCall(WatchStep(st, ss));
   PetscCall(PetscLogEventEnd(KERGS_Watch, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* The grains (by id, sorted, without repeats) and walls of the contacts of weight at least 1 % in the certificate's
+   network, over all ranks. ids (PetscFree) holds *nids grain ids; wall_in[w] says whether wall w takes part. */
+static PetscErrorCode InfeasibleNetwork(KergsStepper st, const PetscReal weights[], PetscInt *nids, PetscInt **ids, PetscBool wall_in[])
+{
+  KergsDisks    D;
+  KergsContact *c;
+  PetscInt      n, nwalls, nlocal = 0, *local, *walls_in;
+  PetscMPIInt   size, *counts, *displs, total;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(st->scene, &D));
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, NULL));
+  PetscCall(KergsContactsGetLocal(st->contacts, &n, &c));
+  PetscCallMPI(MPI_Comm_size(st->comm, &size));
+  PetscCall(PetscMalloc1(2 * n + 1, &local));
+  PetscCall(PetscCalloc1(nwalls + 1, &walls_in));
+  for (PetscInt k = 0; k < n; k++) {
+    if (!(weights[k] >= 0.01)) continue;
+    local[nlocal++] = D.id[c[k].a];
+    if (c[k].kind == KERGS_CONTACT_DISK_DISK)
+      local[nlocal++] = D.id[c[k].b];
+    else
+      walls_in[c[k].b] = 1;
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, walls_in, nwalls, MPIU_INT, MPI_MAX, st->comm));
+  for (PetscInt w = 0; w < nwalls; w++) wall_in[w] = (PetscBool)(walls_in[w] > 0);
+  PetscCall(PetscSortRemoveDupsInt(&nlocal, local));
+  PetscCall(PetscMalloc2(size, &counts, size + 1, &displs));
+  {
+    PetscMPIInt mine = (PetscMPIInt)nlocal;
+    PetscCallMPI(MPI_Allgather(&mine, 1, MPI_INT, counts, 1, MPI_INT, st->comm));
+  }
+  displs[0] = 0;
+  for (PetscMPIInt q = 0; q < size; q++) displs[q + 1] = displs[q] + counts[q];
+  total = displs[size];
+  PetscCall(PetscMalloc1(total + 1, ids));
+  PetscCallMPI(MPI_Allgatherv(local, (PetscMPIInt)nlocal, MPIU_INT, *ids, counts, displs, MPIU_INT, st->comm));
+  *nids = total;
+  PetscCall(PetscSortRemoveDupsInt(nids, *ids));
+  PetscCall(PetscFree2(counts, displs));
+  PetscCall(PetscFree(local));
+  PetscCall(PetscFree(walls_in));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsStepperReportInfeasible(KergsStepper st, PetscInt step)
+{
+  const PetscReal *weights;
+  const KergsWall *walls;
+  PetscInt         nwalls, nids, *ids;
+  PetscBool       *wall_in;
+  char             grains[160] = "", names[160] = "";
+  size_t           len;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSolverGetInfeasibleNetwork(st->solver, &weights));
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  PetscCall(PetscCalloc1(nwalls + 1, &wall_in));
+  PetscCall(InfeasibleNetwork(st, weights, &nids, &ids, wall_in));
+  /* the grains as ranges of consecutive ids, as many as fit */
+  for (PetscInt i = 0; i < nids;) {
+    PetscInt j = i;
+    while (j + 1 < nids && ids[j + 1] == ids[j] + 1) j++;
+    PetscCall(PetscStrlen(grains, &len));
+    if (len + 40 >= sizeof(grains)) {
+      PetscCall(PetscStrlcat(grains, ", ...", sizeof(grains)));
+      break;
+    }
+    if (j > i)
+      PetscCall(PetscSNPrintf(grains + len, sizeof(grains) - len, "%s%" PetscInt_FMT "-%" PetscInt_FMT, i ? ", " : "", ids[i], ids[j]));
+    else
+      PetscCall(PetscSNPrintf(grains + len, sizeof(grains) - len, "%s%" PetscInt_FMT, i ? ", " : "", ids[i]));
+    i = j + 1;
+  }
+  for (PetscInt w = 0; w < nwalls; w++) {
+    if (!wall_in[w]) continue;
+    PetscCall(PetscStrlen(names, &len));
+    if (len + 40 >= sizeof(names)) break;
+    PetscCall(PetscSNPrintf(names + len, sizeof(names) - len, "%s%s", len ? ", " : "", walls[w].name));
+  }
+  PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
+                          "step %" PetscInt_FMT " has no solution: the %" PetscInt_FMT
+                          " grains %s%s%s hold a compressive self-equilibrated "
+                          "network that the imposed velocities shorten (rigid grains cannot; -on_infeasible continue applies the "
+                          "solver's answer anyway; results kept to step %" PetscInt_FMT ")",
+                          step, nids, grains, names[0] ? " between walls " : "", names, step - 1));
+  st->failure_status = KERGS_EXIT_SOLVER_FAILED;
+  st->failure_kind   = "infeasible step";
+  PetscCall(PetscFree(ids));
+  PetscCall(PetscFree(wall_in));
   PetscFunctionReturn(0);
 }

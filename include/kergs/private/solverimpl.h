@@ -28,8 +28,10 @@ struct _p_KergsSolver {
   void          *data;
   PetscInt       max_it;
   PetscReal      tol;
-  PetscReal      residual_tol; /* -solver_residual_tol: largest natural residual of the original problem of a converged step */
-  PetscReal      velocity_tol; /* -solver_velocity_tol: largest relative velocity error of a converged step */
+  PetscReal      residual_tol;     /* -solver_residual_tol: largest natural residual of the original problem of a converged step */
+  PetscReal      velocity_tol;     /* -solver_velocity_tol: largest relative velocity error of a converged step */
+  PetscReal      infeasible_ratio; /* -solver_infeasible_ratio (DetectInfeasible) */
+  PetscReal     *infeasible;       /* per local contact, the weight of the certificate's network (NULL: none) */
   KergsCriterion criterion;
   PetscBool      fixed_criterion; /* the type decides convergence by the natural residual whatever -solver_criterion */
   const char    *iteration_name;  /* what -solver_max_it counts: "sweeps" or "Newton steps" */

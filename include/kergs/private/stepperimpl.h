@@ -50,19 +50,21 @@ struct _p_KergsStepper {
   PetscReal last_residual, last_max_violation;
   PetscReal last_max_relative; /* the latest step's largest interpenetration over the smaller radius of its pair */
   /* the watch (src/step/watch.c, docs/running.md): blow-ups and solver failures */
-  PetscReal       blowup_overlap;   /* -blowup_overlap: largest interpenetration / smaller radius (0: not checked) */
-  PetscReal       blowup_energy;    /* -blowup_energy: largest kinetic energy over what the work explains (0: not checked) */
-  PetscReal       divergence_tol;   /* -solver_divergence_tol: a natural residual above it is a diverged step (0: never) */
-  PetscInt        divergence_steps; /* -solver_divergence_steps: diverged steps in a row that stop the run */
-  PetscInt        diverged_steps;   /* diverged steps in a row so far */
-  PetscReal       ek_start, ek_end; /* kinetic energy (disks and free walls) at the start and the end of the latest step */
-  PetscReal       work;             /* work of gravity and walls during the latest step */
-  PetscReal       vmax_end;         /* the fastest disk's speed at the end of the latest step */
-  PetscBool       warned_alert;     /* the warning that grains outrun the alert distance was printed */
-  PetscReal       energy_floor;     /* the scene's energy scale times 1e-6: kinetic energies below it are rounding */
-  char            failure[512];     /* what went wrong in the latest step (empty: nothing) */
-  KergsExitStatus failure_status;   /* and the exit status it gives */
-  const char     *failure_kind;     /* in a few words, for the results file's end attribute */
+  PetscReal       blowup_overlap;         /* -blowup_overlap: largest interpenetration / smaller radius (0: not checked) */
+  PetscReal       blowup_energy;          /* -blowup_energy: largest kinetic energy over what the work explains (0: not checked) */
+  PetscReal       divergence_tol;         /* -solver_divergence_tol: a natural residual above it is a diverged step (0: never) */
+  PetscInt        divergence_steps;       /* -solver_divergence_steps: diverged steps in a row that stop the run */
+  PetscInt        diverged_steps;         /* diverged steps in a row so far */
+  PetscReal       ek_start, ek_end;       /* kinetic energy (disks and free walls) at the start and the end of the latest step */
+  PetscReal       work;                   /* work of gravity and walls during the latest step */
+  PetscReal       driven_work;            /* the driven walls' part of it */
+  PetscBool       on_infeasible_continue; /* -on_infeasible continue: apply an infeasible step's answer and go on */
+  PetscReal       vmax_end;               /* the fastest disk's speed at the end of the latest step */
+  PetscBool       warned_alert;           /* the warning that grains outrun the alert distance was printed */
+  PetscReal       energy_floor;           /* the scene's energy scale times 1e-6: kinetic energies below it are rounding */
+  char            failure[512];           /* what went wrong in the latest step (empty: nothing) */
+  KergsExitStatus failure_status;         /* and the exit status it gives */
+  const char     *failure_kind;           /* in a few words, for the results file's end attribute */
 };
 
 /* The statistics of the step just taken, from what each component measured, handed to the results file, and the
@@ -101,7 +103,11 @@ PETSC_INTERN PetscErrorCode KergsStepperWatchOptions(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperFindOutside(KergsStepper, PetscInt *grain, PetscInt *wall);
 PETSC_INTERN PetscErrorCode KergsStepperCheckContainer(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperEnergy(KergsStepper, PetscReal *ek, PetscReal *vmax);
-PETSC_INTERN PetscErrorCode KergsStepperExternalWork(KergsStepper, const PetscReal vold[], const PetscReal wvold[], PetscReal *work);
+PETSC_INTERN PetscErrorCode KergsStepperExternalWork(KergsStepper, const PetscReal vold[], const PetscReal wvold[], PetscReal *work,
+                                                     PetscReal *driven_work);
+/* The message of a step the solver proved infeasible (KergsSolverGetInfeasibleNetwork): the grains and walls of the
+   network, into st->failure with status 5. Collective. */
+PETSC_INTERN PetscErrorCode KergsStepperReportInfeasible(KergsStepper, PetscInt step);
 PETSC_INTERN PetscErrorCode KergsStepperEnergyFloor(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperWatch(KergsStepper, const KergsSolveStats *);
 
