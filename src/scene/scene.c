@@ -122,9 +122,9 @@ PetscErrorCode KergsSceneCreate(MPI_Comm comm, KergsScene *scene)
   s->dt         = 1e-3;
   s->theta      = 1.0;
   s->nsteps     = 100;
-  s->gaprule    = KERGS_GAP_PAPER;
-  s->alert      = -1.0; /* automatic: 0.1 * mean radius once the disks are known */
-  s->ghost_skin = -1.0; /* automatic: the alert distance */
+  s->gaprule    = KERGS_GAP_PREDICTIVE; /* the paper's rule lets a pile at rest fall through its contacts (docs/solver.md) */
+  s->alert      = -1.0;                 /* automatic: 0.1 * mean radius once the disks are known */
+  s->ghost_skin = -1.0;                 /* automatic: the alert distance */
   s->nmaterials = 1;
   PetscCall(PetscMalloc1(1, &s->density));
   PetscCall(PetscCalloc1(1, &s->mu));
@@ -553,7 +553,7 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
   PetscCall(PetscOptionsEnum(
       "-gap_rule",
       "Active contacts: paper (g~ = g- <= 0), lmgc90 (g~ = g- + (1-theta) dt vn- <= 0), predictive (every contact within the "
-      "alert distance, v_n >= -max(g~, 0) / (theta dt): may close during the step, never further)",
+      "alert distance, v_n >= -max(g~, 0) / (theta dt): may close during the step, never further; the default)",
       NULL, KergsGapRules, (PetscEnum)scene->gaprule, (PetscEnum *)&scene->gaprule, NULL));
   PetscCall(PetscOptionsReal(
       "-alert", "Alert distance >= 0: potential contacts have gap < alert (default 0.1 * mean radius, once the disks are known)", NULL,

@@ -175,7 +175,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   KergsSolveStats ss;
   PetscLogDouble  t0, t1, t2;
   PetscReal      *vold, *wold, *wvold;
-  PetscBool       due, keepH, needsH, needsFullW;
+  PetscBool       due, keepH, needsH, needsFullW, stop;
   PetscInt        step;
 
   PetscFunctionBeginUser;
@@ -201,19 +201,21 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscCall(PetscTime(&t2));
   PetscCall(KergsSolverSetStepNumber(st->solver, step + 1)); /* numbered as the step lines, for -solver_monitor */
   PetscCall(KergsSolverSolve(st->solver, sc, st->contacts, st->ops, &ss));
+  stop = (PetscBool)(ss.reason == KERGS_SOLVER_DIVERGED_INFEASIBLE && !st->on_infeasible_continue);
+  /* the contacts keep this step's impulses (the export reads them there), unless the step is not applied */
+  if (!stop || step + 1 == st->fclib_step) PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
   if (step + 1 == st->fclib_step) { /* the step that the line "step N" reports: N = step + 1 */
     const PetscBool *active;
     PetscCall(KergsSolverGetActive(st->solver, &active));
     PetscCall(KergsFCLibExport(sc, st->contacts, st->ops, active, st->fclib_path));
   }
-  if (ss.reason == KERGS_SOLVER_DIVERGED_INFEASIBLE && !st->on_infeasible_continue) {
+  if (stop) {
     /* no answer to apply: the state, the contacts' impulses and the results stay those of the previous step */
     PetscCall(KergsStepperReportInfeasible(st, step + 1));
     PetscCall(KergsOperatorsReleaseW(st->ops));
     PetscCall(KergsOperatorsReleaseH(st->ops));
     PetscFunctionReturn(0);
   }
-  PetscCall(KergsOperatorsSetImpulses(st->ops, st->contacts));
   PetscCall(PetscLogEventBegin(KERGS_Update, 0, 0, 0, 0));
   if (!keepH) {
     PetscCall(KergsOperatorsReleaseW(st->ops));

@@ -165,14 +165,17 @@ PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[],
     if (c[k].kind != KERGS_CONTACT_DISK_WALL) continue;
     w = &walls[c[k].b];
     if (w->kind != KERGS_WALL_DRIVEN) continue;
-    for (PetscInt d = 0; d < KERGS_DIM; d++) wk[1] += (c[k].r[0] * c[k].n[d] + (frictional ? c[k].r[1] * c[k].t[d] : 0.0)) * w->v[d];
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      const PetscReal term = (c[k].r[0] * c[k].n[d] + (frictional ? c[k].r[1] * c[k].t[d] : 0.0)) * w->v[d];
+      wk[0] += term; /* in the order of the sum before the driven part was kept apart: the same bits */
+      wk[1] += term;
+    }
   }
   if (rank == 0) /* the walls are replicated: counted once */
     for (PetscInt w = 0; w < nwalls; w++)
       if (walls[w].kind == KERGS_WALL_FREE)
         for (PetscInt d = 0; d < KERGS_DIM; d++)
           wk[0] += dt * walls[w].force[d] * (theta * walls[w].v[d] + (1 - theta) * wvold[KERGS_DIM * w + d]);
-  wk[0] += wk[1];
   PetscCall(MPIU_Allreduce(wk, sums, 2, MPIU_REAL, MPIU_SUM, st->comm));
   *work        = sums[0];
   *driven_work = sums[1];
