@@ -11,101 +11,6 @@ const char *const KergsGapRules[]  = {"paper", "lmgc90", "predictive", "KergsGap
 #define KERGS_WALL_PREFIX_LEN 128
 
 /* ------------------------------------------------------------------------------------------------ */
-/* Options helpers, shared with src/scene/disks.c                                                  */
-
-/* Number of comma-separated values given to option opt (under the block's prefix), 0 when absent. */
-static PetscErrorCode OptionsCountValues(PetscOptionItems *PetscOptionsObject, const char opt[], PetscInt *count)
-{
-  const char *value;
-  PetscBool   found;
-
-  PetscFunctionBeginUser;
-  *count = 0;
-  PetscCall(PetscOptionsFindPair(PetscOptionsObject->options, PetscOptionsObject->prefix, opt, &value, &found));
-  if (!found || !value || !value[0]) PetscFunctionReturn(0);
-  *count = 1;
-  for (const char *c = value; *c; c++)
-    if (*c == ',') (*count)++;
-  PetscFunctionReturn(0);
-}
-
-/* Read a list of reals of any length into a new array (*values, free with PetscFree; never NULL, since the
-   help printer reads values[0]). *n is the number of values given, 0 when the option is absent. */
-PETSC_INTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
-                                                 PetscReal **values, PetscBool *set)
-{
-  PetscInt  cap;
-  PetscBool flg;
-
-  PetscFunctionBeginUser;
-  PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
-  PetscCall(PetscCalloc1(cap + 1, values));
-  *n = cap + 1;
-  PetscCall(PetscOptionsRealArray(opt, text, NULL, *values, n, &flg));
-  if (!flg) *n = 0;
-  if (set) *set = flg;
-  PetscFunctionReturn(0);
-}
-
-/* Same for integers. */
-PETSC_INTERN PetscErrorCode KergsOptionsIntList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
-                                                PetscInt **values, PetscBool *set)
-{
-  PetscInt  cap;
-  PetscBool flg;
-
-  PetscFunctionBeginUser;
-  PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
-  PetscCall(PetscCalloc1(cap + 1, values));
-  *n = cap + 1;
-  PetscCall(PetscOptionsIntArray(opt, text, NULL, *values, n, &flg));
-  if (!flg) *n = 0;
-  if (set) *set = flg;
-  PetscFunctionReturn(0);
-}
-
-/* Read exactly n reals (a point, a vector, a box); v is left unchanged when the option is absent. */
-PETSC_INTERN PetscErrorCode KergsOptionsReals(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt n,
-                                              PetscReal v[], PetscBool *set)
-{
-  PetscReal *tmp;
-  PetscInt   nread = n, given;
-  PetscBool  flg;
-  char       help[512];
-  size_t     len;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscMalloc1(n, &tmp));
-  PetscCall(PetscArraycpy(tmp, v, n));
-  /* -help prints only the first value of an absent array option: show the whole default in the text */
-  PetscCall(PetscSNPrintf(help, sizeof(help), "%s (default ", text));
-  for (PetscInt k = 0; k < n; k++) {
-    PetscCall(PetscStrlen(help, &len));
-    PetscCall(PetscSNPrintf(help + len, sizeof(help) - len, "%g%s", (double)v[k], k + 1 < n ? "," : ")"));
-  }
-  PetscCall(PetscOptionsRealArray(opt, help, NULL, tmp, &nread, &flg));
-  if (flg) {
-    PetscCall(OptionsCountValues(PetscOptionsObject, opt, &given));
-    PetscCheck(given == n, PetscOptionsObject->comm, PETSC_ERR_ARG_SIZ,
-               "Option -%s%s needs %" PetscInt_FMT " comma-separated values, got %" PetscInt_FMT,
-               PetscOptionsObject->prefix ? PetscOptionsObject->prefix : "", opt + 1, n, given);
-    PetscCall(PetscArraycpy(v, tmp, n));
-  }
-  PetscCall(PetscFree(tmp));
-  if (set) *set = flg;
-  PetscFunctionReturn(0);
-}
-
-/* A point or vector: exactly KERGS_DIM reals. */
-PETSC_INTERN PetscErrorCode KergsOptionsVector(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscReal v[],
-                                               PetscBool *set)
-{
-  PetscFunctionBeginUser;
-  PetscCall(KergsOptionsReals(PetscOptionsObject, opt, text, KERGS_DIM, v, set));
-  PetscFunctionReturn(0);
-}
-
-/* ------------------------------------------------------------------------------------------------ */
 /* Create, destroy, disks                                                                          */
 
 PetscErrorCode KergsSceneCreate(MPI_Comm comm, KergsScene *scene)
@@ -761,9 +666,8 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
 {
   PetscReal box[4] = {0, 0, 1, 1}, alert;
   PetscInt  nnames;
-  PetscBool alert_set = PETSC_FALSE, box_set = PETSC_FALSE, open_top = PETSC_FALSE, names_set, help;
+  PetscBool alert_set = PETSC_FALSE, box_set = PETSC_FALSE, open_top = PETSC_FALSE, help;
   char    **names;
-  PetscInt  cap;
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(scene->comm, NULL, "Scene options", NULL);
@@ -772,16 +676,11 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
   PetscCall(KergsOptionsReals(PetscOptionsObject, "-box",
                               "Box x0,y0,x1,y1: driven walls box_bottom, box_right, box_top, box_left facing inward", 4, box, &box_set));
   PetscCall(PetscOptionsBool("-box_open_top", "Omit the top wall of -box", NULL, open_top, &open_top, NULL));
-  PetscCall(OptionsCountValues(PetscOptionsObject, "-walls", &cap));
-  PetscCall(PetscCalloc1(cap + 1, &names));
-  nnames = cap + 1;
-  PetscCall(PetscOptionsStringArray("-walls", "Names of further walls, each set by -wall_<name>_a, _b, _type, ...", NULL, names, &nnames,
-                                    &names_set));
-  if (!names_set) nnames = 0;
+  PetscCall(KergsOptionsStringList(PetscOptionsObject, "-walls", "Names of further walls, each set by -wall_<name>_a, _b, _type, ...",
+                                   &nnames, &names, NULL));
   PetscOptionsEnd();
   PetscCall(SceneSetWalls(scene, box_set, box, open_top, nnames, names));
-  for (PetscInt k = 0; k < nnames; k++) PetscCall(PetscFree(names[k]));
-  PetscCall(PetscFree(names));
+  PetscCall(PetscStrNArrayDestroy(nnames, &names));
 
   alert = scene->alert;
   PetscCall(KergsSceneDisksSetFromOptions(scene));

@@ -54,10 +54,4 @@ struct _p_KergsScene {
    (src/scene/disks.c). */
 PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene);
 
-/* Options holding lists of numbers, with the number of values checked (src/scene/scene.c). */
-PETSC_INTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscReal **, PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsIntList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscInt **, PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsReals(PetscOptionItems *, const char[], const char[], PetscInt, PetscReal[], PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsVector(PetscOptionItems *, const char[], const char[], PetscReal[], PetscBool *);
-
 #endif
