@@ -21,21 +21,36 @@ static PetscErrorCode OptionsCountValues(PetscOptionItems *PetscOptionsObject, c
   PetscFunctionReturn(0);
 }
 
-/* Read a list of reals of any length into a new array (*values, free with PetscFree; never NULL, since the
-   help printer reads values[0]). *n is the number of values given, 0 when the option is absent. */
-PetscErrorCode KergsOptionsRealList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
-                                    PetscReal **values, PetscBool *set)
+/* Room for a list option: *values (size bytes an entry, zeroed) holds every value given to opt and one more, so that it
+   is never NULL (the help printer reads values[0]); *n its capacity, as PETSc's array readers take it. */
+static PetscErrorCode OptionsListAlloc(PetscOptionItems *PetscOptionsObject, const char opt[], size_t size, void *values, PetscInt *n)
 {
-  PetscInt  cap;
-  PetscBool flg;
+  PetscInt cap;
 
   PetscFunctionBeginUser;
   PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
-  PetscCall(PetscCalloc1(cap + 1, values));
+  PetscCall(PetscCalloc(size * (size_t)(cap + 1), values));
   *n = cap + 1;
-  PetscCall(PetscOptionsRealArray(opt, text, NULL, *values, n, &flg));
-  if (!flg) *n = 0;
-  if (set) *set = flg;
+  PetscFunctionReturn(0);
+}
+
+/* After the read: *n the number of values given, 0 when the option is absent. */
+static void OptionsListRead(PetscBool found, PetscInt *n, PetscBool *set)
+{
+  if (!found) *n = 0;
+  if (set) *set = found;
+}
+
+/* Read a list of reals of any length into a new array (*values, free with PetscFree). */
+PetscErrorCode KergsOptionsRealList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
+                                    PetscReal **values, PetscBool *set)
+{
+  PetscBool found;
+
+  PetscFunctionBeginUser;
+  PetscCall(OptionsListAlloc(PetscOptionsObject, opt, sizeof(**values), values, n));
+  PetscCall(PetscOptionsRealArray(opt, text, NULL, *values, n, &found));
+  OptionsListRead(found, n, set);
   PetscFunctionReturn(0);
 }
 
@@ -43,16 +58,12 @@ PetscErrorCode KergsOptionsRealList(PetscOptionItems *PetscOptionsObject, const 
 PetscErrorCode KergsOptionsIntList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
                                    PetscInt **values, PetscBool *set)
 {
-  PetscInt  cap;
-  PetscBool flg;
+  PetscBool found;
 
   PetscFunctionBeginUser;
-  PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
-  PetscCall(PetscCalloc1(cap + 1, values));
-  *n = cap + 1;
-  PetscCall(PetscOptionsIntArray(opt, text, NULL, *values, n, &flg));
-  if (!flg) *n = 0;
-  if (set) *set = flg;
+  PetscCall(OptionsListAlloc(PetscOptionsObject, opt, sizeof(**values), values, n));
+  PetscCall(PetscOptionsIntArray(opt, text, NULL, *values, n, &found));
+  OptionsListRead(found, n, set);
   PetscFunctionReturn(0);
 }
 
@@ -60,16 +71,12 @@ PetscErrorCode KergsOptionsIntList(PetscOptionItems *PetscOptionsObject, const c
 PetscErrorCode KergsOptionsStringList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
                                       char ***values, PetscBool *set)
 {
-  PetscInt  cap;
-  PetscBool flg;
+  PetscBool found;
 
   PetscFunctionBeginUser;
-  PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
-  PetscCall(PetscCalloc1(cap + 1, values));
-  *n = cap + 1;
-  PetscCall(PetscOptionsStringArray(opt, text, NULL, *values, n, &flg));
-  if (!flg) *n = 0;
-  if (set) *set = flg;
+  PetscCall(OptionsListAlloc(PetscOptionsObject, opt, sizeof(**values), values, n));
+  PetscCall(PetscOptionsStringArray(opt, text, NULL, *values, n, &found));
+  OptionsListRead(found, n, set);
   PetscFunctionReturn(0);
 }
 
