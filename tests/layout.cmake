@@ -1,5 +1,7 @@
-# Rules of the code base that the compiler does not check: the component layout (private headers, io at the end,
-# nothing pointing outside the repository) and the formatting (.clang-format).
-add_test(NAME layout COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/check_layout.sh WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+# Rules of the code base that the compiler does not check: the component layout (private headers, layers that import
+# only downward, by their includes and by the calls between the library's object files; nothing pointing outside the
+# repository) and the formatting (.clang-format).
+add_test(NAME layout COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/check_layout.sh $<TARGET_OBJECTS:kergs> WORKING_DIRECTORY ${CMAKE_SOURCE_DIR}
+         COMMAND_EXPAND_LISTS)
 add_test(NAME format COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/check_format.sh WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(layout format PROPERTIES LABELS "layout" TIMEOUT 60)

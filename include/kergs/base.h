@@ -27,6 +27,20 @@ PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
    share one binary representation. */
 PETSC_EXTERN PetscErrorCode KergsExchangeRecords(MPI_Comm, size_t size, const PetscMPIInt sendcount[], const void *send,
                                                  PetscMPIInt recvcount[], void *recv, PetscInt *nrecv);
+/* Options whose number of values the user decides, read inside an options block (PetscOptionsBegin/End) so that -help
+   lists them (src/base/options.c). A list of any length becomes a new array (*values, never NULL, PetscFree; names:
+   PetscStrNArrayDestroy(*n, values)) and *n the number of values given, 0 when the option is absent. Reals reads
+   exactly n values into v (an error names the option when another number is given; v is left unchanged when the
+   option is absent; -help shows the whole default), Vector KERGS_DIM of them (a point, a velocity, a force). */
+PETSC_EXTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *, const char opt[], const char text[], PetscInt *n, PetscReal **values,
+                                                 PetscBool *set);
+PETSC_EXTERN PetscErrorCode KergsOptionsIntList(PetscOptionItems *, const char opt[], const char text[], PetscInt *n, PetscInt **values,
+                                                PetscBool *set);
+PETSC_EXTERN PetscErrorCode KergsOptionsStringList(PetscOptionItems *, const char opt[], const char text[], PetscInt *n, char ***values,
+                                                   PetscBool *set);
+PETSC_EXTERN PetscErrorCode KergsOptionsReals(PetscOptionItems *, const char opt[], const char text[], PetscInt n, PetscReal v[],
+                                              PetscBool *set);
+PETSC_EXTERN PetscErrorCode KergsOptionsVector(PetscOptionItems *, const char opt[], const char text[], PetscReal v[], PetscBool *set);
 /* Counts and indices are PetscInt, 32-bit in this build: PETSc's options parser wraps a larger value silently
    (-steps 10000000000 becomes 1410065408). Call after the option was read: every comma-separated number given to
    option `name` (under prefix, may be NULL) must fit in PetscInt, otherwise an error on comm names the option and the

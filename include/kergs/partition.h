@@ -22,7 +22,7 @@
    the ranks that own most of their grains already. On one rank nothing is ever renumbered (every type is then the contiguous one).
 
    Measures: the work of a grain is 1 + the work of each of its contacts (disk-disk and disk-wall), 6 for an active
-   contact and 1 for an inactive one (src/partition/partition.c, ContactWork: their costs in a sweep); the work of a
+   contact and 1 for an inactive one (partitionimpl.h, KergsPartitionContactWork: their costs in a sweep); the work of a
    rank is the sum over the grains it owns (-partition_work model, the default). With -partition_work measured the work of a rank is instead
    its time in the sweeps' arithmetic at the last step (messages and reductions excluded), once every rank has timed some, and METIS weighs
    each grain by the model times its rank's time per modelled unit: what the model misses (docs/scaling.md, "Partition work") is balanced at

@@ -1,109 +1,11 @@
-/* kergs scene: bodies, materials, loading programs and numerical settings, read from the options database, and
-   the accessors through which the other components read them. The disks themselves come from src/scene/disks.c
-   (list, lattice, random) and src/scene/sample_read.c (sample file); the distributed state from
-   src/scene/ghosts.c. */
+/* kergs scene: the container of the bodies, materials, loading programs and numerical settings, read from the options
+   database, and the accessors through which the other components read them. The disks themselves come from
+   src/scene/disks.c (list, lattice, random) and src/scene/sample_read.c (sample file); the walls, their options and
+   motion from src/scene/walls.c; the distributed state from src/scene/ghosts.c. */
 #include <kergs/private/sceneimpl.h>
 #include <petscviewer.h>
 
-const char *const KergsWallKinds[] = {"driven", "free", "KergsWallKind", "KERGS_WALL_", NULL};
-const char *const KergsGapRules[]  = {"paper", "lmgc90", "predictive", "KergsGapRule", "KERGS_GAP_", NULL};
-
-#define KERGS_WALL_PREFIX_LEN 128
-
-/* ------------------------------------------------------------------------------------------------ */
-/* Options helpers, shared with src/scene/disks.c                                                  */
-
-/* Number of comma-separated values given to option opt (under the block's prefix), 0 when absent. */
-static PetscErrorCode OptionsCountValues(PetscOptionItems *PetscOptionsObject, const char opt[], PetscInt *count)
-{
-  const char *value;
-  PetscBool   found;
-
-  PetscFunctionBeginUser;
-  *count = 0;
-  PetscCall(PetscOptionsFindPair(PetscOptionsObject->options, PetscOptionsObject->prefix, opt, &value, &found));
-  if (!found || !value || !value[0]) PetscFunctionReturn(0);
-  *count = 1;
-  for (const char *c = value; *c; c++)
-    if (*c == ',') (*count)++;
-  PetscFunctionReturn(0);
-}
-
-/* Read a list of reals of any length into a new array (*values, free with PetscFree; never NULL, since the
-   help printer reads values[0]). *n is the number of values given, 0 when the option is absent. */
-PETSC_INTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
-                                                 PetscReal **values, PetscBool *set)
-{
-  PetscInt  cap;
-  PetscBool flg;
-
-  PetscFunctionBeginUser;
-  PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
-  PetscCall(PetscCalloc1(cap + 1, values));
-  *n = cap + 1;
-  PetscCall(PetscOptionsRealArray(opt, text, NULL, *values, n, &flg));
-  if (!flg) *n = 0;
-  if (set) *set = flg;
-  PetscFunctionReturn(0);
-}
-
-/* Same for integers. */
-PETSC_INTERN PetscErrorCode KergsOptionsIntList(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt *n,
-                                                PetscInt **values, PetscBool *set)
-{
-  PetscInt  cap;
-  PetscBool flg;
-
-  PetscFunctionBeginUser;
-  PetscCall(OptionsCountValues(PetscOptionsObject, opt, &cap));
-  PetscCall(PetscCalloc1(cap + 1, values));
-  *n = cap + 1;
-  PetscCall(PetscOptionsIntArray(opt, text, NULL, *values, n, &flg));
-  if (!flg) *n = 0;
-  if (set) *set = flg;
-  PetscFunctionReturn(0);
-}
-
-/* Read exactly n reals (a point, a vector, a box); v is left unchanged when the option is absent. */
-PETSC_INTERN PetscErrorCode KergsOptionsReals(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscInt n,
-                                              PetscReal v[], PetscBool *set)
-{
-  PetscReal *tmp;
-  PetscInt   nread = n, given;
-  PetscBool  flg;
-  char       help[512];
-  size_t     len;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscMalloc1(n, &tmp));
-  PetscCall(PetscArraycpy(tmp, v, n));
-  /* -help prints only the first value of an absent array option: show the whole default in the text */
-  PetscCall(PetscSNPrintf(help, sizeof(help), "%s (default ", text));
-  for (PetscInt k = 0; k < n; k++) {
-    PetscCall(PetscStrlen(help, &len));
-    PetscCall(PetscSNPrintf(help + len, sizeof(help) - len, "%g%s", (double)v[k], k + 1 < n ? "," : ")"));
-  }
-  PetscCall(PetscOptionsRealArray(opt, help, NULL, tmp, &nread, &flg));
-  if (flg) {
-    PetscCall(OptionsCountValues(PetscOptionsObject, opt, &given));
-    PetscCheck(given == n, PetscOptionsObject->comm, PETSC_ERR_ARG_SIZ,
-               "Option -%s%s needs %" PetscInt_FMT " comma-separated values, got %" PetscInt_FMT,
-               PetscOptionsObject->prefix ? PetscOptionsObject->prefix : "", opt + 1, n, given);
-    PetscCall(PetscArraycpy(v, tmp, n));
-  }
-  PetscCall(PetscFree(tmp));
-  if (set) *set = flg;
-  PetscFunctionReturn(0);
-}
-
-/* A point or vector: exactly KERGS_DIM reals. */
-PETSC_INTERN PetscErrorCode KergsOptionsVector(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], PetscReal v[],
-                                               PetscBool *set)
-{
-  PetscFunctionBeginUser;
-  PetscCall(KergsOptionsReals(PetscOptionsObject, opt, text, KERGS_DIM, v, set));
-  PetscFunctionReturn(0);
-}
+const char *const KergsGapRules[] = {"paper", "lmgc90", "predictive", "KergsGapRule", "KERGS_GAP_", NULL};
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Create, destroy, disks                                                                          */
@@ -303,21 +205,6 @@ PetscErrorCode KergsSceneFriction(KergsScene scene, PetscInt mat_a, PetscInt mat
   PetscFunctionReturn(0);
 }
 
-/* Driven wall: the value of its piecewise-constant program at time t, piece k holding on [t_k, t_{k+1}) and the
-   last piece forever; zero before t_0 and for a wall without program. Free wall: its current velocity. */
-PetscErrorCode KergsWallVelocityAt(const KergsWall *wall, PetscReal t, PetscReal v[])
-{
-  PetscFunctionBeginUser;
-  if (wall->kind == KERGS_WALL_FREE) {
-    for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = wall->v[d];
-    PetscFunctionReturn(0);
-  }
-  for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = 0.0;
-  for (PetscInt k = 0; k < wall->nprog && t >= wall->prog_t[k]; k++)
-    for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = wall->prog_v[k][d];
-  PetscFunctionReturn(0);
-}
-
 /* E_k = sum over disks of 1/2 m |v|^2 + 1/2 I omega^2; vmax = largest disk speed. */
 PetscErrorCode KergsSceneKineticEnergy(KergsScene scene, PetscReal *ek, PetscReal *vmax)
 {
@@ -361,14 +248,6 @@ PetscErrorCode KergsSceneGetDisks(KergsScene scene, KergsDisks *d)
   d->radius      = scene->radius;
   d->mass        = scene->mass;
   d->inertia     = scene->inertia;
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode KergsSceneGetWalls(KergsScene scene, PetscInt *nwalls, const KergsWall **walls)
-{
-  PetscFunctionBeginUser;
-  if (nwalls) *nwalls = scene->nwalls;
-  if (walls) *walls = scene->walls;
   PetscFunctionReturn(0);
 }
 
@@ -486,32 +365,8 @@ PetscErrorCode KergsSceneRestoreState(KergsScene scene, PetscInt step, PetscReal
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsSceneRestoreWall(KergsScene scene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
-                                     const PetscReal disp[])
-{
-  PetscFunctionBeginUser;
-  PetscCheck(w >= 0 && w < scene->nwalls, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
-  for (PetscInt d = 0; d < KERGS_DIM; d++) {
-    scene->walls[w].a[d]    = a[d];
-    scene->walls[w].b[d]    = b[d];
-    scene->walls[w].v[d]    = v[d];
-    scene->walls[w].disp[d] = disp[d];
-  }
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode KergsSceneSetWallVelocity(KergsScene scene, PetscInt w, const PetscReal v[])
-{
-  PetscFunctionBeginUser;
-  PetscCheck(w >= 0 && w < scene->nwalls, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-             "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
-  for (PetscInt d = 0; d < KERGS_DIM; d++) scene->walls[w].v[d] = v[d];
-  PetscFunctionReturn(0);
-}
-
-/* x+ = x- + dt (theta V+ + (1 - theta) V-) for the owned disks and the free walls (a driven wall moves with its given
-   velocity of the step), then the clock. */
+/* x+ = x- + dt (theta V+ + (1 - theta) V-) for the owned disks, then the walls (KergsSceneAdvanceWalls), then the
+   clock. */
 PetscErrorCode KergsSceneAdvance(KergsScene sc, const PetscReal vold[], const PetscReal wold[], const PetscReal wvold[])
 {
   const PetscReal th = sc->theta, dt = sc->dt;
@@ -519,22 +374,14 @@ PetscErrorCode KergsSceneAdvance(KergsScene sc, const PetscReal vold[], const Pe
   PetscFunctionBeginUser;
   for (PetscInt i = 0; i < KERGS_DIM * sc->nowned; i++) sc->x[i] += dt * (th * sc->v[i] + (1 - th) * vold[i]);
   for (PetscInt i = 0; i < KERGS_NROT * sc->nowned; i++) sc->rot[i] += dt * (th * sc->omega[i] + (1 - th) * wold[i]);
-  for (PetscInt w = 0; w < sc->nwalls; w++) {
-    KergsWall *wall = &sc->walls[w];
-    for (PetscInt d = 0; d < KERGS_DIM; d++) {
-      PetscReal dx = wall->kind == KERGS_WALL_DRIVEN ? dt * wall->v[d] : dt * (th * wall->v[d] + (1 - th) * wvold[KERGS_DIM * w + d]);
-      wall->a[d] += dx;
-      wall->b[d] += dx;
-      wall->disp[d] += dx;
-    }
-  }
+  PetscCall(KergsSceneAdvanceWalls(sc, wvold));
   sc->time += sc->dt;
   sc->step++;
   PetscFunctionReturn(0);
 }
 
 /* ------------------------------------------------------------------------------------------------ */
-/* Options: numerics, materials, walls                                                             */
+/* Options: numerics, materials                                                                    */
 
 static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject, KergsScene scene, PetscBool *alert_set)
 {
@@ -609,181 +456,22 @@ static PetscErrorCode SceneMaterialOptions(PetscOptionItems *PetscOptionsObject,
   PetscFunctionReturn(0);
 }
 
-/* -box x0,y0,x1,y1: four driven walls at rest whose left normals point into the box. */
-static PetscErrorCode SceneBoxWalls(KergsScene scene, const PetscReal box[4], PetscBool open_top, PetscInt *nbox, KergsWall walls[])
-{
-  const char     *names[4] = {"box_bottom", "box_right", "box_top", "box_left"};
-  const PetscReal x0 = box[0], y0 = box[1], x1 = box[2], y1 = box[3];
-  /* corners counter-clockwise: (x0,y0) (x1,y0) (x1,y1) (x0,y1); wall k goes from corner k to corner k+1 */
-  const PetscReal cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
-
-  PetscFunctionBeginUser;
-  PetscCheck(x1 > x0 && y1 > y0, scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-box %g,%g,%g,%g: need x0 < x1 and y0 < y1", (double)x0,
-             (double)y0, (double)x1, (double)y1);
-  *nbox = 0;
-  for (PetscInt k = 0; k < 4; k++) {
-    KergsWall *w = &walls[*nbox];
-
-    if (k == 2 && open_top) continue;
-    PetscCall(PetscMemzero(w, sizeof(*w)));
-    PetscCall(PetscStrncpy(w->name, names[k], sizeof(w->name)));
-    w->kind = KERGS_WALL_DRIVEN;
-    w->a[0] = cx[k];
-    w->a[1] = cy[k];
-    w->b[0] = cx[(k + 1) % 4];
-    w->b[1] = cy[(k + 1) % 4];
-    (*nbox)++;
-  }
-  PetscFunctionReturn(0);
-}
-
-/* Fill a wall's program from -wall_<name>_velocity (constant from t = 0) or -wall_<name>_program t,vx,vy,... */
-static PetscErrorCode WallSetProgram(MPI_Comm comm, KergsWall *w, const PetscReal vel[], PetscBool vset, PetscInt nvals,
-                                     const PetscReal prog[])
-{
-  PetscFunctionBeginUser;
-  if (w->kind == KERGS_WALL_FREE) {
-    PetscCheck(nvals == 0, comm, PETSC_ERR_ARG_INCOMP, "Wall %s is free: -wall_%s_program applies to driven walls only", w->name, w->name);
-    w->nprog = 0;
-    if (vset)
-      for (PetscInt d = 0; d < KERGS_DIM; d++) w->v[d] = vel[d];
-    PetscFunctionReturn(0);
-  }
-  PetscCheck(!(vset && nvals), comm, PETSC_ERR_ARG_INCOMP, "Wall %s: give -wall_%s_velocity or -wall_%s_program, not both", w->name,
-             w->name, w->name);
-  if (vset) {
-    w->nprog     = 1;
-    w->prog_t[0] = 0.0;
-    for (PetscInt d = 0; d < KERGS_DIM; d++) w->prog_v[0][d] = vel[d];
-  }
-  if (nvals) {
-    const PetscInt width = 1 + KERGS_DIM; /* t, v */
-
-    PetscCheck(nvals % width == 0, comm, PETSC_ERR_ARG_SIZ, "Wall %s: -wall_%s_program has %" PetscInt_FMT " values, not groups t,vx,vy",
-               w->name, w->name, nvals);
-    PetscCheck(nvals / width <= KERGS_MAX_PROGRAM, comm, PETSC_ERR_ARG_SIZ,
-               "Wall %s: -wall_%s_program has %" PetscInt_FMT " pieces, at most %d", w->name, w->name, nvals / width, KERGS_MAX_PROGRAM);
-    w->nprog = nvals / width;
-    for (PetscInt k = 0; k < w->nprog; k++) {
-      w->prog_t[k] = prog[width * k];
-      for (PetscInt d = 0; d < KERGS_DIM; d++) w->prog_v[k][d] = prog[width * k + 1 + d];
-      PetscCheck(k == 0 || w->prog_t[k] > w->prog_t[k - 1], comm, PETSC_ERR_ARG_OUTOFRANGE,
-                 "Wall %s: -wall_%s_program times must increase (piece %" PetscInt_FMT " starts at %g after %g)", w->name, w->name, k,
-                 (double)w->prog_t[k], (double)w->prog_t[k - 1]);
-    }
-  }
-  PetscFunctionReturn(0);
-}
-
-/* The options of one wall, prefix wall_<name>_. Declared walls must give both endpoints; box walls may
-   override theirs. */
-static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBool needs_endpoints, PetscReal time)
-{
-  char      prefix[KERGS_WALL_PREFIX_LEN], title[KERGS_WALL_PREFIX_LEN];
-  PetscReal vel[KERGS_DIM] = {0}, *prog;
-  PetscInt  nvals;
-  PetscBool aset, bset, vset;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "wall_%s_", w->name));
-  PetscCall(PetscSNPrintf(title, sizeof(title), "Wall %s options", w->name));
-  PetscOptionsBegin(scene->comm, prefix, title, NULL);
-  PetscCall(
-      KergsOptionsVector(PetscOptionsObject, "-a", "First endpoint x,y (the outward normal is the left normal of a->b)", w->a, &aset));
-  PetscCall(KergsOptionsVector(PetscOptionsObject, "-b", "Second endpoint x,y", w->b, &bset));
-  PetscCall(PetscOptionsEnum("-type", "Wall kind: driven (velocity program) or free (mass, applied force)", NULL, KergsWallKinds,
-                             (PetscEnum)w->kind, (PetscEnum *)&w->kind, NULL));
-  PetscCall(
-      PetscOptionsBool("-infinite", "Infinite line through a and b instead of the segment [a,b]", NULL, w->infinite, &w->infinite, NULL));
-  PetscCall(PetscOptionsInt("-material", "Material index of the wall", NULL, w->material, &w->material, NULL));
-  PetscCall(KergsOptionsCheckInt(scene->comm, prefix, "-material"));
-  PetscCall(KergsOptionsVector(PetscOptionsObject, "-velocity",
-                               "Constant velocity vx,vy of a driven wall, or initial velocity of a free wall", vel, &vset));
-  PetscCall(KergsOptionsRealList(PetscOptionsObject, "-program",
-                                 "Driven wall velocity program t0,vx,vy,t1,vx,vy,...: (vx,vy) from t_k to t_{k+1}, zero before t0", &nvals,
-                                 &prog, NULL));
-  PetscCall(PetscOptionsReal("-mass", "Mass of a free wall", NULL, w->mass, &w->mass, NULL));
-  PetscCall(KergsOptionsVector(PetscOptionsObject, "-force", "Applied force fx,fy on a free wall (pressure x length)", w->force, NULL));
-  PetscOptionsEnd();
-  PetscCheck(!needs_endpoints || (aset && bset), scene->comm, PETSC_ERR_ARG_WRONGSTATE,
-             "Wall %s (from -walls) needs both -wall_%s_a x,y and -wall_%s_b x,y", w->name, w->name, w->name);
-  PetscCall(WallSetProgram(scene->comm, w, vel, vset, nvals, prog));
-  if (w->kind == KERGS_WALL_DRIVEN) PetscCall(KergsWallVelocityAt(w, time, w->v));
-  PetscCall(PetscFree(prog));
-  PetscFunctionReturn(0);
-}
-
-/* A wall name becomes part of option names: nonempty, unique, short enough for KergsWall.name. */
-static PetscErrorCode WallCheckName(KergsScene scene, const KergsWall walls[], PetscInt nwalls, const char name[])
-{
-  size_t len;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscStrlen(name, &len));
-  PetscCheck(len > 0, scene->comm, PETSC_ERR_ARG_WRONG, "-walls: empty wall name");
-  PetscCheck(len < sizeof(walls[0].name), scene->comm, PETSC_ERR_ARG_WRONG, "-walls: wall name %s is longer than %d characters", name,
-             (int)sizeof(walls[0].name) - 1);
-  for (PetscInt w = 0; w < nwalls; w++) {
-    PetscBool same;
-
-    PetscCall(PetscStrcmp(walls[w].name, name, &same));
-    PetscCheck(!same, scene->comm, PETSC_ERR_ARG_WRONG,
-               "-walls: wall name %s is used twice (box walls are named box_bottom, box_right, box_top, box_left)", name);
-  }
-  PetscFunctionReturn(0);
-}
-
-/* Build the wall list: box walls, then declared walls, then every wall's own options. */
-static PetscErrorCode SceneSetWalls(KergsScene scene, PetscBool box_set, const PetscReal box[4], PetscBool open_top, PetscInt nnames,
-                                    char *names[])
-{
-  PetscInt nbox = 0;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree(scene->walls));
-  scene->nwalls = 0;
-  PetscCall(PetscCalloc1(4 + nnames, &scene->walls));
-  if (box_set) PetscCall(SceneBoxWalls(scene, box, open_top, &nbox, scene->walls));
-  scene->nwalls = nbox;
-  for (PetscInt k = 0; k < nnames; k++) {
-    PetscCall(WallCheckName(scene, scene->walls, scene->nwalls, names[k]));
-    PetscCall(PetscStrncpy(scene->walls[scene->nwalls].name, names[k], sizeof(scene->walls[0].name)));
-    scene->walls[scene->nwalls].kind = KERGS_WALL_DRIVEN;
-    scene->nwalls++;
-  }
-  for (PetscInt w = 0; w < scene->nwalls; w++)
-    PetscCall(WallSetFromOptions(scene, &scene->walls[w], w >= nbox ? PETSC_TRUE : PETSC_FALSE, scene->time));
-  PetscFunctionReturn(0);
-}
-
 /* ------------------------------------------------------------------------------------------------ */
 
 /* Read the scene from the options database: numerics, materials, walls, disks; then check it. */
 PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
 {
-  PetscReal box[4] = {0, 0, 1, 1}, alert;
-  PetscInt  nnames;
-  PetscBool alert_set = PETSC_FALSE, box_set = PETSC_FALSE, open_top = PETSC_FALSE, names_set, help;
-  char    **names;
-  PetscInt  cap;
+  KergsWallsSpec walls;
+  PetscReal      alert;
+  PetscBool      alert_set = PETSC_FALSE, help;
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(scene->comm, NULL, "Scene options", NULL);
   PetscCall(SceneNumericsOptions(PetscOptionsObject, scene, &alert_set));
   PetscCall(SceneMaterialOptions(PetscOptionsObject, scene));
-  PetscCall(KergsOptionsReals(PetscOptionsObject, "-box",
-                              "Box x0,y0,x1,y1: driven walls box_bottom, box_right, box_top, box_left facing inward", 4, box, &box_set));
-  PetscCall(PetscOptionsBool("-box_open_top", "Omit the top wall of -box", NULL, open_top, &open_top, NULL));
-  PetscCall(OptionsCountValues(PetscOptionsObject, "-walls", &cap));
-  PetscCall(PetscCalloc1(cap + 1, &names));
-  nnames = cap + 1;
-  PetscCall(PetscOptionsStringArray("-walls", "Names of further walls, each set by -wall_<name>_a, _b, _type, ...", NULL, names, &nnames,
-                                    &names_set));
-  if (!names_set) nnames = 0;
+  PetscCall(KergsSceneWallsOptions(PetscOptionsObject, &walls));
   PetscOptionsEnd();
-  PetscCall(SceneSetWalls(scene, box_set, box, open_top, nnames, names));
-  for (PetscInt k = 0; k < nnames; k++) PetscCall(PetscFree(names[k]));
-  PetscCall(PetscFree(names));
+  PetscCall(KergsSceneSetWalls(scene, &walls));
 
   alert = scene->alert;
   PetscCall(KergsSceneDisksSetFromOptions(scene));
@@ -806,27 +494,25 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
 /* ------------------------------------------------------------------------------------------------ */
 /* Validation                                                                                       */
 
-static PetscBool Finite(PetscReal v) { return PetscIsInfOrNanReal(v) ? PETSC_FALSE : PETSC_TRUE; }
-
 static PetscErrorCode SceneCheckNumerics(KergsScene scene)
 {
   MPI_Comm comm = scene->comm;
 
   PetscFunctionBeginUser;
-  PetscCheck(Finite(scene->dt) && scene->dt > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: time step -dt %g must be positive",
+  PetscCheck(KergsSceneFinite(scene->dt) && scene->dt > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: time step -dt %g must be positive",
              scene->name, (double)scene->dt);
-  PetscCheck(Finite(scene->theta) && scene->theta > 0.0 && scene->theta <= 1.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+  PetscCheck(KergsSceneFinite(scene->theta) && scene->theta > 0.0 && scene->theta <= 1.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Scene %s: -theta %g must be in (0,1]", scene->name, (double)scene->theta);
   PetscCheck(scene->nsteps >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -steps %" PetscInt_FMT " must be >= 0", scene->name,
              scene->nsteps);
-  PetscCheck(Finite(scene->alert) && scene->alert >= 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: alert distance -alert %g must be >= 0",
-             scene->name, (double)scene->alert);
-  PetscCheck(Finite(scene->ghost_skin), comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -ghost_skin %g is not finite", scene->name,
+  PetscCheck(KergsSceneFinite(scene->alert) && scene->alert >= 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: alert distance -alert %g must be >= 0", scene->name, (double)scene->alert);
+  PetscCheck(KergsSceneFinite(scene->ghost_skin), comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -ghost_skin %g is not finite", scene->name,
              (double)scene->ghost_skin);
   PetscCheck(scene->gaprule == KERGS_GAP_PAPER || scene->gaprule == KERGS_GAP_LMGC90 || scene->gaprule == KERGS_GAP_PREDICTIVE, comm,
              PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: unknown gap rule %d", scene->name, (int)scene->gaprule);
   for (PetscInt d = 0; d < KERGS_DIM; d++)
-    PetscCheck(Finite(scene->gravity[d]), comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -gravity is not finite", scene->name);
+    PetscCheck(KergsSceneFinite(scene->gravity[d]), comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -gravity is not finite", scene->name);
   PetscFunctionReturn(0);
 }
 
@@ -838,14 +524,14 @@ static PetscErrorCode SceneCheckMaterials(KergsScene scene)
   PetscFunctionBeginUser;
   PetscCheck(nm >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "Scene %s: -materials %" PetscInt_FMT " must be at least 1", scene->name, nm);
   for (PetscInt m = 0; m < nm; m++)
-    PetscCheck(Finite(scene->density[m]) && scene->density[m] > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+    PetscCheck(KergsSceneFinite(scene->density[m]) && scene->density[m] > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
                "Scene %s: density of material %" PetscInt_FMT " is %g, must be positive (-material_density)", scene->name, m,
                (double)scene->density[m]);
   for (PetscInt p = 0; p < nm; p++) {
     for (PetscInt q = 0; q < nm; q++) {
       const PetscReal mu = scene->mu[p * nm + q];
 
-      PetscCheck(Finite(mu) && mu >= 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+      PetscCheck(KergsSceneFinite(mu) && mu >= 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
                  "Scene %s: friction coefficient of materials (%" PetscInt_FMT ", %" PetscInt_FMT
                  ") is %g, must be finite and >= 0 (-friction, -friction_pairs)",
                  scene->name, p, q, (double)mu);
@@ -881,17 +567,18 @@ static void GetDiskCheckRecord(KergsScene scene, PetscInt i, DiskCheckRecord *d)
 static PetscErrorCode CheckDisk(MPI_Comm comm, PetscInt nmaterials, const DiskCheckRecord *d)
 {
   PetscFunctionBeginUser;
-  PetscCheck(Finite(d->radius) && d->radius > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+  PetscCheck(KergsSceneFinite(d->radius) && d->radius > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Grain %" PetscInt_FMT ": radius %g must be positive and finite", d->id, (double)d->radius);
   for (PetscInt k = 0; k < KERGS_DIM; k++) {
-    PetscCheck(Finite(d->x[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": position component %" PetscInt_FMT " is %g", d->id, k,
-               (double)d->x[k]);
-    PetscCheck(Finite(d->v[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": velocity component %" PetscInt_FMT " is %g", d->id, k,
-               (double)d->v[k]);
+    PetscCheck(KergsSceneFinite(d->x[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": position component %" PetscInt_FMT " is %g", d->id,
+               k, (double)d->x[k]);
+    PetscCheck(KergsSceneFinite(d->v[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": velocity component %" PetscInt_FMT " is %g", d->id,
+               k, (double)d->v[k]);
   }
   for (PetscInt k = 0; k < KERGS_NROT; k++) {
-    PetscCheck(Finite(d->rot[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": orientation is %g", d->id, (double)d->rot[k]);
-    PetscCheck(Finite(d->omega[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": angular velocity is %g", d->id, (double)d->omega[k]);
+    PetscCheck(KergsSceneFinite(d->rot[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": orientation is %g", d->id, (double)d->rot[k]);
+    PetscCheck(KergsSceneFinite(d->omega[k]), comm, PETSC_ERR_FP, "Grain %" PetscInt_FMT ": angular velocity is %g", d->id,
+               (double)d->omega[k]);
   }
   PetscCheck(d->material >= 0 && d->material < nmaterials, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Grain %" PetscInt_FMT ": material %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ") (see -materials)", d->id, d->material,
@@ -927,37 +614,6 @@ static PetscErrorCode SceneCheckDisks(KergsScene scene)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode SceneCheckWall(KergsScene scene, const KergsWall *w)
-{
-  MPI_Comm  comm = scene->comm;
-  PetscReal len2 = 0.0;
-
-  PetscFunctionBeginUser;
-  for (PetscInt d = 0; d < KERGS_DIM; d++) {
-    PetscCheck(Finite(w->a[d]) && Finite(w->b[d]), comm, PETSC_ERR_FP, "Wall %s: endpoint is not finite", w->name);
-    PetscCheck(Finite(w->v[d]) && Finite(w->force[d]), comm, PETSC_ERR_FP, "Wall %s: velocity or force is not finite", w->name);
-    len2 += (w->b[d] - w->a[d]) * (w->b[d] - w->a[d]);
-  }
-  PetscCheck(len2 > 0.0, comm, PETSC_ERR_ARG_WRONG, "Wall %s is degenerate: a == b = (%g, %g)", w->name, (double)w->a[0], (double)w->a[1]);
-  PetscCheck(w->material >= 0 && w->material < scene->nmaterials, comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "Wall %s: material %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ") (-wall_%s_material, -materials)", w->name,
-             w->material, scene->nmaterials, w->name);
-  PetscCheck(w->kind == KERGS_WALL_DRIVEN || w->kind == KERGS_WALL_FREE, comm, PETSC_ERR_ARG_OUTOFRANGE, "Wall %s: unknown kind %d",
-             w->name, (int)w->kind);
-  PetscCheck(w->kind != KERGS_WALL_FREE || (Finite(w->mass) && w->mass > 0.0), comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "Free wall %s: mass %g must be positive (-wall_%s_mass)", w->name, (double)w->mass, w->name);
-  PetscCheck(w->nprog >= 0 && w->nprog <= KERGS_MAX_PROGRAM, comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "Wall %s: %" PetscInt_FMT " program pieces, at most %d", w->name, w->nprog, KERGS_MAX_PROGRAM);
-  for (PetscInt k = 0; k < w->nprog; k++) {
-    PetscCheck(Finite(w->prog_t[k]), comm, PETSC_ERR_FP, "Wall %s: program time %" PetscInt_FMT " is not finite", w->name, k);
-    PetscCheck(k == 0 || w->prog_t[k] > w->prog_t[k - 1], comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "Wall %s: program times must increase (piece %" PetscInt_FMT ")", w->name, k);
-    for (PetscInt d = 0; d < KERGS_DIM; d++)
-      PetscCheck(Finite(w->prog_v[k][d]), comm, PETSC_ERR_FP, "Wall %s: program velocity %" PetscInt_FMT " is not finite", w->name, k);
-  }
-  PetscFunctionReturn(0);
-}
-
 /* Every fault of the input named; overlaps of grains are left to the contact detection. */
 PetscErrorCode KergsSceneCheck(KergsScene scene)
 {
@@ -967,35 +623,12 @@ PetscErrorCode KergsSceneCheck(KergsScene scene)
   PetscCall(SceneCheckDisks(scene));
   PetscCall(SceneCheckMaterials(scene));
   PetscCall(SceneCheckNumerics(scene));
-  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(SceneCheckWall(scene, &scene->walls[w]));
+  PetscCall(KergsSceneCheckWalls(scene));
   PetscFunctionReturn(0);
 }
 
 /* ------------------------------------------------------------------------------------------------ */
 /* View                                                                                             */
-
-static PetscErrorCode SceneViewWall(PetscViewer viewer, const KergsWall *w)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "wall %s: %s %s (%g, %g) -> (%g, %g), material %" PetscInt_FMT, w->name, KergsWallKinds[w->kind],
-                                   w->infinite ? "line" : "segment", (double)w->a[0], (double)w->a[1], (double)w->b[0], (double)w->b[1],
-                                   w->material));
-  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
-  if (w->kind == KERGS_WALL_FREE) {
-    PetscCall(PetscViewerASCIIPrintf(viewer, ", mass %g, force (%g, %g), velocity (%g, %g)\n", (double)w->mass, (double)w->force[0],
-                                     (double)w->force[1], (double)w->v[0], (double)w->v[1]));
-  } else if (w->nprog == 0) {
-    PetscCall(PetscViewerASCIIPrintf(viewer, ", at rest\n"));
-  } else {
-    PetscCall(PetscViewerASCIIPrintf(viewer, ", velocity program"));
-    for (PetscInt k = 0; k < w->nprog; k++)
-      PetscCall(
-          PetscViewerASCIIPrintf(viewer, " [t >= %g: (%g, %g)]", (double)w->prog_t[k], (double)w->prog_v[k][0], (double)w->prog_v[k][1]));
-    PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
-  }
-  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
-  PetscFunctionReturn(0);
-}
 
 static PetscErrorCode SceneViewMaterials(KergsScene scene, PetscViewer viewer)
 {
@@ -1055,7 +688,7 @@ PetscErrorCode KergsSceneView(KergsScene scene, PetscViewer viewer)
                                                                              : "frictional (tangential impulses, rotations)")
                                                      : "frictionless (normal impulses only)"));
   PetscCall(SceneViewMaterials(scene, viewer));
-  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(SceneViewWall(viewer, &scene->walls[w]));
+  PetscCall(KergsSceneViewWalls(scene, viewer));
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);
 }

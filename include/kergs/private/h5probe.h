@@ -1,7 +1,8 @@
-/* kergs HDF5 probes, private: for the readers of src/io and src/scene (checkpoints, results files, samples, FCLib
-   problems), which look at a file before PETSc's viewer or libfclib opens it. A missing, truncated, damaged or foreign
-   file is an expected outcome there, so HDF5's own error trace is switched off around the probe and kergs says what is
-   wrong instead (src/io/h5probe.c). */
+/* kergs HDF5 probes (base layer), private to the library: they need hdf5.h, which the installed headers do not. For
+   the readers of src/io and src/scene (checkpoints, results files, samples, FCLib problems), which look at a file
+   before PETSc's viewer or libfclib opens it. A missing, truncated, damaged or foreign file is an expected outcome
+   there, so HDF5's own error trace is switched off around the probe and kergs says what is wrong instead
+   (src/base/h5probe.c). */
 #ifndef KERGS_H5PROBE_H
 #define KERGS_H5PROBE_H
 

@@ -54,10 +54,24 @@ struct _p_KergsScene {
    (src/scene/disks.c). */
 PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene);
 
-/* Options holding lists of numbers, with the number of values checked (src/scene/scene.c). */
-PETSC_INTERN PetscErrorCode KergsOptionsRealList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscReal **, PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsIntList(PetscOptionItems *, const char[], const char[], PetscInt *, PetscInt **, PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsReals(PetscOptionItems *, const char[], const char[], PetscInt, PetscReal[], PetscBool *);
-PETSC_INTERN PetscErrorCode KergsOptionsVector(PetscOptionItems *, const char[], const char[], PetscReal[], PetscBool *);
+/* The walls (src/scene/walls.c). Which walls there are (-box, -box_open_top, -walls) is read inside the scene's options
+   block by KergsSceneWallsOptions; each wall then has an options block of its own (prefix wall_<name>_), read by
+   KergsSceneSetWalls once the scene's block has ended. */
+typedef struct {
+  PetscBool box_set, open_top;
+  PetscReal box[4]; /* x0,y0,x1,y1 */
+  PetscInt  nnames;
+  char    **names; /* the names given to -walls */
+} KergsWallsSpec;
+PETSC_INTERN PetscErrorCode KergsSceneWallsOptions(PetscOptionItems *, KergsWallsSpec *);
+/* Replaces the scene's walls by the box walls, then the named walls, each read from its options; frees spec's names. */
+PETSC_INTERN PetscErrorCode KergsSceneSetWalls(KergsScene, KergsWallsSpec *);
+/* The walls' part of KergsSceneAdvance; wvold: the walls' velocities before the update (KERGS_DIM per wall). */
+PETSC_INTERN PetscErrorCode KergsSceneAdvanceWalls(KergsScene, const PetscReal wvold[]);
+PETSC_INTERN PetscErrorCode KergsSceneCheckWalls(KergsScene);
+PETSC_INTERN PetscErrorCode KergsSceneViewWalls(KergsScene, PetscViewer);
+
+/* Neither infinite nor NaN: the checks of the input. */
+static inline PetscBool KergsSceneFinite(PetscReal v) { return PetscIsInfOrNanReal(v) ? PETSC_FALSE : PETSC_TRUE; }
 
 #endif

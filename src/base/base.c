@@ -3,7 +3,6 @@
 #include <kergs/base.h>
 #include <petscviewer.h>
 #include <kergs/version.h> /* generated at build time (cmake/version.cmake) */
-#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #if defined(__GLIBC__)
@@ -90,34 +89,6 @@ void KergsReturnFreedMemory(void)
   (void)mallopt(M_MMAP_THRESHOLD, 128 * 1024);
   (void)mallopt(M_TRIM_THRESHOLD, 128 * 1024);
 #endif
-}
-
-PetscErrorCode KergsOptionsCheckInt(MPI_Comm comm, const char prefix[], const char name[])
-{
-  char      value[4096], *token, *save = NULL;
-  PetscBool set;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscOptionsGetString(NULL, prefix, name, value, sizeof(value), &set));
-  if (!set) PetscFunctionReturn(0);
-  for (token = strtok_r(value, ",", &save); token; token = strtok_r(NULL, ",", &save)) {
-    char  *end;
-    double v = strtod(token, &end);
-    if (end == token || *end) continue; /* not a number: PETSc's parser reports it */
-    PetscCheck(v <= (double)PETSC_MAX_INT && v >= (double)PETSC_MIN_INT, comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "Option -%s%s: %s is out of the range of this build's integers (PetscInt is %d-bit: at most %" PetscInt_FMT ")",
-               prefix ? prefix : "", name + 1, token, (int)(8 * sizeof(PetscInt)), (PetscInt)PETSC_MAX_INT);
-  }
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode KergsOptionsInt(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], const char man[],
-                               PetscInt current, PetscInt *value, PetscBool *set)
-{
-  PetscFunctionBeginUser;
-  PetscCall(KergsOptionsCheckInt(PetscOptionsObject->comm, PetscOptionsObject->prefix, opt));
-  PetscCall(PetscOptionsInt(opt, text, man, current, value, set));
-  PetscFunctionReturn(0);
 }
 
 PetscErrorCode KergsViewFromOptions(MPI_Comm comm, const char prefix[], const char option[], PetscErrorCode (*view)(void *, PetscViewer),

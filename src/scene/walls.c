@@ -1,0 +1,324 @@
+/* kergs walls: the one-sided lines and segments that confine the disks (kergs/scene.h, KergsWall): the box and the
+   named walls read from the options, their velocities (a driven wall's program, a free wall's own), their motion at
+   the end of a step, their checks and their view. The scene's container (src/scene/scene.c) holds them.
+
+   A wall's kind decides how it moves: a driven wall follows its velocity program (its DOFs are in V_g), a free wall is
+   a body with a mass under an applied force (its DOFs are in V_f, updated by the solve). Every function below that
+   depends on the kind switches on it: KergsWallVelocityAt, WallSetProgram, WallSetFromOptions (the kind's options),
+   KergsSceneAdvanceWalls, CheckWall and ViewWall; a new kind adds its case there and its name to KergsWallKinds.
+   Outside the scene, the operators (V_f or V_g), the kernel and the watch (energy, work) ask whether a wall is free. */
+#include <kergs/private/sceneimpl.h>
+#include <petscviewer.h>
+
+const char *const KergsWallKinds[] = {"driven", "free", "KergsWallKind", "KERGS_WALL_", NULL};
+
+#define KERGS_WALL_PREFIX_LEN 128
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Velocities and motion                                                                            */
+
+/* Driven wall: the value of its piecewise-constant program at time t, piece k holding on [t_k, t_{k+1}) and the
+   last piece forever; zero before t_0 and for a wall without program. Free wall: its current velocity. */
+PetscErrorCode KergsWallVelocityAt(const KergsWall *wall, PetscReal t, PetscReal v[])
+{
+  PetscFunctionBeginUser;
+  if (wall->kind == KERGS_WALL_FREE) {
+    for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = wall->v[d];
+    PetscFunctionReturn(0);
+  }
+  for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = 0.0;
+  for (PetscInt k = 0; k < wall->nprog && t >= wall->prog_t[k]; k++)
+    for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = wall->prog_v[k][d];
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneSetWallVelocity(KergsScene scene, PetscInt w, const PetscReal v[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(w >= 0 && w < scene->nwalls, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) scene->walls[w].v[d] = v[d];
+  PetscFunctionReturn(0);
+}
+
+/* x+ = x- + dt (theta V+ + (1 - theta) V-) for the free walls; a driven wall moves with its given velocity of the step. */
+PetscErrorCode KergsSceneAdvanceWalls(KergsScene sc, const PetscReal wvold[])
+{
+  const PetscReal th = sc->theta, dt = sc->dt;
+
+  PetscFunctionBeginUser;
+  for (PetscInt w = 0; w < sc->nwalls; w++) {
+    KergsWall *wall = &sc->walls[w];
+    for (PetscInt d = 0; d < KERGS_DIM; d++) {
+      PetscReal dx = wall->kind == KERGS_WALL_DRIVEN ? dt * wall->v[d] : dt * (th * wall->v[d] + (1 - th) * wvold[KERGS_DIM * w + d]);
+      wall->a[d] += dx;
+      wall->b[d] += dx;
+      wall->disp[d] += dx;
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Accessors and restart                                                                            */
+
+PetscErrorCode KergsSceneGetWalls(KergsScene scene, PetscInt *nwalls, const KergsWall **walls)
+{
+  PetscFunctionBeginUser;
+  if (nwalls) *nwalls = scene->nwalls;
+  if (walls) *walls = scene->walls;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneRestoreWall(KergsScene scene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
+                                     const PetscReal disp[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(w >= 0 && w < scene->nwalls, scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    scene->walls[w].a[d]    = a[d];
+    scene->walls[w].b[d]    = b[d];
+    scene->walls[w].v[d]    = v[d];
+    scene->walls[w].disp[d] = disp[d];
+  }
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Options                                                                                          */
+
+/* -box, -box_open_top and -walls, inside the scene's options block. */
+PetscErrorCode KergsSceneWallsOptions(PetscOptionItems *PetscOptionsObject, KergsWallsSpec *spec)
+{
+  PetscFunctionBeginUser;
+  *spec = (KergsWallsSpec){.box = {0, 0, 1, 1}}; /* the unit box, shown by -help */
+  PetscCall(KergsOptionsReals(PetscOptionsObject, "-box",
+                              "Box x0,y0,x1,y1: driven walls box_bottom, box_right, box_top, box_left facing inward", 4, spec->box,
+                              &spec->box_set));
+  PetscCall(PetscOptionsBool("-box_open_top", "Omit the top wall of -box", NULL, spec->open_top, &spec->open_top, NULL));
+  PetscCall(KergsOptionsStringList(PetscOptionsObject, "-walls", "Names of further walls, each set by -wall_<name>_a, _b, _type, ...",
+                                   &spec->nnames, &spec->names, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* -box x0,y0,x1,y1: four driven walls at rest whose left normals point into the box. */
+static PetscErrorCode SceneBoxWalls(KergsScene scene, const PetscReal box[4], PetscBool open_top, PetscInt *nbox, KergsWall walls[])
+{
+  const char     *names[4] = {"box_bottom", "box_right", "box_top", "box_left"};
+  const PetscReal x0 = box[0], y0 = box[1], x1 = box[2], y1 = box[3];
+  /* corners counter-clockwise: (x0,y0) (x1,y0) (x1,y1) (x0,y1); wall k goes from corner k to corner k+1 */
+  const PetscReal cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
+
+  PetscFunctionBeginUser;
+  PetscCheck(x1 > x0 && y1 > y0, scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-box %g,%g,%g,%g: need x0 < x1 and y0 < y1", (double)x0,
+             (double)y0, (double)x1, (double)y1);
+  *nbox = 0;
+  for (PetscInt k = 0; k < 4; k++) {
+    KergsWall *w = &walls[*nbox];
+
+    if (k == 2 && open_top) continue;
+    PetscCall(PetscMemzero(w, sizeof(*w)));
+    PetscCall(PetscStrncpy(w->name, names[k], sizeof(w->name)));
+    w->kind = KERGS_WALL_DRIVEN;
+    w->a[0] = cx[k];
+    w->a[1] = cy[k];
+    w->b[0] = cx[(k + 1) % 4];
+    w->b[1] = cy[(k + 1) % 4];
+    (*nbox)++;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Fill a wall's program from -wall_<name>_velocity (constant from t = 0) or -wall_<name>_program t,vx,vy,... */
+static PetscErrorCode WallSetProgram(MPI_Comm comm, KergsWall *w, const PetscReal vel[], PetscBool vset, PetscInt nvals,
+                                     const PetscReal prog[])
+{
+  PetscFunctionBeginUser;
+  if (w->kind == KERGS_WALL_FREE) {
+    PetscCheck(nvals == 0, comm, PETSC_ERR_ARG_INCOMP, "Wall %s is free: -wall_%s_program applies to driven walls only", w->name, w->name);
+    w->nprog = 0;
+    if (vset)
+      for (PetscInt d = 0; d < KERGS_DIM; d++) w->v[d] = vel[d];
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(!(vset && nvals), comm, PETSC_ERR_ARG_INCOMP, "Wall %s: give -wall_%s_velocity or -wall_%s_program, not both", w->name,
+             w->name, w->name);
+  if (vset) {
+    w->nprog     = 1;
+    w->prog_t[0] = 0.0;
+    for (PetscInt d = 0; d < KERGS_DIM; d++) w->prog_v[0][d] = vel[d];
+  }
+  if (nvals) {
+    const PetscInt width = 1 + KERGS_DIM; /* t, v */
+
+    PetscCheck(nvals % width == 0, comm, PETSC_ERR_ARG_SIZ, "Wall %s: -wall_%s_program has %" PetscInt_FMT " values, not groups t,vx,vy",
+               w->name, w->name, nvals);
+    PetscCheck(nvals / width <= KERGS_MAX_PROGRAM, comm, PETSC_ERR_ARG_SIZ,
+               "Wall %s: -wall_%s_program has %" PetscInt_FMT " pieces, at most %d", w->name, w->name, nvals / width, KERGS_MAX_PROGRAM);
+    w->nprog = nvals / width;
+    for (PetscInt k = 0; k < w->nprog; k++) {
+      w->prog_t[k] = prog[width * k];
+      for (PetscInt d = 0; d < KERGS_DIM; d++) w->prog_v[k][d] = prog[width * k + 1 + d];
+      PetscCheck(k == 0 || w->prog_t[k] > w->prog_t[k - 1], comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "Wall %s: -wall_%s_program times must increase (piece %" PetscInt_FMT " starts at %g after %g)", w->name, w->name, k,
+                 (double)w->prog_t[k], (double)w->prog_t[k - 1]);
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The options of one wall, prefix wall_<name>_. Declared walls must give both endpoints; box walls may
+   override theirs. */
+static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBool needs_endpoints, PetscReal time)
+{
+  char      prefix[KERGS_WALL_PREFIX_LEN], title[KERGS_WALL_PREFIX_LEN];
+  PetscReal vel[KERGS_DIM] = {0}, *prog;
+  PetscInt  nvals;
+  PetscBool aset, bset, vset;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "wall_%s_", w->name));
+  PetscCall(PetscSNPrintf(title, sizeof(title), "Wall %s options", w->name));
+  PetscOptionsBegin(scene->comm, prefix, title, NULL);
+  PetscCall(
+      KergsOptionsVector(PetscOptionsObject, "-a", "First endpoint x,y (the outward normal is the left normal of a->b)", w->a, &aset));
+  PetscCall(KergsOptionsVector(PetscOptionsObject, "-b", "Second endpoint x,y", w->b, &bset));
+  PetscCall(PetscOptionsEnum("-type", "Wall kind: driven (velocity program) or free (mass, applied force)", NULL, KergsWallKinds,
+                             (PetscEnum)w->kind, (PetscEnum *)&w->kind, NULL));
+  PetscCall(
+      PetscOptionsBool("-infinite", "Infinite line through a and b instead of the segment [a,b]", NULL, w->infinite, &w->infinite, NULL));
+  PetscCall(PetscOptionsInt("-material", "Material index of the wall", NULL, w->material, &w->material, NULL));
+  PetscCall(KergsOptionsCheckInt(scene->comm, prefix, "-material"));
+  PetscCall(KergsOptionsVector(PetscOptionsObject, "-velocity",
+                               "Constant velocity vx,vy of a driven wall, or initial velocity of a free wall", vel, &vset));
+  PetscCall(KergsOptionsRealList(PetscOptionsObject, "-program",
+                                 "Driven wall velocity program t0,vx,vy,t1,vx,vy,...: (vx,vy) from t_k to t_{k+1}, zero before t0", &nvals,
+                                 &prog, NULL));
+  PetscCall(PetscOptionsReal("-mass", "Mass of a free wall", NULL, w->mass, &w->mass, NULL));
+  PetscCall(KergsOptionsVector(PetscOptionsObject, "-force", "Applied force fx,fy on a free wall (pressure x length)", w->force, NULL));
+  PetscOptionsEnd();
+  PetscCheck(!needs_endpoints || (aset && bset), scene->comm, PETSC_ERR_ARG_WRONGSTATE,
+             "Wall %s (from -walls) needs both -wall_%s_a x,y and -wall_%s_b x,y", w->name, w->name, w->name);
+  PetscCall(WallSetProgram(scene->comm, w, vel, vset, nvals, prog));
+  if (w->kind == KERGS_WALL_DRIVEN) PetscCall(KergsWallVelocityAt(w, time, w->v));
+  PetscCall(PetscFree(prog));
+  PetscFunctionReturn(0);
+}
+
+/* A wall name becomes part of option names: nonempty, unique, short enough for KergsWall.name. */
+static PetscErrorCode WallCheckName(KergsScene scene, const KergsWall walls[], PetscInt nwalls, const char name[])
+{
+  size_t len;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscStrlen(name, &len));
+  PetscCheck(len > 0, scene->comm, PETSC_ERR_ARG_WRONG, "-walls: empty wall name");
+  PetscCheck(len < sizeof(walls[0].name), scene->comm, PETSC_ERR_ARG_WRONG, "-walls: wall name %s is longer than %d characters", name,
+             (int)sizeof(walls[0].name) - 1);
+  for (PetscInt w = 0; w < nwalls; w++) {
+    PetscBool same;
+
+    PetscCall(PetscStrcmp(walls[w].name, name, &same));
+    PetscCheck(!same, scene->comm, PETSC_ERR_ARG_WRONG,
+               "-walls: wall name %s is used twice (box walls are named box_bottom, box_right, box_top, box_left)", name);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Build the wall list: box walls, then declared walls, then every wall's own options. */
+PetscErrorCode KergsSceneSetWalls(KergsScene scene, KergsWallsSpec *spec)
+{
+  PetscInt nbox = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(scene->walls));
+  scene->nwalls = 0;
+  PetscCall(PetscCalloc1(4 + spec->nnames, &scene->walls));
+  if (spec->box_set) PetscCall(SceneBoxWalls(scene, spec->box, spec->open_top, &nbox, scene->walls));
+  scene->nwalls = nbox;
+  for (PetscInt k = 0; k < spec->nnames; k++) {
+    PetscCall(WallCheckName(scene, scene->walls, scene->nwalls, spec->names[k]));
+    PetscCall(PetscStrncpy(scene->walls[scene->nwalls].name, spec->names[k], sizeof(scene->walls[0].name)));
+    scene->walls[scene->nwalls].kind = KERGS_WALL_DRIVEN;
+    scene->nwalls++;
+  }
+  for (PetscInt w = 0; w < scene->nwalls; w++)
+    PetscCall(WallSetFromOptions(scene, &scene->walls[w], w >= nbox ? PETSC_TRUE : PETSC_FALSE, scene->time));
+  PetscCall(PetscStrNArrayDestroy(spec->nnames, &spec->names));
+  PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Validation and view                                                                              */
+
+static PetscErrorCode CheckWall(KergsScene scene, const KergsWall *w)
+{
+  MPI_Comm  comm = scene->comm;
+  PetscReal len2 = 0.0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    PetscCheck(KergsSceneFinite(w->a[d]) && KergsSceneFinite(w->b[d]), comm, PETSC_ERR_FP, "Wall %s: endpoint is not finite", w->name);
+    PetscCheck(KergsSceneFinite(w->v[d]) && KergsSceneFinite(w->force[d]), comm, PETSC_ERR_FP, "Wall %s: velocity or force is not finite",
+               w->name);
+    len2 += (w->b[d] - w->a[d]) * (w->b[d] - w->a[d]);
+  }
+  PetscCheck(len2 > 0.0, comm, PETSC_ERR_ARG_WRONG, "Wall %s is degenerate: a == b = (%g, %g)", w->name, (double)w->a[0], (double)w->a[1]);
+  PetscCheck(w->material >= 0 && w->material < scene->nmaterials, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Wall %s: material %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ") (-wall_%s_material, -materials)", w->name,
+             w->material, scene->nmaterials, w->name);
+  PetscCheck(w->kind == KERGS_WALL_DRIVEN || w->kind == KERGS_WALL_FREE, comm, PETSC_ERR_ARG_OUTOFRANGE, "Wall %s: unknown kind %d",
+             w->name, (int)w->kind);
+  PetscCheck(w->kind != KERGS_WALL_FREE || (KergsSceneFinite(w->mass) && w->mass > 0.0), comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Free wall %s: mass %g must be positive (-wall_%s_mass)", w->name, (double)w->mass, w->name);
+  PetscCheck(w->nprog >= 0 && w->nprog <= KERGS_MAX_PROGRAM, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Wall %s: %" PetscInt_FMT " program pieces, at most %d", w->name, w->nprog, KERGS_MAX_PROGRAM);
+  for (PetscInt k = 0; k < w->nprog; k++) {
+    PetscCheck(KergsSceneFinite(w->prog_t[k]), comm, PETSC_ERR_FP, "Wall %s: program time %" PetscInt_FMT " is not finite", w->name, k);
+    PetscCheck(k == 0 || w->prog_t[k] > w->prog_t[k - 1], comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Wall %s: program times must increase (piece %" PetscInt_FMT ")", w->name, k);
+    for (PetscInt d = 0; d < KERGS_DIM; d++)
+      PetscCheck(KergsSceneFinite(w->prog_v[k][d]), comm, PETSC_ERR_FP, "Wall %s: program velocity %" PetscInt_FMT " is not finite",
+                 w->name, k);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Every fault of a wall named (-wall_<name>_... options). */
+PetscErrorCode KergsSceneCheckWalls(KergsScene scene)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(CheckWall(scene, &scene->walls[w]));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode ViewWall(PetscViewer viewer, const KergsWall *w)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "wall %s: %s %s (%g, %g) -> (%g, %g), material %" PetscInt_FMT, w->name, KergsWallKinds[w->kind],
+                                   w->infinite ? "line" : "segment", (double)w->a[0], (double)w->a[1], (double)w->b[0], (double)w->b[1],
+                                   w->material));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
+  if (w->kind == KERGS_WALL_FREE) {
+    PetscCall(PetscViewerASCIIPrintf(viewer, ", mass %g, force (%g, %g), velocity (%g, %g)\n", (double)w->mass, (double)w->force[0],
+                                     (double)w->force[1], (double)w->v[0], (double)w->v[1]));
+  } else if (w->nprog == 0) {
+    PetscCall(PetscViewerASCIIPrintf(viewer, ", at rest\n"));
+  } else {
+    PetscCall(PetscViewerASCIIPrintf(viewer, ", velocity program"));
+    for (PetscInt k = 0; k < w->nprog; k++)
+      PetscCall(
+          PetscViewerASCIIPrintf(viewer, " [t >= %g: (%g, %g)]", (double)w->prog_t[k], (double)w->prog_v[k][0], (double)w->prog_v[k][1]));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
+  }
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneViewWalls(KergsScene scene, PetscViewer viewer)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(ViewWall(viewer, &scene->walls[w]));
+  PetscFunctionReturn(0);
+}
