@@ -5,6 +5,7 @@
 # bad options.
 kergs_test(NAME predictor_1 SOURCE test_predictor.c NPROCS 1 FAIL_REGEX "FAIL ")
 kergs_test(NAME predictor_2 SOURCE test_predictor.c NPROCS 2 FAIL_REGEX "FAIL ")
-# -help lists every predictor option, the KSP's under the predictor_ prefix included.
+# -help lists every predictor option, each on its own help line, the KSP's under the predictor_ prefix included.
 kergs_test(NAME predictor_help SOURCE test_predictor.c NPROCS 1 ARGS -help
-           PASS_REGEX "-predictor_type.*-predictor_eta.*-predictor_epsilon.*-predictor_relative.*-predictor_unilateral_tol.*-predictor_unilateral_max_it.*-predictor_pc_type.*-predictor_ksp_type")
+           EXPECT_OUTPUT -predictor_type -predictor_eta -predictor_epsilon -predictor_relative -predictor_unilateral_tol
+                       -predictor_unilateral_max_it -predictor_pc_type -predictor_ksp_type)
