@@ -1,4 +1,4 @@
-# Predictors of NLKerGS-P (src/predictor.c, src/predictors/): column of disks (unilateral exact, linear -> exact
+# Predictors of NLKerGS-P (src/solver/predictor.c, src/solver/predictors/): column of disks (unilateral exact, linear -> exact
 # as eta -> 0), one disk on a floor (closed forms of the elastic and linear predictors, eps 1e-12 .. 1),
 # inactive contacts and tangential components zero, a confined hex lattice on 1 rank and on all ranks
 # (same r~ within 1e-10, same H_f r~ for the unilateral one), the defining equations of Algorithms 4 and 5,
