@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The accurate end of the speed/accuracy trade (issue 9): solver type newton against NLGS, in one run, as JSON lines.
+"""The accurate end of the speed/accuracy trade: solver type newton against NLGS, in one run, as JSON lines.
 
 Parts (each prints one JSON line per kergs run, then one comparison line with the target and whether it is met):
   confine500  10 steps: newton to natural residual 1e-10 against nlgs to natural 1e-6 (no cap). Target: every step

@@ -1,5 +1,5 @@
 /* kergs micro-benchmarks, one JSON line each on stdout (run by scripts/bench, built with the tests: tests/bench.cmake).
-   They were timing-only sections of the test programs (issue 12): a measured value is not a pass/fail property, so
+   They were timing-only sections of the test programs: a measured value is not a pass/fail property, so
    they live here, each with the accuracy the measured computation reached, so that a fast but wrong run shows.
      sweep   the NLGS sweep on the hand-built lattice of tests/lattice.h (frictional, W = H^T M^-1 H + 0.05 I):
              ns per local contact per sweep, with the quad criterion and the natural residual after the sweeps

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Speed-up of the distributed engine (issue 4): runs the biaxial case at each size on 1 and on N ranks with plain
+"""Speed-up of the distributed engine: runs the biaxial case at each size on 1 and on N ranks with plain
 NLGS to the same criterion, and prints one JSON line per run (seconds per phase per step, sweeps, residual, bytes
 sent, ghosts, edge cut) and one comparison line per size: whole-step speed-up, extra sweeps caused by the
 cross-rank Jacobi coupling, bytes exchanged per step and per sweep.

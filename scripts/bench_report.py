@@ -45,7 +45,7 @@ out = {
     "residual_mean": float(np.mean(s["residual"][k])),
     "nnz_W": float(np.mean(s["nnz_W"][k])) if "nnz_W" in s else None,
 }
-# kernel-regularised solvers (issue 3): the projector's factorization, diagonal blocks, prediction
+# kernel-regularised solvers: the projector's factorization, diagonal blocks, prediction
 for name in ("factor_seconds", "diag_seconds", "predict_seconds", "nnz_factor", "kernel_dimension", "rank_Hf", "omega"):
     if name in s:
         out[name] = float(np.nanmean(s[name][k]))

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Growth of each phase's cost with the number of grains (issue 3): runs a solver on hexagonal biaxial packings
+"""Growth of each phase's cost with the number of grains (the kernel-regularised solvers' benchmarks): runs a solver on hexagonal biaxial packings
 of increasing size, prints one JSON line per size with seconds per phase per step, then one line with the
 fitted exponents p of t ~ N^p between the smallest and largest size.
 

@@ -104,6 +104,26 @@ static PetscErrorCode RunFCLib(KergsExitStatus *status)
   PetscFunctionReturn(0);
 }
 
+/* Everything kergs -help lists: with -restart, the checkpointed run's options first; the run's objects, every solver
+   type and the FCLib run (KergsOptionsCheckValues runs it with -help set). */
+static PetscErrorCode ReadAllOptions(MPI_Comm comm, void *ctx)
+{
+  KergsStepper stepper;
+  char         checkpoint[PETSC_MAX_PATH_LEN];
+  PetscBool    restart;
+
+  PetscFunctionBeginUser;
+  (void)ctx;
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-restart", checkpoint, sizeof(checkpoint), &restart));
+  if (restart && checkpoint[0]) PetscCall(KergsCheckpointLoadOptions(comm, checkpoint));
+  PetscCall(KergsStepperCreate(comm, &stepper));
+  PetscCall(KergsStepperSetFromOptions(stepper));
+  PetscCall(KergsSolverPrintHelpAllTypes(comm));
+  PetscCall(KergsFCLibRunPrintHelp(comm));
+  PetscCall(KergsStepperDestroy(&stepper));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
 {
   KergsStepper stepper;
@@ -113,6 +133,7 @@ static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
   PetscCall(PetscOptionsHasHelp(NULL, &want_help));
+  if (!want_help) PetscCall(KergsOptionsCheckValues(PETSC_COMM_WORLD, ReadAllOptions, NULL)); /* "-dt" alone is an error */
   PetscCall(PetscOptionsHasName(NULL, NULL, "-fclib_input", &fclib));
   if (fclib && !want_help) {
     PetscCall(RunFCLib(status));

@@ -36,3 +36,11 @@ foreach(c ${KERGS_CASE_FILES})
            WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
   set_tests_properties(case_${case} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60)
 endforeach()
+
+# An option that takes a value, given without one, is an error naming it before any work (KergsOptionsCheckValues):
+# every such option that `kergs -help` lists for confine5's scene, one run each; flags, viewers and PETSc's own options
+# still go without a value. On 2 ranks, where rank 0 decides: -dt.
+add_test(NAME bad_input_missing_values COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/check_missing_values.py $<TARGET_FILE:kergs_exe>
+                                               -options_file cases/confine5.opts WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(bad_input_missing_values PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 240 LABELS bad_input)
+kergs_bad_input(missing_value_2 "option -dt is given without its value" -options_file cases/confine5.opts -dt)

@@ -88,7 +88,7 @@ CASES = {
     # radius-ratio-100 pile, docs/running.md) are caught
     "diverged": ("watch", 1, ["-options_file", CONFINE5, "-solver_max_it", 1, "-solver_divergence_tol", 1e-12], 5,
                  r"the contact solver diverged: natural residual above -solver_divergence_tol 1e-12 in 5 steps in a row, up to step 5"),
-    # a genuine divergence: NLGS-Jac on the radius-ratio-100 pile of issue 10 under the predictive rule, the watch's
+    # a genuine divergence: NLGS-Jac on the radius-ratio-100 pile of docs/running.md under the predictive rule, the watch's
     # other rules off (they stop it at step 149 otherwise): its natural residual is 0.78-0.93 from step 198 (r = 0 scores 1)
     "diverged_nlgsjac": ("watch", 1, ["-scene_name", "r100", "-gravity", "0,-9.81", "-friction", 0.3, "-dt", 1e-3, "-steps", 250,
                                       "-disks_source", "random", "-random_n", 500, "-random_box", "0,0,1,6", "-random_radius",

@@ -1,4 +1,4 @@
-# Tests of the one-contact law (src/law.c) and the NLGS sweep (src/nlgs.c).
+# Tests of the one-contact law (src/solver/law.c) and the NLGS sweep (src/solver/sweep.c).
 # law_1: random and hand-made 2x2 and 1x1 problems; the returned impulse satisfies the Signorini-Coulomb law.
 kergs_test(NAME law_1 SOURCE test_law.c NPROCS 1 ARGS -fp_trap)
 # sweep_1 / sweep_2: hand-built problems (column of disks, lattice W = H^T M^-1 H + s I), solutions against the

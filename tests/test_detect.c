@@ -1,4 +1,4 @@
-static const char help[] = "Tests of contact detection (src/detect.c): the cell-list search against a brute-force O(N^2)\n"
+static const char help[] = "Tests of contact detection (src/detect/detect.c): the cell-list search against a brute-force O(N^2)\n"
                            "search on a polydisperse packing with walls, ownership over ranks (by grain id, through ghosts),\n"
                            "persistence of impulses, the alert distance, one-sided walls and segment ends, coincident\n"
                            "centres. (Its timing is a benchmark: scripts/bench_micro.c.)\n";

@@ -1,4 +1,4 @@
-/* Tests of the exact one-contact law (src/law.c): for thousands of random SPD 2x2 blocks and right-hand
+/* Tests of the exact one-contact law (src/solver/law.c): for thousands of random SPD 2x2 blocks and right-hand
    sides, the returned r satisfies the Signorini-Coulomb law to rounding, the natural-map residual vanishes
    there and not at a perturbed r; plus hand-made cases, ncomp = 1, inactive contacts and degenerate blocks. */
 #include "testing.h"

@@ -1,4 +1,4 @@
-/* Partition and migration (issue 4): the physics does not depend on the number of ranks nor on
+/* Partition and migration of the distributed engine: the physics does not depend on the number of ranks nor on
    how the grains are numbered and owned. Each check compares a run on PETSC_COMM_WORLD against a reference run of
    the same scene in the same process (on PETSC_COMM_SELF, or on PETSC_COMM_WORLD with the contiguous layout), grain
    by grain through the persistent ids, after every step. Runs on 1, 2 and 3 ranks. */

@@ -1,4 +1,4 @@
-/* Predictors of NLKerGS-P (src/predictor.c, src/predictors/): known answers on configurations built by the
+/* Predictors of NLKerGS-P (src/solver/predictor.c, src/solver/predictors/): known answers on configurations built by the
    engine (scene -> steps -> detect -> operators), the defining equations of Algorithms 4 and 5, the extremes of
    eta and epsilon, the unilateral complementarity, and the same predictions on 1 and 2 ranks.
    Runs on 1 and 2 ranks; every check is global. */

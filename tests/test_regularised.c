@@ -1,4 +1,4 @@
-/* The kernel-regularised solvers (NLKerGS-P, NLGS-Jac) at the extremes (issue 3): omega from 1e-6 to 1e3 times
+/* The kernel-regularised solvers (NLKerGS-P, NLGS-Jac) at the extremes: omega from 1e-6 to 1e3 times
    ||W||_2, eta down to 1e-12, epsilon from 1e-12 to 1, radius ratio 100, mass ratio 1e6, every grain floating,
    huge kernels. Each run must keep every impulse and velocity finite and report its convergence honestly: run under
    the natural criterion, a step that says it converged has a natural residual below the tolerance, recomputed here
@@ -8,7 +8,7 @@
    the solver, and every step says so, as the scene documents.
    Options: -straight_row_solver <type> [-straight_row_predictor <type>] [-straight_row_steps N]: run only the straight
    row with that solver
-   (the ctests of the known defect of issue 9, tests/regularised.cmake). */
+   (the ctests of the straight row's known defect, tests/regularised.cmake). */
 static const char help[] = "kergs regularised solver tests.\n";
 
 #include "testing.h"

@@ -1,4 +1,4 @@
-/* Tests of the NLGS sweep (src/nlgs.c) on problems built by hand:
+/* Tests of the NLGS sweep (src/solver/sweep.c) on problems built by hand:
    - a column of disks on the ground under gravity, frictionless (known static solution r_k = g dt sum_{j>=k} m_j),
      with an inactive ceiling contact that would close if it were active;
    - a triangular lattice of disks, W = H^T M^-1 H + s I (positive definite), frictionless and frictional, some

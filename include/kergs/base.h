@@ -55,6 +55,12 @@ PETSC_EXTERN PetscErrorCode KergsOptionsInt(PetscOptionItems *, const char opt[]
    Collective on comm. */
 PETSC_EXTERN PetscErrorCode KergsViewFromOptions(MPI_Comm, const char prefix[], const char option[],
                                                  PetscErrorCode (*view)(void *, PetscViewer), void *obj);
+/* Collective, before the options are read: an option of the database given without a value, which the help of the
+   program's readers lists as taking one, is an error naming it (PETSc's readers would take it as not given). read_all
+   reads every option the program reads, as with -help; it runs, with -help set, on a copy of the database, only when
+   some option has no value. Flags, viewers (whose value is optional), PETSc's own options and those of PETSc objects
+   pass. */
+PETSC_EXTERN PetscErrorCode KergsOptionsCheckValues(MPI_Comm, PetscErrorCode (*read_all)(MPI_Comm, void *), void *ctx);
 /* The largest number of disks this build can hold: KERGS_DIM values per disk must be indexable by PetscInt. */
 #define KERGS_MAX_DISKS (PETSC_MAX_INT / KERGS_DIM)
 /* Provenance of a run, as the output files record it (docs/results.md): the version of the sources, captured at build
