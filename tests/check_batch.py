@@ -23,6 +23,7 @@ import hashlib
 import os
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import time
@@ -214,11 +215,51 @@ def test_paths(k):
         (["-output", os.path.join(sample, "r.h5")], "is not a directory", "an output under a regular file"),
         (["-output", os.path.join(d, "r.h5"), "-checkpoint_path", CONFINE500], "is the input -options_file", "-checkpoint_path on the options file"),
     ]
+    # paths through directories that do not exist yet, then "..": compared after normalising what mkdir -p would create
+    opts = os.path.join(d, "my.opts")
+    shutil.copy(CONFINE500, opts)
+    sub = os.path.join(d, "D")
+    os.makedirs(sub, exist_ok=True)
+    bad += [
+        (["-options_file", opts, "-output", os.path.join(d, "newdir", "..", "my.opts")], "is the input -options_file",
+         "-output newdir/../my.opts replacing the options file"),
+        (["-output", os.path.join(d, "r.h5"), "-sample_output", os.path.join(d, "new", "er", "..", "..", "sample.h5")],
+         "is the input -sample_input", "-sample_output new/er/../../sample.h5 replacing -sample_input"),
+        (["-output", os.path.join(sub, "a.h5"), "-checkpoint_path", os.path.join(sub, ".", "sub", "..", "a.h5")], "are the same file",
+         "-output D/a.h5 -checkpoint_path D/./sub/../a.h5"),
+    ]
+    # devices: a character device with /dev/null's numbers, made for the test (never /dev/null itself)
+    dev = os.path.join(d, "null")
+    try:
+        os.mknod(dev, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    except OSError as e:
+        dev = None
+        print(f"skipped: the device cases need mknod ({e})")
+    if dev:
+        bad += [(["-output", dev], "is a character device", "-output on a device"),
+                (["-output", os.path.join(d, "r.h5"), "-checkpoint_path", dev], "is a character device", "-checkpoint_path on a device"),
+                (["-output", os.path.join(d, "r.h5"), "-sample_output", dev], "is a character device", "-sample_output on a device"),
+                (["-output", os.path.join(d, "nul")], "nul.tmp is a character device", "an output whose .tmp is (a link to) a device")]
+        os.symlink(dev, os.path.join(d, "nul.tmp"))
     for extra, message, what in bad:
         p = k.run(2, *base, *extra, log="paths.log")
         text = p.stdout + p.stderr
         check(p.returncode == 1 and message in text and "step " not in p.stdout, f"paths: {what} is refused before any step ('{message}')")
     check(sha(sample) == before and not os.path.exists(os.path.join(d, "r.h5")), "paths: the input is untouched, nothing written")
+    check(sha(opts) == sha(CONFINE500) and not os.path.exists(os.path.join(d, "newdir")), "paths: the options file is untouched")
+    if dev:
+        check(stat.S_ISCHR(os.stat(dev).st_mode), "paths: the device is still a device")
+        # a device that appears under the output's name while the run goes on: the final rename refuses it, the .tmp stays
+        out = os.path.join(d, "late.h5")
+        p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log="late.log")
+        started = wait_for_steps(log, 3, p)
+        os.mknod(out, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+        for pid in ranks_of(p):
+            os.kill(pid, signal.SIGTERM)
+        rc = p.wait(timeout=60)
+        text = open(log).read()
+        check(started and rc == 1 and "is a character device" in text and stat.S_ISCHR(os.stat(out).st_mode) and os.path.exists(out + ".tmp"),
+              f"paths: a device made at the output's name during the run is not replaced at the end (exit 1, the .tmp kept; got {rc})")
     # a path of 300 characters on 2 ranks (Open MPI's ompio aborted from 241 on)
     long_dir = os.path.join(k.dir, "L" * 100, "o" * 100)
     os.makedirs(long_dir, exist_ok=True)

@@ -12,10 +12,15 @@
 #include <kergs/scene.h>
 #include <petscviewer.h>
 
-/* The directories leading to path, created like mkdir -p of its dirname. Collective. */
+/* The directories leading to path, created like mkdir -p of its dirname; then path and path.tmp must be regular files
+   or not exist (KergsFileReplaceable). Collective. */
 PETSC_EXTERN PetscErrorCode KergsFileMakeParentDir(MPI_Comm, const char path[]);
-/* Waits for every rank (after the file was closed everywhere), then renames tmp to path. Collective. */
+/* Waits for every rank (after the file was closed everywhere), then renames tmp to path, unless path is no longer
+   replaceable (KergsFileReplaceable: the .tmp is kept). Collective. */
 PETSC_EXTERN PetscErrorCode KergsFileCommit(MPI_Comm, const char tmp[], const char path[]);
+/* Whether renaming a file to path is safe: path does not exist or is a regular file (links followed). Otherwise
+   (a device, a directory, a pipe, a socket) msg says what path is. Not collective; plain C (no PETSc error). */
+PETSC_EXTERN PetscBool KergsFileReplaceable(const char path[], char msg[], size_t len);
 /* Whether path exists (rank 0's view, collective). */
 PETSC_EXTERN PetscErrorCode KergsFileExists(MPI_Comm, const char path[], PetscBool *);
 /* Copies src to dst byte for byte (rank 0; dst is replaced). Collective. */
@@ -36,10 +41,10 @@ typedef struct {
   const char *path;   /* empty or NULL: not used in this run */
 } KergsFileRole;
 /* Before any work: every output must be writable (its directory exists or can be created, and files can be created
-   in it), must not be a directory (nor its .tmp), and must differ from every input and every other output, the
-   outputs' .tmp files included; paths are compared after resolving links (realpath of the parent directory plus
-   the base name, and for an existing input also the realpath of the file itself). An input that is also allowed as
-   an output of the same run is listed in `same` pairs (output option, input option) (e.g. -checkpoint_path may be
+   in it), must be a regular file or not exist (nor its .tmp: no device, directory, pipe), and must differ from every input and every other
+   output, the outputs' .tmp files included; paths are compared after resolving links (realpath of the parent directory plus the base name,
+   directories still to be created normalised: newdir/../a is ./a; and for an existing input also the realpath of the file itself). An input
+   that is also allowed as an output of the same run is listed in `same` pairs (output option, input option) (e.g. -checkpoint_path may be
    the -restart file: read whole before the run starts, replaced atomically). Errors name the options and paths.
    Collective. */
 PETSC_EXTERN PetscErrorCode KergsFileCheckPaths(MPI_Comm, PetscInt nout, const KergsFileRole outputs[], PetscInt nin,

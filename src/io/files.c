@@ -103,6 +103,17 @@ static void MakeDirectories(const char path[], char msg[], size_t len)
   }
 }
 
+/* Rank 0, when an output is opened: neither it nor its .tmp may be anything but a regular file (checked before the
+   run, again here: the file system may have changed since). */
+static void CheckReplaceable(const char path[], char msg[], size_t len)
+{
+  char tmp[PETSC_MAX_PATH_LEN + 8], why[PETSC_MAX_PATH_LEN + 160];
+
+  snprintf(tmp, sizeof(tmp), "%s.tmp", path);
+  if (!KergsFileReplaceable(path, why, sizeof(why)) || !KergsFileReplaceable(tmp, why, sizeof(why)))
+    snprintf(msg, len, "Output file %s", why);
+}
+
 PetscErrorCode KergsFileMakeParentDir(MPI_Comm comm, const char path[])
 {
   char        msg[KERGS_FILE_MSG] = "";
@@ -111,6 +122,7 @@ PetscErrorCode KergsFileMakeParentDir(MPI_Comm comm, const char path[])
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   if (rank == 0) MakeDirectories(path, msg, sizeof(msg));
+  if (rank == 0 && !msg[0]) CheckReplaceable(path, msg, sizeof(msg));
   PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_OPEN, msg, (int)sizeof(msg)));
   PetscFunctionReturn(0);
 }
@@ -123,7 +135,13 @@ PetscErrorCode KergsFileCommit(MPI_Comm comm, const char tmp[], const char path[
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Barrier(comm)); /* every rank has closed its handle on tmp */
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  if (rank == 0 && rename(tmp, path)) snprintf(msg, sizeof(msg), "Cannot rename %s to %s: %s", tmp, path, strerror(errno));
+  if (rank == 0) {
+    char why[PETSC_MAX_PATH_LEN + 160];
+    if (!KergsFileReplaceable(path, why, sizeof(why))) /* it became one while the run went on: keep the .tmp */
+      snprintf(msg, sizeof(msg), "Cannot rename %s to %s: %s (the results stay in %s)", tmp, path, why, tmp);
+    else if (rename(tmp, path))
+      snprintf(msg, sizeof(msg), "Cannot rename %s to %s: %s", tmp, path, strerror(errno));
+  }
   PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_WRITE, msg, (int)sizeof(msg)));
   PetscFunctionReturn(0);
 }
@@ -221,13 +239,34 @@ PetscErrorCode KergsFileWriteFailed(const char path[], const char tmp[], const c
 /* ------------------------------------------------------------------------------------------------ */
 /* Checks of a run's paths                                                                          */
 
-/* The directory entry that writing path (by rename) replaces, links resolved: realpath of its deepest existing
-   directory, then the directories still to be created, then the base name. Empty message on success. */
+/* Appends to the absolute path `at` (no trailing '/') the components of `rest`, lexically: "." and empty ones are
+   skipped, ".." drops the last component. Only for directories that do not exist yet (mkdir -p creates them), which
+   hold no links, so that the lexical and the real path agree. */
+static void AppendNormalised(char at[], size_t len, const char rest[])
+{
+  const char *p = rest;
+
+  while (*p) {
+    const char *end = strchr(p, '/');
+    size_t      n   = end ? (size_t)(end - p) : strlen(p);
+    if (n == 2 && !strncmp(p, "..", 2)) {
+      char *slash = strrchr(at, '/');
+      if (slash) *slash = 0;
+    } else if (n && !(n == 1 && p[0] == '.')) {
+      size_t na = strlen(at);
+      snprintf(at + na, len - na, "/%.*s", (int)n, p);
+    }
+    p += n + (end ? 1 : 0);
+  }
+}
+
+/* The directory entry that writing path (by rename) replaces, links resolved: realpath of the deepest existing
+   ancestor of its directory, then the directories still to be created (normalised: newdir/../a.h5 is ./a.h5), then
+   the base name. */
 static void EntryOf(const char path[], char entry[], size_t len)
 {
-  char        dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN], real[PATH_MAX];
-  char        rest[PETSC_MAX_PATH_LEN + 8] = ""; /* the directories below anc still to be created by mkdir -p, from a '/' */
-  const char *base                         = strrchr(path, '/');
+  char        dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN], real[PATH_MAX + PETSC_MAX_PATH_LEN];
+  const char *base = strrchr(path, '/'), *rest = "";
   PetscBool   isdir;
   size_t      na;
 
@@ -237,13 +276,25 @@ static void EntryOf(const char path[], char entry[], size_t len)
   na = strlen(anc);
   if (!realpath(anc, real)) snprintf(real, sizeof(real), "%s", anc);
   if (!strcmp(real, "/")) real[0] = 0; /* entries are joined with '/' below */
-  if (strcmp(anc, dir)) {
-    if (!strcmp(anc, ".") && strncmp(dir, "./", 2))
-      snprintf(rest, sizeof(rest), "/%.*s", (int)(sizeof(dir) - 1), dir);
-    else if (!strncmp(dir, anc, na))
-      snprintf(rest, sizeof(rest), "%s", dir + na - (anc[na - 1] == '/' ? 1 : 0));
-  }
-  snprintf(entry, len, "%s%s/%s", real, rest, base);
+  if (strcmp(anc, dir))                /* anc is "." for a relative dir none of which exists */
+    rest = !strncmp(dir, anc, na) && (dir[na] == '/' || anc[na - 1] == '/') ? dir + na : dir;
+  AppendNormalised(real, sizeof(real), rest);
+  snprintf(entry, len, "%s/%s", real, base);
+}
+
+PetscBool KergsFileReplaceable(const char path[], char msg[], size_t len)
+{
+  struct stat st;
+
+  if (stat(path, &st) || S_ISREG(st.st_mode)) return PETSC_TRUE;
+  snprintf(msg, len, "%s is %s, not a regular file: kergs would replace it; choose a file name", path,
+           S_ISDIR(st.st_mode)    ? "a directory"
+           : S_ISCHR(st.st_mode)  ? "a character device"
+           : S_ISBLK(st.st_mode)  ? "a block device"
+           : S_ISFIFO(st.st_mode) ? "a named pipe"
+           : S_ISSOCK(st.st_mode) ? "a socket"
+                                  : "a special file");
+  return PETSC_FALSE;
 }
 
 typedef struct {
@@ -255,6 +306,7 @@ typedef struct {
 static void CheckOutput(const Named *o, char msg[], size_t len)
 {
   char        dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN], probe[PETSC_MAX_PATH_LEN + 64], tmp[PETSC_MAX_PATH_LEN + 8];
+  char        why[PETSC_MAX_PATH_LEN + 160];
   size_t      n = strlen(o->path);
   struct stat st;
   PetscBool   isdir;
@@ -272,6 +324,10 @@ static void CheckOutput(const Named *o, char msg[], size_t len)
   }
   if (!stat(tmp, &st) && S_ISDIR(st.st_mode)) {
     snprintf(msg, len, "Output %s %s cannot be written: its temporary file %s is a directory", o->option, o->path, tmp);
+    return;
+  }
+  if (!KergsFileReplaceable(o->path, why, sizeof(why)) || !KergsFileReplaceable(tmp, why, sizeof(why))) {
+    snprintf(msg, len, "Output %s: %s", o->option, why);
     return;
   }
   DirName(o->path, dir, sizeof(dir));
