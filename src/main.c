@@ -94,6 +94,7 @@ static PetscErrorCode RunFCLib(KergsExitStatus *status)
   KergsSolver   solver;
 
   PetscFunctionBeginUser;
+  (void)KergsStepperCatchStopSignals(PETSC_FALSE); /* one solve, no time loop to stop cleanly: a signal ends it */
   PetscCall(KergsFCLibRunCreate(PETSC_COMM_WORLD, &run));
   PetscCall(KergsFCLibRunSetFromOptions(run));
   PetscCall(KergsFCLibRunGetSolver(run, &solver));
@@ -154,8 +155,12 @@ int main(int argc, char **argv)
 
   KergsReturnFreedMemory();      /* peak resident memory = peak of live data (base.h) */
   KergsFileAvoidLongPathAbort(); /* before MPI_Init: Open MPI's MPI-IO and paths of 241 characters or more */
+  /* a batch system's stop signal may come at once: caught before MPI_Init, and again after it should MPI or PETSc
+     have taken one (the time loop polls the flag before its first step) */
+  (void)KergsStepperCatchStopSignals(PETSC_TRUE);
   ierr = PetscInitialize(&argc, &argv, NULL, help);
   if (ierr) return KERGS_EXIT_ERROR;
+  if (KergsStepperCatchStopSignals(PETSC_TRUE)) return KERGS_EXIT_ERROR;
   ierr = Run(argc, args, &status);
   /* the run is over and its status known: a batch scheduler's warning signal (Slurm's --signal, SIGUSR1) arriving
      during the last clean-up must not turn it into a failure */

@@ -163,6 +163,114 @@ def test_signals(k):
             check(p2.returncode == 0 and list(s2["step"]) == list(range(1, nrows + 4)) and attrs2.get("end") == b"done" and steps == want,
                   f"SIGTERM: the restart continues the same file to step {nrows + 3}: rows contiguous, snapshots those of one "
                   f"run (steps {want}; the stop's own snapshot dropped)")
+    test_signals_early(k)
+    test_signals_ctrl_c(k)
+    test_signals_recipe(k)
+
+
+def catches_usr1(pid):
+    """Whether the process has a handler for SIGUSR1 (its SigCgt mask in /proc)."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            mask = next(int(line.split()[1], 16) for line in f if line.startswith("SigCgt:"))
+        return bool(mask & (1 << (signal.SIGUSR1 - 1)))
+    except (OSError, StopIteration):
+        return False
+
+
+def kergs_ranks(p):
+    """The rank processes of p that already run the kergs executable (not mpiexec's fork before exec)."""
+    ranks = []
+    for pid in ranks_of(p):
+        try:
+            if os.path.basename(os.readlink(f"/proc/{pid}/exe")) == "kergs":
+                ranks.append(pid)
+        except OSError:
+            pass
+    return ranks
+
+
+def test_signals_early(k):
+    """SIGUSR1 to the ranks as soon as they catch it, or 0.3 s after they started (a batch system's signal at once):
+    the run stops cleanly before its first step. kergs installs its handler first thing in main, before MPI_Init."""
+    out = k.path("early.h5")
+    p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log="early.log")
+    t0, ranks = time.time(), []
+    while time.time() - t0 < 30 and len(ranks) < 2 and p.poll() is None:
+        ranks = kergs_ranks(p)
+        time.sleep(0.005)
+    t1 = time.time()
+    while time.time() - t1 < 0.3 and not all(catches_usr1(pid) for pid in ranks):
+        time.sleep(0.005)
+    for pid in ranks:
+        os.kill(pid, signal.SIGUSR1)
+    sent = time.time() - t1
+    rc = p.wait(timeout=60)
+    text = open(log).read()
+    check(len(ranks) == 2 and rc == 4 and "SIGUSR1 received: stopped after step 0" in text,
+          f"SIGUSR1 {sent:.3f} s after the ranks' start: stopped before the first step, exit status 4 (got {rc})")
+    check(os.path.exists(out) and os.path.exists(k.path("early.checkpoint.h5")), "SIGUSR1 at start: results and checkpoint of step 0")
+
+
+def test_signals_ctrl_c(k):
+    """Ctrl-C in a terminal: SIGINT to mpiexec and the ranks (one process group), then mpiexec relays SIGTERM to the
+    ranks. The second signal, of another kind, must not kill them: the results are kept as on SIGTERM."""
+    out = k.path("ctrlc.h5")
+    out_f = open(k.path("ctrlc.log"), "w")
+    p = subprocess.Popen(k.cmd(2, [*PAPER500, "-steps", 100000, "-output", out]), cwd=ROOT, stdout=out_f, stderr=subprocess.STDOUT,
+                         start_new_session=True)
+    started = wait_for_steps(k.path("ctrlc.log"), 5, p)
+    os.killpg(p.pid, signal.SIGINT)
+    p.wait(timeout=60)
+    text = open(k.path("ctrlc.log")).read()
+    try:
+        _, attrs, _ = stats(out)
+        with h5py.File(k.path("ctrlc.checkpoint.h5"), "r") as c:
+            ok = int(c.attrs["step"]) >= 5
+    except (OSError, KeyError):
+        attrs, ok = {}, False
+    check(started and ok and attrs.get("complete") == 1 and b"stopped by SIG" in attrs.get("end", b"") and not os.path.exists(out + ".tmp")
+          and "exit status 4" in text,
+          "SIGINT to the process group (Ctrl-C): the ranks stop cleanly, results complete under their final name, checkpoint written")
+
+
+def test_signals_recipe(k):
+    """The stop recipe of scripts/slurm/kergs.sbatch with mpiexec as the launcher: SIGTERM to the job script (as
+    scancel --batch --signal=TERM, or --signal=B:...), which relays SIGUSR1 to mpiexec. Exit status 4 (the chain reads
+    it), a checkpoint from which a restart runs."""
+    out, ckpt = k.path("recipe.h5"), k.path("recipe.checkpoint.h5")
+    env = dict(os.environ, KERGS=k.kergs, KERGS_CASE=CONFINE500, KERGS_CHECKPOINT=ckpt, KERGS_CHECKPOINT_SECONDS="100000",
+               KERGS_MAX_JOBS="1", KERGS_LAUNCH=f"{k.mpiexec} -n 2", SLURM_SUBMIT_DIR=ROOT,
+               KERGS_ARGS=f"-solver_type nlgs -solver_max_it 150 -solver_tol 1e-4 -steps 100000 -output {out}")
+    log = k.path("recipe.log")
+    with open(log, "w") as f:
+        p = subprocess.Popen(["bash", os.path.join(ROOT, "scripts", "slurm", "kergs.sbatch")], cwd=ROOT, env=env, stdout=f,
+                             stderr=subprocess.STDOUT, start_new_session=True)
+    started = wait_for_steps(log, 5, p)
+    p.send_signal(signal.SIGTERM)
+    try:
+        rc = p.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        rc = None
+    try:  # whatever is left of the job (a script that did not relay leaves mpiexec and the ranks running)
+        os.killpg(p.pid, signal.SIGKILL)
+    except OSError:
+        pass
+    text = open(log).read()
+    check(started and rc == 4 and "stopped by SIGUSR1, exit status 4" in text and "KERGS_MAX_JOBS" in text,
+          f"recipe: SIGTERM to the job script stops kergs through mpiexec with status 4 (got {rc})")
+    try:
+        s, attrs, _ = stats(out)
+        with h5py.File(ckpt, "r") as c:
+            cstep = int(c.attrs["step"])
+        nrows = len(s["step"])
+    except (OSError, KeyError) as e:
+        check(False, f"recipe: results and checkpoint readable ({e})")
+        return
+    p2 = k.run(2, "-restart", ckpt, "-steps", nrows + 3, log="recipe-restart.log")
+    s2, attrs2, _ = stats(out)
+    check(cstep == nrows and p2.returncode == 0 and list(s2["step"]) == list(range(1, nrows + 4)),
+          f"recipe: the checkpoint (step {cstep}) restarts: 3 more steps appended to the same results file")
 
 
 def test_kill(k):
