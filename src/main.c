@@ -4,7 +4,9 @@ static const char help[] =
     "Every option of the scene, the solver, the output and the time loop is listed below; docs/ describes the files.\n\n";
 
 #include <kergs/kergs.h>
+#include <limits.h>
 #include <signal.h>
+#include <stdlib.h>
 
 /* Options that PETSc itself reads late (at finalize) or that tune PETSc, and so may legitimately look unused. */
 static PetscBool IsPetscOption(const char *name)
@@ -74,16 +76,29 @@ static PetscErrorCode CheckUnusedOptions(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
-/* The -options_file arguments of the command line: PETSc reads those files into the options database and forgets their
+/* The options files (-options_file of the command line and those they include), copied as the walk finds them (one
+   more than the stepper keeps, for its error to name): PETSc reads them into the options database and forgets their
    names, which the checks of the run's paths need (no output may replace an input). */
+typedef struct {
+  int  n;
+  char path[9][PETSC_MAX_PATH_LEN];
+} OptionsFiles;
+
+static void CollectOptionsFile(const char path[], void *ctx)
+{
+  OptionsFiles *files = (OptionsFiles *)ctx;
+  if (files->n < 9) snprintf(files->path[files->n++], PETSC_MAX_PATH_LEN, "%s", path);
+}
+
 static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **argv)
 {
+  static OptionsFiles files;
+  char                msg[256];
+
   PetscFunctionBeginUser;
-  for (int i = 1; i + 1 < argc; i++) {
-    PetscBool same;
-    PetscCall(PetscStrcmp(argv[i], "-options_file", &same));
-    if (same) PetscCall(KergsStepperAddInput(stepper, "-options_file", argv[i + 1]));
-  }
+  files.n = 0;
+  (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
+  for (int i = 0; i < files.n; i++) PetscCall(KergsStepperAddInput(stepper, "-options_file", files.path[i]));
   PetscFunctionReturn(0);
 }
 
@@ -158,6 +173,14 @@ int main(int argc, char **argv)
   /* a batch system's stop signal may come at once: caught before MPI_Init, and again after it should MPI or PETSc
      have taken one (the time loop polls the flag before its first step) */
   (void)KergsStepperCatchStopSignals(PETSC_TRUE);
+  {
+    char msg[2 * PATH_MAX]; /* PETSc would recurse into a file that includes itself until the stack overflows */
+    if (KergsOptionsFilesWalk(argc, argv, NULL, NULL, msg, sizeof(msg))) {
+      const char *rank = getenv("OMPI_COMM_WORLD_RANK");
+      if (!rank || !strcmp(rank, "0")) fprintf(stderr, "kergs: error: %s\n", msg);
+      return KERGS_EXIT_ERROR;
+    }
+  }
   ierr = PetscInitialize(&argc, &argv, NULL, help);
   if (ierr) return KERGS_EXIT_ERROR;
   if (KergsStepperCatchStopSignals(PETSC_TRUE)) return KERGS_EXIT_ERROR;

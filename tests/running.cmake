@@ -6,6 +6,12 @@ kergs_bad_input(solver_count_overflow "Option .solver_max_it: 3000000000 is out 
 # a checkpoint that is missing, or a file that is not a checkpoint
 kergs_bad_input(missing_checkpoint "Checkpoint file .-restart. [^ ]*no_such.checkpoint.h5 does not exist" -restart tests/data/no_such.checkpoint.h5)
 kergs_bad_input(not_a_checkpoint "deposit500.h5 is not a kergs checkpoint" -restart cases/deposit500.h5)
+# an options file that includes itself, directly or through another, is refused before PETSc recurses into it; the
+# files an options file includes are inputs that no output may replace
+kergs_bad_input(options_file_self "self_include.opts includes itself" -options_file tests/data/self_include.opts)
+kergs_bad_input(options_file_cycle "cycle_a.opts includes itself .*cycle_b.opts" -options_file tests/data/cycle_a.opts)
+kergs_bad_input(output_on_included_options_file "is the input -options_file cases/confine5.opts"
+                -options_file tests/data/includes_confine5.opts -sample_output cases/confine5.opts)
 # the solver types' integer options are checked from the stepper (src/solver/ stays untouched): none may be missing
 add_test(NAME int_options COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/check_int_options.sh WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(int_options PROPERTIES LABELS layout TIMEOUT 60)

@@ -50,6 +50,13 @@ typedef struct {
 PETSC_EXTERN PetscErrorCode KergsFileCheckPaths(MPI_Comm, PetscInt nout, const KergsFileRole outputs[], PetscInt nin,
                                                 const KergsFileRole inputs[], PetscInt nsame, const char *const same[][2]);
 
+/* Every options file of the command line (-options_file FILE) and those they include, in PETSc's order (visit, when
+   not NULL, is called with each path as written). A file that includes itself, directly or through others, makes PETSc
+   recurse until the stack overflows: then msg names the chain and the function returns 1, else 0. Plain C, before
+   PetscInitialize (main) and after. */
+typedef void (*KergsOptionsFileVisitor)(const char path[], void *ctx);
+PETSC_EXTERN int KergsOptionsFilesWalk(int argc, char **argv, KergsOptionsFileVisitor visit, void *ctx, char msg[], size_t len);
+
 /* Open MPI's MPI-IO (ompio) aborts with glibc's "buffer overflow detected" on file paths of 241 characters or more, in
    its sharedfp/lockedfile component (which HDF5 never uses). Unless the user set OMPI_MCA_sharedfp, exclude that
    component (setenv, before MPI_Init: call it first thing in main). */

@@ -419,6 +419,88 @@ PetscErrorCode KergsFileCheckPaths(MPI_Comm comm, PetscInt nout, const KergsFile
   PetscFunctionReturn(0);
 }
 
+/* ------------------------------------------------------------------------------------------------ */
+/* Options files                                                                                    */
+
+#define KERGS_OPTIONS_FILE_DEPTH 32 /* deeper nesting than anyone writes by hand: a cycle by another name */
+
+typedef struct {
+  char                    chain[KERGS_OPTIONS_FILE_DEPTH][PATH_MAX]; /* the files being read, outermost first */
+  int                     depth;
+  KergsOptionsFileVisitor visit;
+  void                   *ctx;
+} OptionsWalk;
+
+static int WalkOptionsFile(OptionsWalk *w, const char path[], char msg[], size_t len);
+
+/* The -options_file arguments in one file's text, as PETSc reads it: '#' starts a comment to the end of the line, the
+   value may be on the next line. */
+static int WalkOptionsText(OptionsWalk *w, FILE *fp, char msg[], size_t len)
+{
+  char     *line = NULL;
+  size_t    cap  = 0;
+  PetscBool want = PETSC_FALSE;
+  int       bad  = 0;
+
+  while (!bad && getline(&line, &cap, fp) >= 0) {
+    char *hash = strchr(line, '#'), *save = NULL;
+    if (hash) *hash = 0;
+    for (char *tok = strtok_r(line, " \t\r\n", &save); tok; tok = strtok_r(NULL, " \t\r\n", &save)) {
+      if (want && (bad = WalkOptionsFile(w, tok, msg, len))) break;
+      want = (PetscBool)!strcmp(tok, "-options_file");
+    }
+  }
+  free(line);
+  return bad;
+}
+
+static int WalkOptionsFile(OptionsWalk *w, const char path[], char msg[], size_t len)
+{
+  char  real[PATH_MAX];
+  FILE *fp;
+  int   bad = 0;
+
+  if (!realpath(path, real)) return 0; /* missing: PETSc says so */
+  for (int d = 0; d < w->depth; d++) {
+    if (strcmp(w->chain[d], real)) continue;
+    snprintf(msg, len, "Options file %s includes itself (-options_file", path);
+    for (int e = d; e < w->depth; e++) {
+      size_t n = strlen(msg);
+      snprintf(msg + n, len - n, " %s ->", w->chain[e]);
+    }
+    {
+      size_t n = strlen(msg);
+      snprintf(msg + n, len - n, " %s): PETSc would read it forever", real);
+    }
+    return 1;
+  }
+  if (w->depth == KERGS_OPTIONS_FILE_DEPTH) {
+    snprintf(msg, len, "Options file %s: -options_file nested more than %d deep", path, KERGS_OPTIONS_FILE_DEPTH);
+    return 1;
+  }
+  if (w->visit) w->visit(path, w->ctx);
+  fp = fopen(path, "r");
+  if (!fp) return 0;
+  snprintf(w->chain[w->depth++], PATH_MAX, "%s", real);
+  bad = WalkOptionsText(w, fp, msg, len);
+  w->depth--;
+  fclose(fp);
+  return bad;
+}
+
+int KergsOptionsFilesWalk(int argc, char **argv, KergsOptionsFileVisitor visit, void *ctx, char msg[], size_t len)
+{
+  static OptionsWalk w; /* PATH_MAX x depth: not on the stack */
+
+  msg[0]  = 0;
+  w.depth = 0;
+  w.visit = visit;
+  w.ctx   = ctx;
+  for (int i = 1; i + 1 < argc; i++)
+    if (!strcmp(argv[i], "-options_file") && WalkOptionsFile(&w, argv[i + 1], msg, len)) return 1;
+  return 0;
+}
+
 void KergsFileAvoidLongPathAbort(void)
 {
   /* setenv before MPI_Init: Open MPI reads its MCA parameters from the environment then. Harmless elsewhere. */
