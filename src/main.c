@@ -56,7 +56,7 @@ static PetscBool IsPetscOption(const char *name)
 }
 
 /* An option that nothing read is a typo or belongs to another program: refuse it instead of ignoring it. */
-static PetscErrorCode CheckUnusedOptions(MPI_Comm comm)
+static PetscErrorCode CheckUnusedOptions(MPI_Comm comm, PetscBool fclib)
 {
   PetscInt  n;
   char    **names, **values;
@@ -67,10 +67,15 @@ static PetscErrorCode CheckUnusedOptions(MPI_Comm comm)
   PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
   for (PetscInt i = 0; i < n; i++) {
     if (IsPetscOption(names[i])) continue;
-    PetscCall(PetscPrintf(comm, "kergs: unknown option -%s%s%s\n", names[i], values[i] ? " " : "", values[i] ? values[i] : ""));
+    PetscCall(PetscPrintf(comm, "kergs: %s option -%s%s%s\n", fclib ? "an -fclib_input run does not use" : "unknown", names[i],
+                          values[i] ? " " : "", values[i] ? values[i] : ""));
     bad = PETSC_TRUE;
   }
   PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
+  PetscCheck(!bad || allow || !fclib, comm, PETSC_ERR_USER_INPUT,
+             "Option(s) listed above: an -fclib_input run solves one problem with the solver's options and writes -output; the options of "
+             "a scene and its time loop (-steps, -checkpoint_*, -progress_*, ...) do not apply to it: remove them, or misspelled? "
+             "(-allow_unused_options to accept them)");
   PetscCheck(!bad || allow, comm, PETSC_ERR_USER_INPUT,
              "Unknown option(s) listed above: misspelled? kergs -help lists every option (-allow_unused_options to accept them)");
   PetscFunctionReturn(0);
@@ -113,7 +118,7 @@ static PetscErrorCode RunFCLib(KergsExitStatus *status)
   PetscCall(KergsFCLibRunCreate(PETSC_COMM_WORLD, &run));
   PetscCall(KergsFCLibRunSetFromOptions(run));
   PetscCall(KergsFCLibRunGetSolver(run, &solver));
-  PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
+  PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD, PETSC_TRUE));
   PetscCall(KergsSolverView(solver, PETSC_VIEWER_STDOUT_WORLD));
   PetscCall(KergsFCLibRunSolve(run, status));
   PetscCall(KergsFCLibRunDestroy(&run));
@@ -149,7 +154,7 @@ static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
     PetscCall(KergsSolverPrintHelpAllTypes(PETSC_COMM_WORLD));
     PetscCall(KergsFCLibRunPrintHelp(PETSC_COMM_WORLD));
   } else {
-    PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
+    PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD, PETSC_FALSE));
     PetscCall(KergsSceneView(scene, PETSC_VIEWER_STDOUT_WORLD));
     PetscCall(KergsSolverView(solver, PETSC_VIEWER_STDOUT_WORLD));
     PetscCall(KergsStepperRun(stepper));
