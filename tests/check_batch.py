@@ -336,6 +336,8 @@ def test_paths(k):
         (["-output", os.path.join(sub, "a.h5"), "-checkpoint_path", os.path.join(sub, ".", "sub", "..", "a.h5")], "are the same file",
          "-output D/a.h5 -checkpoint_path D/./sub/../a.h5"),
     ]
+    # a file name of 253 characters: its .tmp (257) would exceed the file system's 255; refused before any work, named
+    bad.append((["-output", os.path.join(d, "n" * 250 + ".h5")], "its file name has 253 characters", "a 253-character file name"))
     # devices: a character device with /dev/null's numbers, made for the test (never /dev/null itself)
     dev = os.path.join(d, "null")
     try:

@@ -336,6 +336,18 @@ static void CheckOutput(const Named *o, char msg[], size_t len)
     snprintf(msg, len, "Output %s %s cannot be written: %s is not a directory", o->option, o->path, anc);
     return;
   }
+  {
+    const char  *base  = strrchr(o->path, '/');
+    const long   limit = pathconf(anc, _PC_NAME_MAX); /* 255 on Linux's file systems */
+    const size_t nb    = strlen(base ? base + 1 : o->path);
+    if (limit > 0 && nb + 4 > (size_t)limit) {
+      snprintf(msg, len,
+               "Output %s %s: its file name has %zu characters, and %s.tmp (written first, then renamed) would exceed the %ld of the file "
+               "system in %s: choose a shorter name",
+               o->option, o->path, nb, base ? base + 1 : o->path, limit, anc);
+      return;
+    }
+  }
   /* permissions, read-only file systems, quotas on inodes: create and remove a file where the output will go */
   snprintf(probe, sizeof(probe), "%s/.kergs-probe-%ld", anc, (long)getpid());
   fd = open(probe, O_CREAT | O_EXCL | O_WRONLY, 0600);
