@@ -409,6 +409,13 @@ def test_statuses(k):
     check(p.returncode == 3 and "exit status 3" in p.stdout, f"statuses: ... and 3 with -error_on_nonconvergence (got {p.returncode})")
     p = k.run(1, "-options_file", CONFINE5, "-steps", 3, "-quiet", "-output_none", "-error_on_nonconvergence", log="done.log")
     check(p.returncode == 0 and " 0 not converged" in p.stdout, f"statuses: a converged run with -error_on_nonconvergence exits 0 (got {p.returncode})")
+    # overlapping grains are found by the first detection, once the results file is open: it is removed, XDMF included
+    out = k.path("overlap.h5")
+    p = k.run(2, "-options_file", CONFINE5, "-disks_x", "0.5,0.5,1.5,0.5,2.2,0.5,3.5,0.5,4.5,0.5", "-output", out, log="overlap.log")
+    check(p.returncode == 1 and "grains 1 and 2 overlap" in p.stdout + p.stderr and not os.path.exists(out + ".tmp")
+          and not os.path.exists(out) and not os.path.exists(k.path("overlap.xdmf")),
+          f"statuses: overlapping grains at start: exit status 1, no results file, no .tmp, no XDMF left (got {p.returncode}, "
+          f"{sorted(f for f in os.listdir(k.dir) if f.startswith('overlap.'))})")
     out = k.path("blowup.h5")
     p = k.run(2, "-options_file", CONFINE5, "-gravity", "0,1e308", "-dt", 10, "-steps", 5, "-quiet", "-output", out, log="blowup.log")
     _, attrs, snaps = stats(out)

@@ -136,6 +136,7 @@ static PetscErrorCode CheckInitialOverlaps(KergsStepper st)
       PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grain %" PetscInt_FMT " crosses wall %s by %g (radius %g)\n", D.id[b->a],
                             walls[b->b].name, (double)-b->gap, (double)b->ra));
   }
+  if (nbad) PetscCall(KergsResultsDiscard(st->results)); /* opened already: no results of a run that did not start */
   PetscCheck(nbad == 0, st->comm, PETSC_ERR_USER_INPUT,
              "The initial packing has overlapping grains (see the pairs printed above); raise -initial_overlap_tol to accept "
              "interpenetrations up to that fraction of the smaller radius");
