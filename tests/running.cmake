@@ -1,5 +1,9 @@
 # Batch use (docs/running.md): counts that do not fit in the build's 32-bit integers are refused, not wrapped.
 kergs_bad_input(steps_overflow "Option .steps: 10000000000 is out of the range" -options_file cases/confine5.opts -steps 10000000000)
+# messages that name the option: counts in exponent notation (PETSc's own message names none), a time step that is not finite
+kergs_bad_input(steps_exponent_overflow "Option .steps: 1e10 is out of the range" -options_file cases/confine5.opts -steps 1e10)
+kergs_bad_input(steps_exponent "Option .steps: 1e3 is not an integer in digits.*write 1000" -options_file cases/confine5.opts -steps 1e3)
+kergs_bad_input(dt_inf "Option .dt inf: the time step must be a finite positive number" -options_file cases/confine5.opts -dt inf)
 kergs_bad_input(lattice_overflow "lattice_n 65536,65537 asks for 4295032832 disks"
                 -options_file cases/confine5.opts -disks_source lattice -lattice_n 65536,65537 -lattice_radius 0.1)
 kergs_bad_input(solver_count_overflow "Option .solver_max_it: 3000000000 is out of the range" -options_file cases/confine5.opts -solver_max_it 3000000000)

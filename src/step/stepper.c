@@ -1,6 +1,7 @@
 /* kergs stepper: the time loop of Algorithm 1 (Moreau-Jean, theta-method). Data flows one way per step:
    scene state -> detect -> operators -> solver -> update -> results. */
 #include <kergs/private/stepperimpl.h>
+#include <math.h>
 #include <kergs/sample.h>
 #include <kergs/fclib.h>
 
@@ -53,6 +54,25 @@ static PetscErrorCode CheckSolverIntegerOptions(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
+/* -steps and -dt, as written: a count in digits within PetscInt's range, a finite time step ("-dt inf" was told
+   "must be positive", "-steps 1e10" got PETSc's message without the option's name). */
+static PetscErrorCode CheckClockOptions(MPI_Comm comm)
+{
+  char      value[256];
+  PetscBool set;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsOptionsCheckInt(comm, NULL, "-steps"));
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-dt", value, sizeof(value), &set));
+  if (set) {
+    char        *end;
+    const double dt = strtod(value, &end);
+    PetscCheck(end == value || *end || isfinite(dt), comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Option -dt %s: the time step must be a finite positive number of seconds", value);
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
 {
   const char *name;
@@ -62,6 +82,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(PetscOptionsHasHelp(NULL, &help));
   PetscCall(KergsStepperBatchOptions(st)); /* first: a restart changes how the scene reads its options */
   if (st->restart_path[0] && !help) PetscCall(KergsSceneSetRestoring(st->scene, PETSC_TRUE));
+  PetscCall(CheckClockOptions(st->comm)); /* before the scene reads them: messages that name the option */
   PetscCall(KergsSceneSetFromOptions(st->scene));
   PetscCall(CheckSolverIntegerOptions(st->comm)); /* before the solver reads them: a wrapped count is never used */
   PetscCall(KergsSolverSetFromOptions(st->solver));
