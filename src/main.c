@@ -189,6 +189,7 @@ int main(int argc, char **argv)
   ierr = PetscInitialize(&argc, &argv, NULL, help);
   if (ierr) return KERGS_EXIT_ERROR;
   if (KergsStepperCatchStopSignals(PETSC_TRUE)) return KERGS_EXIT_ERROR;
+  if (KergsPushErrorHandler()) return KERGS_EXIT_ERROR; /* a failed allocation says "out of memory" */
   ierr = Run(argc, args, &status);
   /* the run is over and its status known: a batch scheduler's warning signal (Slurm's --signal, SIGUSR1) arriving
      during the last clean-up must not turn it into a failure */

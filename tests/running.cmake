@@ -4,6 +4,14 @@ kergs_bad_input(steps_overflow "Option .steps: 10000000000 is out of the range" 
 kergs_bad_input(steps_exponent_overflow "Option .steps: 1e10 is out of the range" -options_file cases/confine5.opts -steps 1e10)
 kergs_bad_input(steps_exponent "Option .steps: 1e3 is not an integer in digits.*write 1000" -options_file cases/confine5.opts -steps 1e3)
 kergs_bad_input(dt_inf "Option .dt inf: the time step must be a finite positive number" -options_file cases/confine5.opts -dt inf)
+# a failed allocation says so, and where (PETSc's own message was the function's name alone); under a 3 GB address-space
+# limit, so that the 6 GB that 400 million disks ask for are refused without touching the machine's memory
+add_test(NAME bad_input_out_of_memory
+         COMMAND sh -c "ulimit -v 3000000 && exec \"$0\" \"$@\"" ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
+                 "out of memory: an allocation in DisksFromLattice failed" $<TARGET_FILE:kergs_exe> -options_file cases/confine5.opts
+                 -output_none -disks_source lattice -lattice_n 20000,20000 -lattice_radius 0.0001 -box 0,0,5,5
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(bad_input_out_of_memory PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60)
 kergs_bad_input(lattice_overflow "lattice_n 65536,65537 asks for 4295032832 disks"
                 -options_file cases/confine5.opts -disks_source lattice -lattice_n 65536,65537 -lattice_radius 0.1)
 kergs_bad_input(solver_count_overflow "Option .solver_max_it: 3000000000 is out of the range" -options_file cases/confine5.opts -solver_max_it 3000000000)
