@@ -416,6 +416,20 @@ def test_statuses(k):
           and not os.path.exists(out) and not os.path.exists(k.path("overlap.xdmf")),
           f"statuses: overlapping grains at start: exit status 1, no results file, no .tmp, no XDMF left (got {p.returncode}, "
           f"{sorted(f for f in os.listdir(k.dir) if f.startswith('overlap.'))})")
+    # restarts that cannot be what the user meant: -steps below the checkpoint's step, a checkpoint of another format
+    out = k.path("short.h5")
+    k.run(1, "-options_file", CONFINE5, "-steps", 4, "-quiet", "-output", out, "-checkpoint_every", 4, log="short.log")
+    ckpt = k.path("short.checkpoint.h5")
+    p = k.run(1, "-restart", ckpt, "-steps", 2, log="short-restart.log")
+    check(p.returncode == 1 and "-steps 2 is below the step of the checkpoint" in p.stdout + p.stderr,
+          f"statuses: a restart with -steps below the checkpoint's step is refused, naming both (got {p.returncode})")
+    other = k.path("other.checkpoint.h5")
+    shutil.copy(ckpt, other)
+    with h5py.File(other, "r+") as f:
+        f.attrs["kergs_format"] = np.bytes_("kergs checkpoint 10")
+    p = k.run(1, "-restart", other, "-steps", 6, "-output", k.path("other.h5"), log="other-restart.log")
+    check(p.returncode == 1 and "is not a kergs checkpoint" in p.stdout + p.stderr,
+          f"statuses: a checkpoint whose kergs_format is another ('kergs checkpoint 10') is refused (got {p.returncode})")
     out = k.path("blowup.h5")
     p = k.run(2, "-options_file", CONFINE5, "-gravity", "0,1e308", "-dt", 10, "-steps", 5, "-quiet", "-output", out, log="blowup.log")
     _, attrs, snaps = stats(out)

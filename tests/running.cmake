@@ -18,6 +18,10 @@ kergs_bad_input(solver_count_overflow "Option .solver_max_it: 3000000000 is out 
 # a checkpoint that is missing, or a file that is not a checkpoint
 kergs_bad_input(missing_checkpoint "Checkpoint file .-restart. [^ ]*no_such.checkpoint.h5 does not exist" -restart tests/data/no_such.checkpoint.h5)
 kergs_bad_input(not_a_checkpoint "deposit500.h5 is not a kergs checkpoint" -restart cases/deposit500.h5)
+# a checkpoint's .tmp (a write that did not finish) is not restarted from; an export of a step beyond the run is refused
+kergs_bad_input(restart_from_tmp "restart [^ ]*c.checkpoint.h5.tmp is the temporary file of a checkpoint.*restart from [^ ]*c.checkpoint.h5,"
+                -restart tests/data/c.checkpoint.h5.tmp)
+kergs_bad_input(fclib_step_beyond "fclib_step 50 is beyond the run .-steps 40." -options_file cases/confine5.opts -fclib_step 50)
 # an options file that includes itself, directly or through another, is refused before PETSc recurses into it; the
 # files an options file includes are inputs that no output may replace
 kergs_bad_input(options_file_self "self_include.opts includes itself" -options_file tests/data/self_include.opts)

@@ -784,6 +784,13 @@ PetscErrorCode KergsCheckpointLoadOptions(MPI_Comm comm, const char path[])
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
+  {
+    size_t n = strlen(path);
+    PetscCheck(n < 4 || strcmp(path + n - 4, ".tmp"), comm, PETSC_ERR_ARG_WRONG,
+               "-restart %s is the temporary file of a checkpoint being written (a write that did not finish, or not yet renamed): restart "
+               "from %.*s, the last complete checkpoint",
+               path, (int)(n - 4), path);
+  }
   PetscCall(CheckFile(comm, path));
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &v));
   PetscCall(PetscViewerHDF5ReadAttribute(v, "/", "options", PETSC_STRING, NULL, &text));

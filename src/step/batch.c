@@ -230,14 +230,18 @@ PetscErrorCode KergsStepperCheckpoint(KergsStepper st)
 PetscErrorCode KergsStepperRestore(KergsStepper st)
 {
   KergsRunState run;
-  PetscInt      step;
+  PetscInt      step, nsteps;
 
   PetscFunctionBeginUser;
   PetscCall(KergsCheckpointRead(st->restart_path, st->scene, st->contacts, st->partition, st->results, &run));
   st->nonconverged  = run.nonconverged;
   st->max_violation = run.max_violation;
   st->moved         = run.moved;
-  PetscCall(KergsSceneGetStep(st->scene, &step, NULL, NULL));
+  PetscCall(KergsSceneGetStep(st->scene, &step, NULL, &nsteps));
+  PetscCheck(nsteps >= step, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-steps %" PetscInt_FMT " is below the step of the checkpoint %s (%" PetscInt_FMT "): give -steps above %" PetscInt_FMT
+             " to continue it",
+             nsteps, st->restart_path, step, step);
   st->checkpoint_step = step; /* the checkpoint this run starts from */
   PetscFunctionReturn(0);
 }

@@ -283,6 +283,8 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   st->status = KERGS_EXIT_DONE;
   PetscCall(KergsSceneGetStep(sc, &step, NULL, &nsteps));
   if (step == 0) PetscCall(KergsStepperCheckContainer(st)); /* before any file is written */
+  PetscCheck(st->fclib_step <= nsteps, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-fclib_step %" PetscInt_FMT " is beyond the run (-steps %" PetscInt_FMT "): no such step to export", st->fclib_step, nsteps);
   PetscCall(KergsStepperEnergyFloor(st));
   PetscCall(KergsStepperCatchSignals(PETSC_TRUE));
   PetscCall(KergsResultsOpen(st->results));
