@@ -200,6 +200,7 @@ int main(int argc, char **argv)
     MPI_Abort(PETSC_COMM_WORLD, KERGS_EXIT_ERROR);
     return KERGS_EXIT_ERROR;
   }
+  (void)PetscPopErrorHandler(); /* KergsPushErrorHandler's, freed before PETSc counts its leaks */
   ierr = PetscFinalize();
   return ierr ? KERGS_EXIT_ERROR : (int)status;
 }

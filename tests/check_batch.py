@@ -107,6 +107,8 @@ def test_restart(k):
         ckpt = part.replace(".h5", ".checkpoint.h5")
         p = k.run(second, "-restart", ckpt, "-steps", 8, log=f"P{first}{second}b.log")
         check(p.returncode == 0, f"restart {first} -> {second} ranks: runs to step 8")
+        check(f"restart of a checkpoint written on {first} rank(s) on {second}: " in p.stdout and "not bit for bit" in p.stdout,
+              f"restart {first} -> {second} ranks: the run says at start that it continues to rounding, not bit for bit")
         with h5py.File(ref, "r") as f, h5py.File(part, "r") as g:
             same4 = all(np.array_equal(f["stats"][n][:4], g["stats"][n][:4]) for n in ("residual", "contacts", "iterations", "time"))
             check(same4 and g["stats/step"].shape == (8,), f"restart {first} -> {second} ranks: rows 1-4 are the first run's, bit for bit")
