@@ -4,7 +4,9 @@ static const char help[] =
     "Every option of the scene, the solver, the output and the time loop is listed below; docs/ describes the files.\n\n";
 
 #include <kergs/kergs.h>
+#include <limits.h>
 #include <signal.h>
+#include <stdlib.h>
 
 /* Options that PETSc itself reads late (at finalize) or that tune PETSc, and so may legitimately look unused. */
 static PetscBool IsPetscOption(const char *name)
@@ -54,7 +56,7 @@ static PetscBool IsPetscOption(const char *name)
 }
 
 /* An option that nothing read is a typo or belongs to another program: refuse it instead of ignoring it. */
-static PetscErrorCode CheckUnusedOptions(MPI_Comm comm)
+static PetscErrorCode CheckUnusedOptions(MPI_Comm comm, PetscBool fclib)
 {
   PetscInt  n;
   char    **names, **values;
@@ -65,25 +67,43 @@ static PetscErrorCode CheckUnusedOptions(MPI_Comm comm)
   PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
   for (PetscInt i = 0; i < n; i++) {
     if (IsPetscOption(names[i])) continue;
-    PetscCall(PetscPrintf(comm, "kergs: unknown option -%s%s%s\n", names[i], values[i] ? " " : "", values[i] ? values[i] : ""));
+    PetscCall(PetscPrintf(comm, "kergs: %s option -%s%s%s\n", fclib ? "an -fclib_input run does not use" : "unknown", names[i],
+                          values[i] ? " " : "", values[i] ? values[i] : ""));
     bad = PETSC_TRUE;
   }
   PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
+  PetscCheck(!bad || allow || !fclib, comm, PETSC_ERR_USER_INPUT,
+             "Option(s) listed above: an -fclib_input run solves one problem with the solver's options and writes -output; the options of "
+             "a scene and its time loop (-steps, -checkpoint_*, -progress_*, ...) do not apply to it: remove them, or misspelled? "
+             "(-allow_unused_options to accept them)");
   PetscCheck(!bad || allow, comm, PETSC_ERR_USER_INPUT,
              "Unknown option(s) listed above: misspelled? kergs -help lists every option (-allow_unused_options to accept them)");
   PetscFunctionReturn(0);
 }
 
-/* The -options_file arguments of the command line: PETSc reads those files into the options database and forgets their
+/* The options files (-options_file of the command line and those they include), copied as the walk finds them (one
+   more than the stepper keeps, for its error to name): PETSc reads them into the options database and forgets their
    names, which the checks of the run's paths need (no output may replace an input). */
+typedef struct {
+  int  n;
+  char path[9][PETSC_MAX_PATH_LEN];
+} OptionsFiles;
+
+static void CollectOptionsFile(const char path[], void *ctx)
+{
+  OptionsFiles *files = (OptionsFiles *)ctx;
+  if (files->n < 9) snprintf(files->path[files->n++], PETSC_MAX_PATH_LEN, "%s", path);
+}
+
 static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **argv)
 {
+  static OptionsFiles files;
+  char                msg[256];
+
   PetscFunctionBeginUser;
-  for (int i = 1; i + 1 < argc; i++) {
-    PetscBool same;
-    PetscCall(PetscStrcmp(argv[i], "-options_file", &same));
-    if (same) PetscCall(KergsStepperAddInput(stepper, "-options_file", argv[i + 1]));
-  }
+  files.n = 0;
+  (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
+  for (int i = 0; i < files.n; i++) PetscCall(KergsStepperAddInput(stepper, "-options_file", files.path[i]));
   PetscFunctionReturn(0);
 }
 
@@ -94,10 +114,11 @@ static PetscErrorCode RunFCLib(KergsExitStatus *status)
   KergsSolver   solver;
 
   PetscFunctionBeginUser;
+  (void)KergsStepperCatchStopSignals(PETSC_FALSE); /* one solve, no time loop to stop cleanly: a signal ends it */
   PetscCall(KergsFCLibRunCreate(PETSC_COMM_WORLD, &run));
   PetscCall(KergsFCLibRunSetFromOptions(run));
   PetscCall(KergsFCLibRunGetSolver(run, &solver));
-  PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
+  PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD, PETSC_TRUE));
   PetscCall(KergsSolverViewFromOptions(solver, "-solver_view"));
   PetscCall(KergsFCLibRunSolve(run, status));
   PetscCall(KergsFCLibRunDestroy(&run));
@@ -150,7 +171,7 @@ static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
     PetscCall(KergsSolverPrintHelpAllTypes(PETSC_COMM_WORLD));
     PetscCall(KergsFCLibRunPrintHelp(PETSC_COMM_WORLD));
   } else {
-    PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD));
+    PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD, PETSC_FALSE));
     PetscCall(KergsStepperViewFromOptions(stepper));
     PetscCall(KergsStepperRun(stepper));
     PetscCall(KergsStepperGetExitStatus(stepper, status));
@@ -170,8 +191,21 @@ int main(int argc, char **argv)
 
   KergsReturnFreedMemory();      /* peak resident memory = peak of live data (base.h) */
   KergsFileAvoidLongPathAbort(); /* before MPI_Init: Open MPI's MPI-IO and paths of 241 characters or more */
+  /* a batch system's stop signal may come at once: caught before MPI_Init, and again after it should MPI or PETSc
+     have taken one (the time loop polls the flag before its first step) */
+  (void)KergsStepperCatchStopSignals(PETSC_TRUE);
+  {
+    char msg[2 * PATH_MAX]; /* PETSc would recurse into a file that includes itself until the stack overflows */
+    if (KergsOptionsFilesWalk(argc, argv, NULL, NULL, msg, sizeof(msg))) {
+      const char *rank = getenv("OMPI_COMM_WORLD_RANK");
+      if (!rank || !strcmp(rank, "0")) fprintf(stderr, "kergs: error: %s\n", msg);
+      return KERGS_EXIT_ERROR;
+    }
+  }
   ierr = PetscInitialize(&argc, &argv, NULL, help);
   if (ierr) return KERGS_EXIT_ERROR;
+  if (KergsStepperCatchStopSignals(PETSC_TRUE)) return KERGS_EXIT_ERROR;
+  if (KergsPushErrorHandler()) return KERGS_EXIT_ERROR; /* a failed allocation says "out of memory" */
   ierr = Run(argc, args, &status);
   /* the run is over and its status known: a batch scheduler's warning signal (Slurm's --signal, SIGUSR1) arriving
      during the last clean-up must not turn it into a failure */
@@ -182,6 +216,7 @@ int main(int argc, char **argv)
     MPI_Abort(PETSC_COMM_WORLD, KERGS_EXIT_ERROR);
     return KERGS_EXIT_ERROR;
   }
+  (void)PetscPopErrorHandler(); /* KergsPushErrorHandler's, freed before PETSc counts its leaks */
   ierr = PetscFinalize();
   return ierr ? KERGS_EXIT_ERROR : (int)status;
 }

@@ -23,6 +23,7 @@ import hashlib
 import os
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import time
@@ -106,6 +107,8 @@ def test_restart(k):
         ckpt = part.replace(".h5", ".checkpoint.h5")
         p = k.run(second, "-restart", ckpt, "-steps", 8, log=f"P{first}{second}b.log")
         check(p.returncode == 0, f"restart {first} -> {second} ranks: runs to step 8")
+        check(f"restart of a checkpoint written on {first} rank(s) on {second}: " in p.stdout and "not bit for bit" in p.stdout,
+              f"restart {first} -> {second} ranks: the run says at start that it continues to rounding, not bit for bit")
         with h5py.File(ref, "r") as f, h5py.File(part, "r") as g:
             same4 = all(np.array_equal(f["stats"][n][:4], g["stats"][n][:4]) for n in ("residual", "contacts", "iterations", "time"))
             check(same4 and g["stats/step"].shape == (8,), f"restart {first} -> {second} ranks: rows 1-4 are the first run's, bit for bit")
@@ -162,6 +165,115 @@ def test_signals(k):
             check(p2.returncode == 0 and list(s2["step"]) == list(range(1, nrows + 4)) and attrs2.get("end") == b"done" and steps == want,
                   f"SIGTERM: the restart continues the same file to step {nrows + 3}: rows contiguous, snapshots those of one "
                   f"run (steps {want}; the stop's own snapshot dropped)")
+    test_signals_early(k)
+    test_signals_ctrl_c(k)
+    test_signals_recipe(k)
+
+
+def catches_usr1(pid):
+    """Whether the process has a handler for SIGUSR1 (its SigCgt mask in /proc)."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            mask = next(int(line.split()[1], 16) for line in f if line.startswith("SigCgt:"))
+        return bool(mask & (1 << (signal.SIGUSR1 - 1)))
+    except (OSError, StopIteration):
+        return False
+
+
+def kergs_ranks(p):
+    """The rank processes of p that already run the kergs executable (not mpiexec's fork before exec)."""
+    ranks = []
+    for pid in ranks_of(p):
+        try:
+            if os.path.basename(os.readlink(f"/proc/{pid}/exe")) == "kergs":
+                ranks.append(pid)
+        except OSError:
+            pass
+    return ranks
+
+
+def test_signals_early(k):
+    """SIGUSR1 to the ranks as soon as they catch it, or 0.3 s after they started (a batch system's signal at once):
+    the run stops cleanly before its first step. kergs installs its handler first thing in main, before MPI_Init."""
+    out = k.path("early.h5")
+    p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log="early.log")
+    t0, ranks = time.time(), []
+    while time.time() - t0 < 30 and len(ranks) < 2 and p.poll() is None:
+        ranks = kergs_ranks(p)
+        time.sleep(0.005)
+    t1 = time.time()
+    while time.time() - t1 < 0.3 and not all(catches_usr1(pid) for pid in ranks):
+        time.sleep(0.005)
+    for pid in ranks:
+        os.kill(pid, signal.SIGUSR1)
+    sent = time.time() - t1
+    rc = p.wait(timeout=60)
+    text = open(log).read()
+    check(len(ranks) == 2 and rc == 4 and "SIGUSR1 received: stopped after step 0" in text,
+          f"SIGUSR1 {sent:.3f} s after the ranks' start: stopped before the first step, exit status 4 (got {rc})")
+    check(os.path.exists(out) and os.path.exists(k.path("early.checkpoint.h5")), "SIGUSR1 at start: results and checkpoint of step 0")
+
+
+def test_signals_ctrl_c(k):
+    """Ctrl-C in a terminal: SIGINT reaches mpiexec and the ranks (one process group), then mpiexec relays SIGTERM to the
+    ranks (and SIGKILL one second later, which kergs cannot prevent: docs/running.md). The relayed signal, of another kind,
+    must not kill them: here SIGINT then SIGTERM go to the ranks directly, and the run must stop as on SIGINT alone."""
+    out = k.path("ctrlc.h5")
+    p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log="ctrlc.log")
+    started = wait_for_steps(log, 5, p)
+    ranks = ranks_of(p)
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        for pid in ranks:
+            os.kill(pid, sig)
+    rc = p.wait(timeout=60)
+    try:
+        _, attrs, _ = stats(out)
+        with h5py.File(k.path("ctrlc.checkpoint.h5"), "r") as c:
+            ok = int(c.attrs["step"]) >= 5
+    except (OSError, KeyError):
+        attrs, ok = {}, False
+    check(started and rc == 4 and ok and attrs.get("end", b"").startswith(b"stopped by SIG") and not os.path.exists(out + ".tmp"),
+          f"SIGINT then SIGTERM to the ranks (Ctrl-C relayed by mpiexec): stopped cleanly with status 4, results complete, checkpoint "
+          f"written (got {rc}, {attrs.get('end')})")
+
+
+def test_signals_recipe(k):
+    """The stop recipe of scripts/slurm/kergs.sbatch with mpiexec as the launcher: SIGTERM to the job script (as
+    scancel --batch --signal=TERM, or --signal=B:...), which relays SIGUSR1 to mpiexec. Exit status 4 (the chain reads
+    it), a checkpoint from which a restart runs."""
+    out, ckpt = k.path("recipe.h5"), k.path("recipe.checkpoint.h5")
+    env = dict(os.environ, KERGS=k.kergs, KERGS_CASE=CONFINE500, KERGS_CHECKPOINT=ckpt, KERGS_CHECKPOINT_SECONDS="100000",
+               KERGS_MAX_JOBS="1", KERGS_LAUNCH=f"{k.mpiexec} -n 2", SLURM_SUBMIT_DIR=ROOT,
+               KERGS_ARGS=f"-solver_type nlgs -solver_max_it 150 -solver_tol 1e-4 -steps 100000 -output {out}")
+    log = k.path("recipe.log")
+    with open(log, "w") as f:
+        p = subprocess.Popen(["bash", os.path.join(ROOT, "scripts", "slurm", "kergs.sbatch")], cwd=ROOT, env=env, stdout=f,
+                             stderr=subprocess.STDOUT, start_new_session=True)
+    started = wait_for_steps(log, 5, p)
+    p.send_signal(signal.SIGTERM)
+    try:
+        rc = p.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        rc = None
+    try:  # whatever is left of the job (a script that did not relay leaves mpiexec and the ranks running)
+        os.killpg(p.pid, signal.SIGKILL)
+    except OSError:
+        pass
+    text = open(log).read()
+    check(started and rc == 4 and "stopped by SIGUSR1, exit status 4" in text and "KERGS_MAX_JOBS" in text,
+          f"recipe: SIGTERM to the job script stops kergs through mpiexec with status 4 (got {rc})")
+    try:
+        s, attrs, _ = stats(out)
+        with h5py.File(ckpt, "r") as c:
+            cstep = int(c.attrs["step"])
+        nrows = len(s["step"])
+    except (OSError, KeyError) as e:
+        check(False, f"recipe: results and checkpoint readable ({e})")
+        return
+    p2 = k.run(2, "-restart", ckpt, "-steps", nrows + 3, log="recipe-restart.log")
+    s2, attrs2, _ = stats(out)
+    check(cstep == nrows and p2.returncode == 0 and list(s2["step"]) == list(range(1, nrows + 4)),
+          f"recipe: the checkpoint (step {cstep}) restarts: 3 more steps appended to the same results file")
 
 
 def test_kill(k):
@@ -214,11 +326,53 @@ def test_paths(k):
         (["-output", os.path.join(sample, "r.h5")], "is not a directory", "an output under a regular file"),
         (["-output", os.path.join(d, "r.h5"), "-checkpoint_path", CONFINE500], "is the input -options_file", "-checkpoint_path on the options file"),
     ]
+    # paths through directories that do not exist yet, then "..": compared after normalising what mkdir -p would create
+    opts = os.path.join(d, "my.opts")
+    shutil.copy(CONFINE500, opts)
+    sub = os.path.join(d, "D")
+    os.makedirs(sub, exist_ok=True)
+    bad += [
+        (["-options_file", opts, "-output", os.path.join(d, "newdir", "..", "my.opts")], "is the input -options_file",
+         "-output newdir/../my.opts replacing the options file"),
+        (["-output", os.path.join(d, "r.h5"), "-sample_output", os.path.join(d, "new", "er", "..", "..", "sample.h5")],
+         "is the input -sample_input", "-sample_output new/er/../../sample.h5 replacing -sample_input"),
+        (["-output", os.path.join(sub, "a.h5"), "-checkpoint_path", os.path.join(sub, ".", "sub", "..", "a.h5")], "are the same file",
+         "-output D/a.h5 -checkpoint_path D/./sub/../a.h5"),
+    ]
+    # a file name of 253 characters: its .tmp (257) would exceed the file system's 255; refused before any work, named
+    bad.append((["-output", os.path.join(d, "n" * 250 + ".h5")], "its file name has 253 characters", "a 253-character file name"))
+    # devices: a character device with /dev/null's numbers, made for the test (never /dev/null itself)
+    dev = os.path.join(d, "null")
+    try:
+        os.mknod(dev, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    except OSError as e:
+        dev = None
+        print(f"skipped: the device cases need mknod ({e})")
+    if dev:
+        bad += [(["-output", dev], "is a character device", "-output on a device"),
+                (["-output", os.path.join(d, "r.h5"), "-checkpoint_path", dev], "is a character device", "-checkpoint_path on a device"),
+                (["-output", os.path.join(d, "r.h5"), "-sample_output", dev], "is a character device", "-sample_output on a device"),
+                (["-output", os.path.join(d, "nul")], "nul.tmp is a character device", "an output whose .tmp is (a link to) a device")]
+        os.symlink(dev, os.path.join(d, "nul.tmp"))
     for extra, message, what in bad:
         p = k.run(2, *base, *extra, log="paths.log")
         text = p.stdout + p.stderr
         check(p.returncode == 1 and message in text and "step " not in p.stdout, f"paths: {what} is refused before any step ('{message}')")
     check(sha(sample) == before and not os.path.exists(os.path.join(d, "r.h5")), "paths: the input is untouched, nothing written")
+    check(sha(opts) == sha(CONFINE500) and not os.path.exists(os.path.join(d, "newdir")), "paths: the options file is untouched")
+    if dev:
+        check(stat.S_ISCHR(os.stat(dev).st_mode), "paths: the device is still a device")
+        # a device that appears under the output's name while the run goes on: the final rename refuses it, the .tmp stays
+        out = os.path.join(d, "late.h5")
+        p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log="late.log")
+        started = wait_for_steps(log, 3, p)
+        os.mknod(out, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+        for pid in ranks_of(p):
+            os.kill(pid, signal.SIGTERM)
+        rc = p.wait(timeout=60)
+        text = open(log).read()
+        check(started and rc == 1 and "is a character device" in text and stat.S_ISCHR(os.stat(out).st_mode) and os.path.exists(out + ".tmp"),
+              f"paths: a device made at the output's name during the run is not replaced at the end (exit 1, the .tmp kept; got {rc})")
     # a path of 300 characters on 2 ranks (Open MPI's ompio aborted from 241 on)
     long_dir = os.path.join(k.dir, "L" * 100, "o" * 100)
     os.makedirs(long_dir, exist_ok=True)
@@ -258,6 +412,27 @@ def test_statuses(k):
     check(p.returncode == 3 and "exit status 3" in p.stdout, f"statuses: ... and 3 with -error_on_nonconvergence (got {p.returncode})")
     p = k.run(1, "-options_file", CONFINE5, "-steps", 3, "-quiet", "-output_none", "-error_on_nonconvergence", log="done.log")
     check(p.returncode == 0 and " 0 not converged" in p.stdout, f"statuses: a converged run with -error_on_nonconvergence exits 0 (got {p.returncode})")
+    # overlapping grains are found by the first detection, once the results file is open: it is removed, XDMF included
+    out = k.path("overlap.h5")
+    p = k.run(2, "-options_file", CONFINE5, "-disks_x", "0.5,0.5,1.5,0.5,2.2,0.5,3.5,0.5,4.5,0.5", "-output", out, log="overlap.log")
+    check(p.returncode == 1 and "grains 1 and 2 overlap" in p.stdout + p.stderr and not os.path.exists(out + ".tmp")
+          and not os.path.exists(out) and not os.path.exists(k.path("overlap.xdmf")),
+          f"statuses: overlapping grains at start: exit status 1, no results file, no .tmp, no XDMF left (got {p.returncode}, "
+          f"{sorted(f for f in os.listdir(k.dir) if f.startswith('overlap.'))})")
+    # restarts that cannot be what the user meant: -steps below the checkpoint's step, a checkpoint of another format
+    out = k.path("short.h5")
+    k.run(1, "-options_file", CONFINE5, "-steps", 4, "-quiet", "-output", out, "-checkpoint_every", 4, log="short.log")
+    ckpt = k.path("short.checkpoint.h5")
+    p = k.run(1, "-restart", ckpt, "-steps", 2, log="short-restart.log")
+    check(p.returncode == 1 and "-steps 2 is below the step of the checkpoint" in p.stdout + p.stderr,
+          f"statuses: a restart with -steps below the checkpoint's step is refused, naming both (got {p.returncode})")
+    other = k.path("other.checkpoint.h5")
+    shutil.copy(ckpt, other)
+    with h5py.File(other, "r+") as f:
+        f.attrs["kergs_format"] = np.bytes_("kergs checkpoint 10")
+    p = k.run(1, "-restart", other, "-steps", 6, "-output", k.path("other.h5"), log="other-restart.log")
+    check(p.returncode == 1 and "is not a kergs checkpoint" in p.stdout + p.stderr,
+          f"statuses: a checkpoint whose kergs_format is another ('kergs checkpoint 10') is refused (got {p.returncode})")
     out = k.path("blowup.h5")
     p = k.run(2, "-options_file", CONFINE5, "-gravity", "0,1e308", "-dt", 10, "-steps", 5, "-quiet", "-output", out, log="blowup.log")
     _, attrs, snaps = stats(out)

@@ -211,6 +211,14 @@ def test_bad(k):
                 return
 
     refused(k, "non-symmetric W", ["not symmetric"], "-fclib_input", copy_with(k, good, "asym.fclib.h5", break_symmetry), *out)
+    # the options of a scene's time loop: named as options that an FCLib run does not use (-help lists them for scenes)
+    for opt, val in (("-steps", 5), ("-progress_every", 1), ("-checkpoint_every", 1)):
+        refused(k, f"{opt} with -fclib_input", ["an -fclib_input run does not use option " + opt, "time loop"], "-fclib_input", good, *out,
+                opt, val)
+    refused(k, "-output_every with -fclib_input", ["-output_every: an -fclib_input run writes", "no snapshot"], "-fclib_input", good, *out,
+            "-output_every", 1)
+    p = k.run(1, "-fclib_input", good, "-output", k.path("quiet.h5"), "-quiet")
+    check(p.returncode == 0 and "fclib " in p.stdout, "-quiet with -fclib_input is accepted (the summary line stays)")
 
     def drop_solution(f):
         del f["solution"]
@@ -219,7 +227,7 @@ def test_bad(k):
     refused(k, "-fclib_start solution without one", ["holds no solution"], "-fclib_input", nosol, "-fclib_start", "solution", *out)
     refused(k, "kernel-regularised type", ["-solver_type nlgsjac needs", "nlgs or newton"], "-fclib_input", good, "-solver_type", "nlgsjac",
             *out)
-    refused(k, "unknown option", ["unknown option -steps"], "-fclib_input", good, "-steps", 3, *out)
+    refused(k, "misspelled option", ["does not use option -solver_max_itt", "misspelled?"], "-fclib_input", good, "-solver_max_itt", 3, *out)
     p = k.run(1, "-fclib_input", nosol, "-output", k.path("nosol.h5"), "-solver_type", "newton", "-solver_max_it", 1000)
     check(p.returncode == 0 and "against the file's solution" not in p.stdout, "a file without a solution is solved, no comparison")
     check(not os.path.exists(k.path("bad.h5")), "no results file is left by a refused input")

@@ -1,5 +1,17 @@
 # Batch use (docs/running.md): counts that do not fit in the build's 32-bit integers are refused, not wrapped.
 kergs_bad_input(steps_overflow "Option .steps: 10000000000 is out of the range" -options_file cases/confine5.opts -steps 10000000000)
+# messages that name the option: counts in exponent notation (PETSc's own message names none), a time step that is not finite
+kergs_bad_input(steps_exponent_overflow "Option .steps: 1e10 is out of the range" -options_file cases/confine5.opts -steps 1e10)
+kergs_bad_input(steps_exponent "Option .steps: 1e3 is not an integer in digits.*write 1000" -options_file cases/confine5.opts -steps 1e3)
+kergs_bad_input(dt_inf "Option .dt inf: the time step must be a finite positive number" -options_file cases/confine5.opts -dt inf)
+# a failed allocation says so, and where (PETSc's own message was the function's name alone); under a 3 GB address-space
+# limit, so that the 6 GB that 400 million disks ask for are refused without touching the machine's memory
+add_test(NAME bad_input_out_of_memory
+         COMMAND sh -c "ulimit -v 3000000 && exec \"$0\" \"$@\"" ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
+                 "out of memory: an allocation in DisksFromLattice failed" $<TARGET_FILE:kergs_exe> -options_file cases/confine5.opts
+                 -output_none -disks_source lattice -lattice_n 20000,20000 -lattice_radius 0.0001 -box 0,0,5,5
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(bad_input_out_of_memory PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60)
 kergs_bad_input(lattice_overflow "lattice_n 65536,65537 asks for 4295032832 disks"
                 -options_file cases/confine5.opts -disks_source lattice -lattice_n 65536,65537 -lattice_radius 0.1)
 kergs_bad_input(solver_count_overflow "Option .solver_max_it: 3000000000 is out of the range" -options_file cases/confine5.opts -solver_max_it 3000000000)
@@ -11,6 +23,16 @@ kergs_bad_input(newton_count_overflow "Option .solver_newton_reuse_its: 30000000
                 -options_file cases/confine5.opts -solver_type newton -solver_newton_reuse_its 3000000000)
 kergs_bad_input(kernel_count_overflow "Option .kernel_diag_batch: -3000000000 is out of the range"
                 -options_file cases/confine5.opts -solver_type nlgsjac -kernel_diag_batch -3000000000)
+# a checkpoint's .tmp (a write that did not finish) is not restarted from; an export of a step beyond the run is refused
+kergs_bad_input(restart_from_tmp "restart [^ ]*c.checkpoint.h5.tmp is the temporary file of a checkpoint.*restart from [^ ]*c.checkpoint.h5,"
+                -restart tests/data/c.checkpoint.h5.tmp)
+kergs_bad_input(fclib_step_beyond "fclib_step 50 is beyond the run .-steps 40." -options_file cases/confine5.opts -fclib_step 50)
+# an options file that includes itself, directly or through another, is refused before PETSc recurses into it; the
+# files an options file includes are inputs that no output may replace
+kergs_bad_input(options_file_self "self_include.opts includes itself" -options_file tests/data/self_include.opts)
+kergs_bad_input(options_file_cycle "cycle_a.opts includes itself .*cycle_b.opts" -options_file tests/data/cycle_a.opts)
+kergs_bad_input(output_on_included_options_file "is the input -options_file cases/confine5.opts"
+                -options_file tests/data/includes_confine5.opts -sample_output cases/confine5.opts)
 
 # tests/check_batch.py drives the kergs executable through mpiexec and reads the files with h5py (Debian's python3):
 # restart (bit for bit on 2 ranks, 2 -> 1 and 1 -> 2 to the solver's tolerance), signals (SIGTERM, SIGINT to the ranks,

@@ -82,6 +82,9 @@ PETSC_EXTERN const char    *KergsGetVersion(void);
 /* Let the C library return freed blocks to the system (glibc: large blocks mapped on their own, heap tops trimmed),
    undoing a process-wide setting of a library PETSc loads; no-op elsewhere. Call it once, first thing in main. */
 PETSC_EXTERN void KergsReturnFreedMemory(void);
+/* PETSc's error handler, which reports a failed allocation by the function's name alone ("DisksFromLattice"), with a
+   first line that says it was out of memory, where, and what to change. Push after PetscInitialize (main). */
+PETSC_EXTERN PetscErrorCode KergsPushErrorHandler(void);
 /* The rank owning global index i when rank q owns [ranges[q], ranges[q+1]) (size + 1 entries, non-decreasing; an
    empty rank is skipped: a later rank starts at the same index). */
 static inline PetscMPIInt KergsRangeOwner(const PetscInt ranges[], PetscMPIInt size, PetscInt i)

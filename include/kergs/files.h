@@ -12,10 +12,15 @@
 #include <kergs/scene.h>
 #include <petscviewer.h>
 
-/* The directories leading to path, created like mkdir -p of its dirname. Collective. */
+/* The directories leading to path, created like mkdir -p of its dirname; then path and path.tmp must be regular files
+   or not exist (KergsFileReplaceable). Collective. */
 PETSC_EXTERN PetscErrorCode KergsFileMakeParentDir(MPI_Comm, const char path[]);
-/* Waits for every rank (after the file was closed everywhere), then renames tmp to path. Collective. */
+/* Waits for every rank (after the file was closed everywhere), then renames tmp to path, unless path is no longer
+   replaceable (KergsFileReplaceable: the .tmp is kept). Collective. */
 PETSC_EXTERN PetscErrorCode KergsFileCommit(MPI_Comm, const char tmp[], const char path[]);
+/* Whether renaming a file to path is safe: path does not exist or is a regular file (links followed). Otherwise
+   (a device, a directory, a pipe, a socket) msg says what path is. Not collective; plain C (no PETSc error). */
+PETSC_EXTERN PetscBool KergsFileReplaceable(const char path[], char msg[], size_t len);
 /* Whether path exists (rank 0's view, collective). */
 PETSC_EXTERN PetscErrorCode KergsFileExists(MPI_Comm, const char path[], PetscBool *);
 /* Copies src to dst byte for byte (rank 0; dst is replaced). Collective. */
@@ -36,14 +41,21 @@ typedef struct {
   const char *path;   /* empty or NULL: not used in this run */
 } KergsFileRole;
 /* Before any work: every output must be writable (its directory exists or can be created, and files can be created
-   in it), must not be a directory (nor its .tmp), and must differ from every input and every other output, the
-   outputs' .tmp files included; paths are compared after resolving links (realpath of the parent directory plus
-   the base name, and for an existing input also the realpath of the file itself). An input that is also allowed as
-   an output of the same run is listed in `same` pairs (output option, input option) (e.g. -checkpoint_path may be
+   in it), must be a regular file or not exist (nor its .tmp: no device, directory, pipe), and must differ from every input and every other
+   output, the outputs' .tmp files included; paths are compared after resolving links (realpath of the parent directory plus the base name,
+   directories still to be created normalised: newdir/../a is ./a; and for an existing input also the realpath of the file itself). An input
+   that is also allowed as an output of the same run is listed in `same` pairs (output option, input option) (e.g. -checkpoint_path may be
    the -restart file: read whole before the run starts, replaced atomically). Errors name the options and paths.
    Collective. */
 PETSC_EXTERN PetscErrorCode KergsFileCheckPaths(MPI_Comm, PetscInt nout, const KergsFileRole outputs[], PetscInt nin,
                                                 const KergsFileRole inputs[], PetscInt nsame, const char *const same[][2]);
+
+/* Every options file of the command line (-options_file FILE) and those they include, in PETSc's order (visit, when
+   not NULL, is called with each path as written). A file that includes itself, directly or through others, makes PETSc
+   recurse until the stack overflows: then msg names the chain and the function returns 1, else 0. Plain C, before
+   PetscInitialize (main) and after. */
+typedef void (*KergsOptionsFileVisitor)(const char path[], void *ctx);
+PETSC_EXTERN int KergsOptionsFilesWalk(int argc, char **argv, KergsOptionsFileVisitor visit, void *ctx, char msg[], size_t len);
 
 /* Open MPI's MPI-IO (ompio) aborts with glibc's "buffer overflow detected" on file paths of 241 characters or more, in
    its sharedfp/lockedfile component (which HDF5 never uses). Unless the user set OMPI_MCA_sharedfp, exclude that

@@ -64,6 +64,10 @@ PETSC_EXTERN PetscErrorCode KergsResultsSnapshot(KergsResults, KergsScene, Kergs
 PETSC_EXTERN PetscErrorCode KergsResultsSetEnd(KergsResults, const char end[]);
 /* Write the last rows, mark the file complete, close and rename the temporary file to its final name. */
 PETSC_EXTERN PetscErrorCode KergsResultsClose(KergsResults);
+/* A run that fails before its first step (bad input found then, e.g. overlapping grains): the file opened by this run
+   is closed and removed, <path>.tmp and its XDMF file, so that no output is left. A continued file (a restart) is kept.
+   Collective. */
+PETSC_EXTERN PetscErrorCode KergsResultsDiscard(KergsResults);
 PETSC_EXTERN PetscErrorCode KergsResultsDestroy(KergsResults *);
 
 /* What a checkpoint keeps of the writer, so that a restarted run continues the same file as if never stopped. */

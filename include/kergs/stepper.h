@@ -37,6 +37,11 @@ PETSC_EXTERN PetscErrorCode KergsStepperGetExitStatus(KergsStepper, KergsExitSta
    may replace it. Before KergsStepperSetFromOptions. */
 PETSC_EXTERN PetscErrorCode KergsStepperAddInput(KergsStepper, const char option[], const char path[]);
 PETSC_EXTERN PetscErrorCode KergsStepperDestroy(KergsStepper *);
+/* on: kergs's handler of SIGTERM, SIGINT and SIGUSR1 (a flag that the time loop polls between steps, and before the
+   first: a signal during the set-up stops the run before step 1); installed again if something replaced it. off: the
+   dispositions found before. Plain C, callable before PetscInitialize (main calls it first thing, and again after
+   PetscInitialize: a signal in the first second of a batch job must not kill the run). 0 on success. */
+PETSC_EXTERN int KergsStepperCatchStopSignals(PetscBool on);
 
 /* Accessors: the objects a time step works on (owned by the stepper). */
 PETSC_EXTERN PetscErrorCode KergsStepperGetScene(KergsStepper, KergsScene *);

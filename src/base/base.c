@@ -77,6 +77,29 @@ PetscErrorCode KergsExchangeRecords(MPI_Comm comm, size_t size, const PetscMPIIn
   PetscFunctionReturn(0);
 }
 
+/* PETSc 3.18's PetscMallocAlign raises its failure with the calling function's name as the whole message (and an error
+   code of its own, not always PETSC_ERR_MEM): recognised by the function that raised it. */
+static PetscErrorCode OutOfMemoryHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p,
+                                         const char *mess, void *ctx)
+{
+  if (p == PETSC_ERROR_INITIAL && (n == PETSC_ERR_MEM || (fun && !strcmp(fun, "PetscMallocAlign")))) {
+    PetscMPIInt rank = 0;
+    (void)MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    (void)fprintf(stderr,
+                  "[%d] kergs: out of memory: an allocation in %s failed, this process could not get the memory it asked for. Fewer "
+                  "grains per rank (more ranks, a smaller -lattice_n or -random_n), or more memory for the job\n",
+                  (int)rank, mess && mess[0] ? mess : fun);
+  }
+  return PetscTraceBackErrorHandler(comm, line, fun, file, n, p, mess, ctx);
+}
+
+PetscErrorCode KergsPushErrorHandler(void)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscPushErrorHandler(OutOfMemoryHandler, NULL));
+  PetscFunctionReturn(0);
+}
+
 void KergsReturnFreedMemory(void)
 {
 #if defined(__GLIBC__)

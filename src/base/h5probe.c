@@ -24,7 +24,7 @@ PetscBool KergsH5HasFormat(hid_t file, const char format[])
   PetscBool has;
 
   (void)H5Tset_size(type, sizeof(value) - 1);
-  has = (PetscBool)(attr >= 0 && H5Aread(attr, type, value) >= 0 && !strncmp(value, format, strlen(format)));
+  has = (PetscBool)(attr >= 0 && H5Aread(attr, type, value) >= 0 && !strcmp(value, format)); /* exactly: "... 10" is not "... 1" */
   (void)H5Tclose(type);
   if (attr >= 0) (void)H5Aclose(attr);
   return has;

@@ -135,6 +135,13 @@ PetscErrorCode KergsOptionsCheckInt(MPI_Comm comm, const char prefix[], const ch
     PetscCheck(v <= (double)PETSC_MAX_INT && v >= (double)PETSC_MIN_INT, comm, PETSC_ERR_ARG_OUTOFRANGE,
                "Option -%s%s: %s is out of the range of this build's integers (PetscInt is %d-bit: at most %" PetscInt_FMT ")",
                prefix ? prefix : "", name + 1, token, (int)(8 * sizeof(PetscInt)), (PetscInt)PETSC_MAX_INT);
+    /* PETSc reads integers in digits only ("Input string 1e3 has no integer value", naming no option) */
+    if (!strncmp(token, "0x", 2) || !strncmp(token, "0X", 2) || !strpbrk(token, ".eE")) continue;
+    PetscCheck(v == (double)(long long)v, comm, PETSC_ERR_ARG_WRONG, "Option -%s%s: %s is not an integer", prefix ? prefix : "", name + 1,
+               token);
+    SETERRQ(comm, PETSC_ERR_ARG_WRONG,
+            "Option -%s%s: %s is not an integer in digits (PETSc reads no exponent or decimal point): write %.0f", prefix ? prefix : "",
+            name + 1, token, v);
   }
   PetscFunctionReturn(0);
 }

@@ -700,6 +700,12 @@ PetscErrorCode KergsCheckpointRead(const char path[], KergsScene sc, KergsContac
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &v));
   PetscCall(ReadHeader(v, comm, path, &h));
   same = (PetscBool)(h.ranks == size);
+  if (!same) /* measured: confine500 frictionless, 4 + 4 steps, 2 -> 1 ranks: 1.4e-14 m on positions against 8 steps */
+    PetscCall(PetscPrintf(comm,
+                          "kergs: restart of a checkpoint written on %" PetscInt_FMT
+                          " rank(s) on %d: the disks are partitioned anew, so the "
+                          "run continues to rounding, not bit for bit (docs/running.md, Restart)\n",
+                          h.ranks, (int)size));
   PetscCall(RestoreDisks(v, comm, path, &h, same, sc, &xref));
   PetscCall(RestoreWalls(v, comm, path, &h, sc));
   PetscCall(KergsSceneCheck(sc)); /* the restored state against the options of this run (materials, ...) */
@@ -784,6 +790,13 @@ PetscErrorCode KergsCheckpointLoadOptions(MPI_Comm comm, const char path[])
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
+  {
+    size_t n = strlen(path);
+    PetscCheck(n < 4 || strcmp(path + n - 4, ".tmp"), comm, PETSC_ERR_ARG_WRONG,
+               "-restart %s is the temporary file of a checkpoint being written (a write that did not finish, or not yet renamed): restart "
+               "from %.*s, the last complete checkpoint",
+               path, (int)(n - 4), path);
+  }
   PetscCall(CheckFile(comm, path));
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &v));
   PetscCall(PetscViewerHDF5ReadAttribute(v, "/", "options", PETSC_STRING, NULL, &text));

@@ -9,6 +9,7 @@
 #define _GNU_SOURCE /* RTLD_DEEPBIND */
 #include <kergs/fclib.h>
 #include <kergs/results.h>
+#include <kergs/files.h>
 #include <dlfcn.h>
 #include <limits.h>
 #include <stdio.h>
@@ -233,11 +234,14 @@ static PetscErrorCode FCLibWrite(KergsScene scene, FCLibProblem *p, const char p
   problem = (struct fclib_local){
       .W = &W, .V = NULL, .R = NULL, .mu = p->mu, .q = p->q, .s = NULL, .spacedim = KERGS_FCLIB_SPACEDIM, .info = &info};
   solution = (struct fclib_solution){.v = NULL, .u = p->u, .r = p->r, .l = NULL};
+  if (!KergsFileReplaceable(path, msg, len) || !KergsFileReplaceable(tmp, msg, len)) PetscFunctionReturn(0);
   (void)remove(tmp); /* libfclib refuses to write a local problem into a file that already holds one */
   if (!write_local(&problem, tmp))
     snprintf(msg, len, "libfclib could not write the local problem to %s", tmp);
   else if (p->m > 0 && !write_solution(&solution, tmp)) /* libfclib exits on an empty solution: none then */
     snprintf(msg, len, "libfclib could not write the solution to %s", tmp);
+  else if (!KergsFileReplaceable(path, msg, len)) /* it became one since the check: the .tmp is kept */
+    PetscFunctionReturn(0);
   else if (rename(tmp, path))
     snprintf(msg, len, "Cannot rename %s to %s", tmp, path);
   PetscFunctionReturn(0);

@@ -103,6 +103,17 @@ static void MakeDirectories(const char path[], char msg[], size_t len)
   }
 }
 
+/* Rank 0, when an output is opened: neither it nor its .tmp may be anything but a regular file (checked before the
+   run, again here: the file system may have changed since). */
+static void CheckReplaceable(const char path[], char msg[], size_t len)
+{
+  char tmp[PETSC_MAX_PATH_LEN + 8], why[PETSC_MAX_PATH_LEN + 160];
+
+  snprintf(tmp, sizeof(tmp), "%s.tmp", path);
+  if (!KergsFileReplaceable(path, why, sizeof(why)) || !KergsFileReplaceable(tmp, why, sizeof(why)))
+    snprintf(msg, len, "Output file %s", why);
+}
+
 PetscErrorCode KergsFileMakeParentDir(MPI_Comm comm, const char path[])
 {
   char        msg[KERGS_FILE_MSG] = "";
@@ -111,6 +122,7 @@ PetscErrorCode KergsFileMakeParentDir(MPI_Comm comm, const char path[])
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   if (rank == 0) MakeDirectories(path, msg, sizeof(msg));
+  if (rank == 0 && !msg[0]) CheckReplaceable(path, msg, sizeof(msg));
   PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_OPEN, msg, (int)sizeof(msg)));
   PetscFunctionReturn(0);
 }
@@ -123,7 +135,13 @@ PetscErrorCode KergsFileCommit(MPI_Comm comm, const char tmp[], const char path[
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Barrier(comm)); /* every rank has closed its handle on tmp */
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  if (rank == 0 && rename(tmp, path)) snprintf(msg, sizeof(msg), "Cannot rename %s to %s: %s", tmp, path, strerror(errno));
+  if (rank == 0) {
+    char why[PETSC_MAX_PATH_LEN + 160];
+    if (!KergsFileReplaceable(path, why, sizeof(why))) /* it became one while the run went on: keep the .tmp */
+      snprintf(msg, sizeof(msg), "Cannot rename %s to %s: %s (the results stay in %s)", tmp, path, why, tmp);
+    else if (rename(tmp, path))
+      snprintf(msg, sizeof(msg), "Cannot rename %s to %s: %s", tmp, path, strerror(errno));
+  }
   PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_WRITE, msg, (int)sizeof(msg)));
   PetscFunctionReturn(0);
 }
@@ -221,13 +239,34 @@ PetscErrorCode KergsFileWriteFailed(const char path[], const char tmp[], const c
 /* ------------------------------------------------------------------------------------------------ */
 /* Checks of a run's paths                                                                          */
 
-/* The directory entry that writing path (by rename) replaces, links resolved: realpath of its deepest existing
-   directory, then the directories still to be created, then the base name. Empty message on success. */
+/* Appends to the absolute path `at` (no trailing '/') the components of `rest`, lexically: "." and empty ones are
+   skipped, ".." drops the last component. Only for directories that do not exist yet (mkdir -p creates them), which
+   hold no links, so that the lexical and the real path agree. */
+static void AppendNormalised(char at[], size_t len, const char rest[])
+{
+  const char *p = rest;
+
+  while (*p) {
+    const char *end = strchr(p, '/');
+    size_t      n   = end ? (size_t)(end - p) : strlen(p);
+    if (n == 2 && !strncmp(p, "..", 2)) {
+      char *slash = strrchr(at, '/');
+      if (slash) *slash = 0;
+    } else if (n && !(n == 1 && p[0] == '.')) {
+      size_t na = strlen(at);
+      snprintf(at + na, len - na, "/%.*s", (int)n, p);
+    }
+    p += n + (end ? 1 : 0);
+  }
+}
+
+/* The directory entry that writing path (by rename) replaces, links resolved: realpath of the deepest existing
+   ancestor of its directory, then the directories still to be created (normalised: newdir/../a.h5 is ./a.h5), then
+   the base name. */
 static void EntryOf(const char path[], char entry[], size_t len)
 {
-  char        dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN], real[PATH_MAX];
-  char        rest[PETSC_MAX_PATH_LEN + 8] = ""; /* the directories below anc still to be created by mkdir -p, from a '/' */
-  const char *base                         = strrchr(path, '/');
+  char        dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN], real[PATH_MAX + PETSC_MAX_PATH_LEN];
+  const char *base = strrchr(path, '/'), *rest = "";
   PetscBool   isdir;
   size_t      na;
 
@@ -237,13 +276,25 @@ static void EntryOf(const char path[], char entry[], size_t len)
   na = strlen(anc);
   if (!realpath(anc, real)) snprintf(real, sizeof(real), "%s", anc);
   if (!strcmp(real, "/")) real[0] = 0; /* entries are joined with '/' below */
-  if (strcmp(anc, dir)) {
-    if (!strcmp(anc, ".") && strncmp(dir, "./", 2))
-      snprintf(rest, sizeof(rest), "/%.*s", (int)(sizeof(dir) - 1), dir);
-    else if (!strncmp(dir, anc, na))
-      snprintf(rest, sizeof(rest), "%s", dir + na - (anc[na - 1] == '/' ? 1 : 0));
-  }
-  snprintf(entry, len, "%s%s/%s", real, rest, base);
+  if (strcmp(anc, dir))                /* anc is "." for a relative dir none of which exists */
+    rest = !strncmp(dir, anc, na) && (dir[na] == '/' || anc[na - 1] == '/') ? dir + na : dir;
+  AppendNormalised(real, sizeof(real), rest);
+  snprintf(entry, len, "%s/%s", real, base);
+}
+
+PetscBool KergsFileReplaceable(const char path[], char msg[], size_t len)
+{
+  struct stat st;
+
+  if (stat(path, &st) || S_ISREG(st.st_mode)) return PETSC_TRUE;
+  snprintf(msg, len, "%s is %s, not a regular file: kergs would replace it; choose a file name", path,
+           S_ISDIR(st.st_mode)    ? "a directory"
+           : S_ISCHR(st.st_mode)  ? "a character device"
+           : S_ISBLK(st.st_mode)  ? "a block device"
+           : S_ISFIFO(st.st_mode) ? "a named pipe"
+           : S_ISSOCK(st.st_mode) ? "a socket"
+                                  : "a special file");
+  return PETSC_FALSE;
 }
 
 typedef struct {
@@ -255,6 +306,7 @@ typedef struct {
 static void CheckOutput(const Named *o, char msg[], size_t len)
 {
   char        dir[PETSC_MAX_PATH_LEN], anc[PETSC_MAX_PATH_LEN], probe[PETSC_MAX_PATH_LEN + 64], tmp[PETSC_MAX_PATH_LEN + 8];
+  char        why[PETSC_MAX_PATH_LEN + 160];
   size_t      n = strlen(o->path);
   struct stat st;
   PetscBool   isdir;
@@ -274,11 +326,27 @@ static void CheckOutput(const Named *o, char msg[], size_t len)
     snprintf(msg, len, "Output %s %s cannot be written: its temporary file %s is a directory", o->option, o->path, tmp);
     return;
   }
+  if (!KergsFileReplaceable(o->path, why, sizeof(why)) || !KergsFileReplaceable(tmp, why, sizeof(why))) {
+    snprintf(msg, len, "Output %s: %s", o->option, why);
+    return;
+  }
   DirName(o->path, dir, sizeof(dir));
   ExistingAncestor(dir, anc, sizeof(anc), &isdir);
   if (!isdir) {
     snprintf(msg, len, "Output %s %s cannot be written: %s is not a directory", o->option, o->path, anc);
     return;
+  }
+  {
+    const char  *base  = strrchr(o->path, '/');
+    const long   limit = pathconf(anc, _PC_NAME_MAX); /* 255 on Linux's file systems */
+    const size_t nb    = strlen(base ? base + 1 : o->path);
+    if (limit > 0 && nb + 4 > (size_t)limit) {
+      snprintf(msg, len,
+               "Output %s %s: its file name has %zu characters, and %s.tmp (written first, then renamed) would exceed the %ld of the file "
+               "system in %s: choose a shorter name",
+               o->option, o->path, nb, base ? base + 1 : o->path, limit, anc);
+      return;
+    }
   }
   /* permissions, read-only file systems, quotas on inodes: create and remove a file where the output will go */
   snprintf(probe, sizeof(probe), "%s/.kergs-probe-%ld", anc, (long)getpid());
@@ -361,6 +429,88 @@ PetscErrorCode KergsFileCheckPaths(MPI_Comm comm, PetscInt nout, const KergsFile
   }
   PetscCall(RaiseFromRoot(comm, PETSC_ERR_FILE_OPEN, msg, (int)sizeof(msg)));
   PetscFunctionReturn(0);
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Options files                                                                                    */
+
+#define KERGS_OPTIONS_FILE_DEPTH 32 /* deeper nesting than anyone writes by hand: a cycle by another name */
+
+typedef struct {
+  char                    chain[KERGS_OPTIONS_FILE_DEPTH][PATH_MAX]; /* the files being read, outermost first */
+  int                     depth;
+  KergsOptionsFileVisitor visit;
+  void                   *ctx;
+} OptionsWalk;
+
+static int WalkOptionsFile(OptionsWalk *w, const char path[], char msg[], size_t len);
+
+/* The -options_file arguments in one file's text, as PETSc reads it: '#' starts a comment to the end of the line, the
+   value may be on the next line. */
+static int WalkOptionsText(OptionsWalk *w, FILE *fp, char msg[], size_t len)
+{
+  char     *line = NULL;
+  size_t    cap  = 0;
+  PetscBool want = PETSC_FALSE;
+  int       bad  = 0;
+
+  while (!bad && getline(&line, &cap, fp) >= 0) {
+    char *hash = strchr(line, '#'), *save = NULL;
+    if (hash) *hash = 0;
+    for (char *tok = strtok_r(line, " \t\r\n", &save); tok; tok = strtok_r(NULL, " \t\r\n", &save)) {
+      if (want && (bad = WalkOptionsFile(w, tok, msg, len))) break;
+      want = (PetscBool)!strcmp(tok, "-options_file");
+    }
+  }
+  free(line);
+  return bad;
+}
+
+static int WalkOptionsFile(OptionsWalk *w, const char path[], char msg[], size_t len)
+{
+  char  real[PATH_MAX];
+  FILE *fp;
+  int   bad = 0;
+
+  if (!realpath(path, real)) return 0; /* missing: PETSc says so */
+  for (int d = 0; d < w->depth; d++) {
+    if (strcmp(w->chain[d], real)) continue;
+    snprintf(msg, len, "Options file %s includes itself (-options_file", path);
+    for (int e = d; e < w->depth; e++) {
+      size_t n = strlen(msg);
+      snprintf(msg + n, len - n, " %s ->", w->chain[e]);
+    }
+    {
+      size_t n = strlen(msg);
+      snprintf(msg + n, len - n, " %s): PETSc would read it forever", real);
+    }
+    return 1;
+  }
+  if (w->depth == KERGS_OPTIONS_FILE_DEPTH) {
+    snprintf(msg, len, "Options file %s: -options_file nested more than %d deep", path, KERGS_OPTIONS_FILE_DEPTH);
+    return 1;
+  }
+  if (w->visit) w->visit(path, w->ctx);
+  fp = fopen(path, "r");
+  if (!fp) return 0;
+  snprintf(w->chain[w->depth++], PATH_MAX, "%s", real);
+  bad = WalkOptionsText(w, fp, msg, len);
+  w->depth--;
+  fclose(fp);
+  return bad;
+}
+
+int KergsOptionsFilesWalk(int argc, char **argv, KergsOptionsFileVisitor visit, void *ctx, char msg[], size_t len)
+{
+  static OptionsWalk w; /* PATH_MAX x depth: not on the stack */
+
+  msg[0]  = 0;
+  w.depth = 0;
+  w.visit = visit;
+  w.ctx   = ctx;
+  for (int i = 1; i + 1 < argc; i++)
+    if (!strcmp(argv[i], "-options_file") && WalkOptionsFile(&w, argv[i + 1], msg, len)) return 1;
+  return 0;
 }
 
 void KergsFileAvoidLongPathAbort(void)

@@ -761,6 +761,22 @@ PetscErrorCode KergsResultsClose(KergsResults res)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsResultsDiscard(KergsResults res)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  if (!res->enabled || !res->viewer || res->source[0]) PetscFunctionReturn(0); /* a continued file holds an earlier run's rows */
+  PetscCall(PetscViewerDestroy(&res->viewer));
+  PetscCallMPI(MPI_Barrier(res->comm)); /* closed on every rank */
+  PetscCallMPI(MPI_Comm_rank(res->comm, &rank));
+  if (rank == 0) {
+    (void)remove(res->tmppath);
+    if (res->xdmf && res->xdmf_written) (void)remove(res->xdmfpath);
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsResultsDestroy(KergsResults *res)
 {
   PetscFunctionBeginUser;

@@ -1,6 +1,7 @@
 /* kergs XDMF: the Xdmf 2 description of a results file's snapshots, for ParaView (include/kergs/xdmf.h,
    docs/results.md). Every array is a reference into the HDF5 file; written to <path>.tmp, then renamed. */
 #include <kergs/xdmf.h>
+#include <kergs/files.h>
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
@@ -162,7 +163,7 @@ static void XdmfBody(FILE *fp, const char h5[], PetscInt n, const KergsXdmfSnaps
 
 PetscErrorCode KergsXdmfWrite(const char path[], const char h5file[], PetscInt n, const KergsXdmfSnapshot snap[])
 {
-  char  tmp[PETSC_MAX_PATH_LEN + 8], h5[3 * PETSC_MAX_PATH_LEN];
+  char  tmp[PETSC_MAX_PATH_LEN + 8], h5[3 * PETSC_MAX_PATH_LEN], why[2 * PETSC_MAX_PATH_LEN];
   FILE *fp;
   int   failed, err;
 
@@ -171,6 +172,8 @@ PetscErrorCode KergsXdmfWrite(const char path[], const char h5file[], PetscInt n
              "The XDMF file %s cannot reference %s: XDMF separates the file from the dataset with ':'", path, h5file);
   PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
   XmlEscape(h5file, h5, sizeof(h5));
+  PetscCheck(KergsFileReplaceable(path, why, sizeof(why)) && KergsFileReplaceable(tmp, why, sizeof(why)), PETSC_COMM_SELF,
+             PETSC_ERR_FILE_OPEN, "XDMF file %s", why);
   fp = fopen(tmp, "w");
   PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "Cannot create the XDMF file %s: %s", tmp, strerror(errno));
   fprintf(fp, "<?xml version=\"1.0\" ?>\n<!-- kergs results %s as a time series; open it with ParaView's \"XDMF Reader\" -->\n", h5);
@@ -186,6 +189,8 @@ PetscErrorCode KergsXdmfWrite(const char path[], const char h5file[], PetscInt n
   if (failed) (void)remove(tmp);
   PetscCheck(!failed, PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot write the XDMF file %s: %s; the partial %s was removed", path,
              strerror(err), tmp);
+  PetscCheck(KergsFileReplaceable(path, why, sizeof(why)), PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot rename %s to %s: %s", tmp, path,
+             why);
   PetscCheck(!rename(tmp, path), PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "Cannot rename %s to %s: %s", tmp, path, strerror(errno));
   PetscFunctionReturn(0);
 }

@@ -110,36 +110,47 @@ static volatile sig_atomic_t Received  = 0;
 static PetscBool             Installed = PETSC_FALSE;
 
 /* The first signal asks for a clean stop after the step; a second one of the same kind is not caught any more and
-   ends the process at once (as without kergs's handler). Only async-signal-safe calls. */
+   ends the process at once (as without kergs's handler). A signal of another kind after the first is ignored: it is
+   the same request relayed (a terminal's Ctrl-C sends SIGINT to mpiexec and the ranks, and mpiexec then sends the
+   ranks SIGTERM, which used to kill them and leave only .tmp files). Only async-signal-safe calls. */
 static void OnSignal(int sig)
 {
-  if (Received) {
+  if (Received == sig) {
     (void)signal(sig, SIG_DFL);
     (void)raise(sig);
     return;
   }
-  Received = sig;
+  if (!Received) Received = sig;
 }
 
-/* on: kergs's handler (a flag) for SIGTERM, SIGINT and SIGUSR1; off: the dispositions found before (nothing when the
-   handler is not installed). */
+int KergsStepperCatchStopSignals(PetscBool on)
+{
+  int failed = 0;
+
+  if (!on) {
+    if (Installed)
+      for (int k = 0; k < NCAUGHT; k++) (void)sigaction(Caught[k], &Saved[k], NULL);
+    Installed = PETSC_FALSE;
+    return 0;
+  }
+  if (!Installed) Received = 0;
+  for (int k = 0; k < NCAUGHT; k++) {
+    struct sigaction sa, cur;
+    if (!sigaction(Caught[k], NULL, &cur) && cur.sa_handler == OnSignal) continue; /* still ours */
+    memset(&sa, 0, sizeof(sa));
+    sa.sa_handler = OnSignal;
+    sigemptyset(&sa.sa_mask);
+    failed |= sigaction(Caught[k], &sa, Installed ? NULL : &Saved[k]); /* the disposition found before kergs's, once */
+  }
+  Installed = PETSC_TRUE;
+  return failed;
+}
+
 PetscErrorCode KergsStepperCatchSignals(PetscBool on)
 {
   PetscFunctionBeginUser;
-  if (on) Received = 0;
-  if (on == Installed) PetscFunctionReturn(0);
-  Installed = on;
-  for (int k = 0; k < NCAUGHT; k++) {
-    if (on) {
-      struct sigaction sa;
-      memset(&sa, 0, sizeof(sa));
-      sa.sa_handler = OnSignal;
-      sigemptyset(&sa.sa_mask);
-      PetscCheck(!sigaction(Caught[k], &sa, &Saved[k]), PETSC_COMM_SELF, PETSC_ERR_SYS, "Cannot install the handler of signal %d",
-                 Caught[k]);
-    } else
-      (void)sigaction(Caught[k], &Saved[k], NULL);
-  }
+  PetscCheck(!KergsStepperCatchStopSignals(on), PETSC_COMM_SELF, PETSC_ERR_SYS,
+             "Cannot install the handlers of SIGTERM, SIGINT and SIGUSR1");
   PetscFunctionReturn(0);
 }
 
@@ -219,14 +230,18 @@ PetscErrorCode KergsStepperCheckpoint(KergsStepper st)
 PetscErrorCode KergsStepperRestore(KergsStepper st)
 {
   KergsRunState run;
-  PetscInt      step;
+  PetscInt      step, nsteps;
 
   PetscFunctionBeginUser;
   PetscCall(KergsCheckpointRead(st->restart_path, st->scene, st->contacts, st->partition, st->results, &run));
   st->nonconverged  = run.nonconverged;
   st->max_violation = run.max_violation;
   st->moved         = run.moved;
-  PetscCall(KergsSceneGetStep(st->scene, &step, NULL, NULL));
+  PetscCall(KergsSceneGetStep(st->scene, &step, NULL, &nsteps));
+  PetscCheck(nsteps >= step, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-steps %" PetscInt_FMT " is below the step of the checkpoint %s (%" PetscInt_FMT "): give -steps above %" PetscInt_FMT
+             " to continue it",
+             nsteps, st->restart_path, step, step);
   st->checkpoint_step = step; /* the checkpoint this run starts from */
   PetscFunctionReturn(0);
 }

@@ -111,6 +111,13 @@ PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun r)
       "or newton (-solver_prox identity, the default)",
       type);
   PetscCall(KergsResultsSetSceneName(r->results, r->name));
+  {
+    PetscBool every, quiet;
+    PetscCall(PetscOptionsHasName(NULL, NULL, "-output_every", &every));
+    PetscCheck(!every, r->comm, PETSC_ERR_ARG_WRONG,
+               "-output_every: an -fclib_input run writes one /stats row and no snapshot (there are no bodies); remove it");
+    PetscCall(PetscOptionsHasName(NULL, NULL, "-quiet", &quiet)); /* accepted: no step lines to silence, the summary stays */
+  }
   PetscCall(KergsResultsSetFromOptions(r->results));
   PetscCall(KergsResultsGetPath(r->results, &out, &enabled));
   outputs[0] = (KergsFileRole){"-output", enabled ? out : NULL};

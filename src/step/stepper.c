@@ -1,6 +1,7 @@
 /* kergs stepper: the time loop of Algorithm 1 (Moreau-Jean, theta-method). Data flows one way per step:
    scene state -> detect -> operators -> solver -> update -> results. */
 #include <kergs/private/stepperimpl.h>
+#include <math.h>
 #include <kergs/sample.h>
 #include <kergs/fclib.h>
 
@@ -30,6 +31,25 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   PetscFunctionReturn(0);
 }
 
+/* -steps and -dt, as written: a count in digits within PetscInt's range, a finite time step ("-dt inf" was told
+   "must be positive", "-steps 1e10" got PETSc's message without the option's name). */
+static PetscErrorCode CheckClockOptions(MPI_Comm comm)
+{
+  char      value[256];
+  PetscBool set;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsOptionsCheckInt(comm, NULL, "-steps"));
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-dt", value, sizeof(value), &set));
+  if (set) {
+    char        *end;
+    const double dt = strtod(value, &end);
+    PetscCheck(end == value || *end || isfinite(dt), comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Option -dt %s: the time step must be a finite positive number of seconds", value);
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
 {
   const char *name;
@@ -39,6 +59,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(PetscOptionsHasHelp(NULL, &help));
   PetscCall(KergsStepperBatchOptions(st)); /* first: a restart changes how the scene reads its options */
   if (st->restart_path[0] && !help) PetscCall(KergsSceneSetRestoring(st->scene, PETSC_TRUE));
+  PetscCall(CheckClockOptions(st->comm)); /* before the scene reads them: messages that name the option */
   PetscCall(KergsSceneSetFromOptions(st->scene));
   PetscCall(KergsSolverSetFromOptions(st->solver));
   PetscCall(KergsSceneGetName(st->scene, &name));
@@ -145,6 +166,7 @@ static PetscErrorCode CheckInitialOverlaps(KergsStepper st)
       PetscCall(PetscPrintf(PETSC_COMM_SELF, "[kergs] grain %" PetscInt_FMT " crosses wall %s by %g (radius %g)\n", D.id[b->a],
                             walls[b->b].name, (double)-b->gap, (double)b->ra));
   }
+  if (nbad) PetscCall(KergsResultsDiscard(st->results)); /* opened already: no results of a run that did not start */
   PetscCheck(nbad == 0, st->comm, PETSC_ERR_USER_INPUT,
              "The initial packing has overlapping grains (see the pairs printed above); raise -initial_overlap_tol to accept "
              "interpenetrations up to that fraction of the smaller radius");
@@ -280,6 +302,8 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   st->status = KERGS_EXIT_DONE;
   PetscCall(KergsSceneGetStep(sc, &step, NULL, &nsteps));
   if (step == 0) PetscCall(KergsStepperCheckContainer(st)); /* before any file is written */
+  PetscCheck(st->fclib_step <= nsteps, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-fclib_step %" PetscInt_FMT " is beyond the run (-steps %" PetscInt_FMT "): no such step to export", st->fclib_step, nsteps);
   PetscCall(KergsStepperEnergyFloor(st));
   PetscCall(KergsStepperCatchSignals(PETSC_TRUE));
   PetscCall(KergsResultsOpen(st->results));
