@@ -85,6 +85,10 @@ def test_restart(k):
     p2 = k.run(2, "-restart", k.path("B.checkpoint.h5"), "-steps", 20, "-malloc_debug", "-malloc_dump", log="B2.log")
     leaks = [line for line in (p2.stdout + p2.stderr).splitlines() if " bytes " in line and "]" in line]
     check(p2.returncode == 0 and not leaks, "restart: -restart FILE -steps 20 continues to step 20 (exit status 0, nothing leaked) " + " ".join(leaks[:2]))
+    # the packing and the walls come from the checkpoint: a changed -box is refused, not ignored
+    p3 = k.run(1, "-restart", k.path("B.checkpoint.h5"), "-steps", 20, "-box", "0,0,0.6,1.2", "-output", k.path("C.h5"), log="B3.log")
+    check(p3.returncode == 1 and "-box 0,0,0.6,1.2 differs from the checkpointed run's -box" in p3.stdout + p3.stderr
+          and not os.path.exists(k.path("C.h5")), "restart: a changed -box is refused, naming both values, before any output")
     _, a_attrs, _ = stats(k.path("A.h5"))
     date = a_attrs.get("date", b"").decode()
     check(a_attrs.get("kergs_version", b"") not in (b"",) and a_attrs.get("ranks") == 2 and b"-steps 20" in a_attrs.get("options", b"")

@@ -28,6 +28,9 @@ ROOT = os.path.dirname(HERE)
 CONFINE5 = os.path.join(ROOT, "cases", "confine5.opts")
 STRAIGHT = os.path.join(ROOT, "cases", "confine5_straight.opts")
 CONFINE500 = os.path.join(ROOT, "cases", "confine500.opts")
+# the paper's settings, kergs's defaults before they became newton to 1e-8 and the predictive rule: the cases about
+# capped NLGS and the paper's gap rule name them
+PAPER = ["-solver_type", "nlgs", "-solver_criterion", "quad", "-solver_tol", 1e-4, "-solver_max_it", 150, "-gap_rule", "paper"]
 BOUND_FACTOR = 2.0  # interpenetration <= BOUND_FACTOR * max relative speed * dt + OVERLAP_FLOOR * smallest radius
 OVERLAP_FLOOR = 0.05  # the default -initial_overlap_tol: what kergs accepts in a packing
 
@@ -92,7 +95,7 @@ CASES = {
     # other rules off (they stop it at step 149 otherwise): its natural residual is 0.78-0.93 from step 198 (r = 0 scores 1)
     "diverged_nlgsjac": ("watch", 1, ["-scene_name", "r100", "-gravity", "0,-9.81", "-friction", 0.3, "-dt", 1e-3, "-steps", 250,
                                       "-disks_source", "random", "-random_n", 500, "-random_box", "0,0,1,6", "-random_radius",
-                                      "0.0005,0.05", "-random_seed", 2013, "-box", "0,0,1,7", "-box_open_top", "-solver_type", "nlgsjac",
+                                      "0.0005,0.05", "-random_seed", 2013, "-box", "0,0,1,7", "-box_open_top", *PAPER, "-solver_type", "nlgsjac",
                                       "-gap_rule", "predictive", "-blowup_overlap", 0, "-blowup_energy", 0], 5,
                          r"the contact solver diverged: natural residual above -solver_divergence_tol 0\.7 in 5 steps in a row, up to step 202"),
     # a kernel projector that misses ker H_f (forced by a check tolerance no factorization meets) fails the step: exit 5
@@ -124,7 +127,7 @@ CASES = {
     # (NLGS on this chain converges at a rate 1 - m_small/m_big per sweep: at mass ratio 1e6 it stops at its cap and
     # must say so; Newton solves it)
     "ratio_1": ("ratios", 1, heavy_on_light(0.5, 1) + ["-dt", 1e-3, "-steps", 10, "-disks_x", "0.5,0.5,0.5,1.5"], 0, None),
-    "ratio_100_nlgs": ("ratios", 1, heavy_on_light(0.005, 1e2) + ["-dt", 1e-3, "-steps", 10], 0, None, {"not_converged": True}),
+    "ratio_100_nlgs": ("ratios", 1, heavy_on_light(0.005, 1e2) + PAPER + ["-dt", 1e-3, "-steps", 10], 0, None, {"not_converged": True}),
     "ratio_100_newton": ("ratios", 1, heavy_on_light(0.005, 1e2) + ["-dt", 1e-3, "-steps", 10, "-solver_type", "newton"], 0, None,
                          {"not_converged": False}),
     # -- wall speeds from creeping to impact ------------------------------------------------------------------------------
@@ -141,8 +144,8 @@ CASES = {
 }
 # the crystal with every solver type (nlkergs stores W~ densely: small enough here)
 for _t in ("nlgs", "nlgsjac", "nlkergs", "newton"):
-    CASES["crystal_" + _t] = ("crystal", 1, crystal(4, 4, 0.5) + ["-dt", 1e-3, "-steps", 5, "-solver_type", _t], 0, None)
-    CASES["crystal_predictive_" + _t] = ("crystal", 1, crystal(4, 4, 0.5) + ["-dt", 1e-3, "-steps", 5, "-solver_type", _t,
+    CASES["crystal_" + _t] = ("crystal", 1, crystal(4, 4, 0.5) + PAPER + ["-dt", 1e-3, "-steps", 5, "-solver_type", _t], 0, None)
+    CASES["crystal_predictive_" + _t] = ("crystal", 1, crystal(4, 4, 0.5) + PAPER + ["-dt", 1e-3, "-steps", 5, "-solver_type", _t,
                                                                            "-gap_rule", "predictive"], 0, None)
 
 

@@ -756,6 +756,34 @@ static PetscBool IsOptionName(const char *t)
 }
 
 /* The pairs of PetscOptionsGetAll's text: "-name value words -name2 -name3 value". */
+/* Options that make the packing and the container: a restart takes them from the checkpoint (its disks and walls),
+   so that a different value on the command line would be ignored while the results record it. */
+static PetscBool IsGeometryOption(const char name[])
+{
+  static const char *prefixes[] = {"-box", "-disks_", "-lattice_", "-random_", "-sample_input", NULL};
+  const size_t       n          = strlen(name);
+
+  for (PetscInt i = 0; prefixes[i]; i++)
+    if (!strncmp(name, prefixes[i], strlen(prefixes[i]))) return PETSC_TRUE;
+  return (PetscBool)(!strncmp(name, "-wall_", 6) && n > 8 && (!strcmp(name + n - 2, "_a") || !strcmp(name + n - 2, "_b")));
+}
+
+/* A geometry option given on the restart's command line must be the checkpointed run's. */
+static PetscErrorCode CheckGeometryOption(const char name[], const char value[])
+{
+  char      given[4096];
+  PetscBool set;
+
+  PetscFunctionBeginUser;
+  if (!IsGeometryOption(name)) PetscFunctionReturn(0);
+  PetscCall(PetscOptionsGetString(NULL, NULL, name, given, sizeof(given), &set));
+  PetscCheck(!set || !strcmp(given, value), PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT,
+             "%s %s differs from the checkpointed run's %s %s: a restart continues that run's packing and walls, which the "
+             "checkpoint holds (remove the option, or start a new run)",
+             name, given, name, value[0] ? value : "(no value)");
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode InsertOptions(const char text[])
 {
   char  *copy, *save = NULL, *tok, name[256] = "", value[4096] = "";
@@ -769,6 +797,7 @@ static PetscErrorCode InsertOptions(const char text[])
         PetscBool set, skip;
         PetscCall(PetscStrcmp(name, "-restart", &skip));
         PetscCall(PetscOptionsHasName(NULL, NULL, name, &set));
+        if (!skip && set) PetscCall(CheckGeometryOption(name, value));
         if (!skip && !set) PetscCall(PetscOptionsSetValue(NULL, name, value[0] ? value : NULL)); /* the command line wins */
       }
       if (!tok) break;

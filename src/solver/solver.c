@@ -317,7 +317,7 @@ static PetscErrorCode DecideConvergence(KergsSolver s, KergsOperators ops, Kergs
    steps: 1.5e4 to 1e6 times for newton, tresca and snesvi; capped NLGS leaves too little evidence (2 to 1,100 times:
    DIVERGED_MAX_IT); feasible steps that capped NLGS fails on, confine500's: at most 0.3. The weights of w, largest 1,
    are kept per local contact in s->infeasible (KergsSolverGetInfeasibleNetwork). */
-static PetscErrorCode DetectInfeasible(KergsSolver s, KergsOperators ops, KergsSolveStats *stats)
+static PetscErrorCode DetectInfeasible(KergsSolver s, KergsOperators ops, KergsSolveStats *stats, PetscReal *ratio)
 {
   const PetscScalar *r, *vd, *g;
   PetscScalar       *w;
@@ -390,7 +390,7 @@ static PetscErrorCode DetectInfeasible(KergsSolver s, KergsOperators ops, KergsS
   bound = glob[1] < 0 ? (glob[2] > 0 ? -glob[1] / PetscSqrtReal(glob[2]) : PETSC_INFINITY) : 0.0;
   PetscCall(PetscInfo(NULL, "infeasibility test: w . v^d_n %g, |W w| %g, impulse bound %g, impulse scale %g, |r_n| %g\n", (double)glob[1],
                       (double)PetscSqrtReal(glob[2]), (double)bound, (double)scale, (double)rnorm));
-  PetscCall(KergsSolveStatsAdd(stats, "infeasible_impulse_ratio", scale > 0 ? bound / scale : 0.0));
+  *ratio = scale > 0 ? PetscMin(bound / scale, PETSC_MAX_REAL) : 0.0; /* finite, as every statistic */
   if (scale > 0 && bound > s->infeasible_ratio * scale) {
     stats->reason = KERGS_SOLVER_DIVERGED_INFEASIBLE;
     PetscCall(PetscMalloc1(n, &s->infeasible));
@@ -473,7 +473,11 @@ PetscErrorCode KergsSolverSolve(KergsSolver s, KergsScene scene, KergsContacts c
   PetscCall((*s->ops.solve)(s, scene, contacts, ops, stats));
   PetscCall(DecideConvergence(s, ops, stats));
   PetscCall(PetscFree(s->infeasible));
-  if (stats->reason < 0 && stats->reason != KERGS_SOLVER_DIVERGED_NANORINF) PetscCall(DetectInfeasible(s, ops, stats));
+  {
+    PetscReal ratio = 0.0; /* 0: no failed solve to test */
+    if (stats->reason < 0 && stats->reason != KERGS_SOLVER_DIVERGED_NANORINF) PetscCall(DetectInfeasible(s, ops, stats, &ratio));
+    PetscCall(KergsSolveStatsAdd(stats, "infeasible_impulse_ratio", ratio));
+  }
   PetscCall(KergsSolverMonitorFlush(s, stats->residual));
   PetscCall(RecordLawWork(s, ops, stats));
   if (s->ops.stats) PetscCall((*s->ops.stats)(s, stats));

@@ -215,7 +215,18 @@ static PetscErrorCode WatchStep(KergsStepper st, const KergsSolveStats *ss)
   PetscCall(KergsSceneGetStep(st->scene, &step, NULL, NULL));
   PetscCall(KergsSceneGetWalls(st->scene, NULL, &walls));
   st->failure[0] = 0;
-  if (PetscIsInfOrNanReal(st->ek_end)) PetscFunctionReturn(0); /* a non-finite state: the poll names the grain */
+  if (PetscIsInfOrNanReal(st->ek_end)) {
+    /* positions or velocities not finite: the poll names the grain; finite but too large for their energy to be
+       (-gravity 0,-1e300: velocities of 1e297 m/s) is a blow-up named here */
+    if (!PetscIsInfOrNanReal(st->vmax_end)) {
+      PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
+                              "blow-up in step %" PetscInt_FMT ": the kinetic energy overflows (fastest grain %.3g m/s)", step,
+                              (double)st->vmax_end));
+      st->failure_status = KERGS_EXIT_BLOWUP;
+      st->failure_kind   = "kinetic energy";
+    }
+    PetscFunctionReturn(0);
+  }
   PetscCall(KergsStepperFindOutside(st, &grain, &wall));
   if (grain >= 0) {
     PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),

@@ -453,6 +453,42 @@ static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, Petsc
   PetscFunctionReturn(0);
 }
 
+/* The natural map's projection p = r - e, taken when it lowers the natural residual. Newton reaches a solution whose
+   impulses vanish (every contact separating) only asymptotically, and there the relative residual of any r != 0 is 1:
+   measured on a wall hitting a lattice at 20 m/s, 2000 Newton steps ended at |r| ~ 1e-71 with residual 1, where the
+   projection gives r = 0 exactly, residual 0. */
+static PetscErrorCode Polish(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *res)
+{
+  const PetscScalar *rl, *ul;
+  PetscScalar       *pl;
+  PetscReal          polished;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecCopy(r, nt->rplain));
+  PetscCall(VecGetArrayRead(r, &rl));
+  PetscCall(VecGetArrayRead(u, &ul));
+  PetscCall(VecGetArray(nt->rc, &pl));
+  for (PetscInt a = 0; a < n; a++) {
+    PetscReal ra[KERGS_MAXCOMP], ua[KERGS_MAXCOMP], e[KERGS_MAXCOMP];
+    for (PetscInt c = 0; c < nc; c++) {
+      ra[c] = PetscRealPart(rl[a * nc + c]);
+      ua[c] = PetscRealPart(ul[a * nc + c]);
+    }
+    KergsLawNaturalMap(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a], e);
+    for (PetscInt c = 0; c < nc; c++) pl[a * nc + c] = ra[c] - e[c];
+  }
+  PetscCall(VecRestoreArray(nt->rc, &pl));
+  PetscCall(VecRestoreArrayRead(u, &ul));
+  PetscCall(VecRestoreArrayRead(r, &rl));
+  PetscCall(MoveTo(nt, nt->rc, r, u, vd));
+  PetscCall(NaturalResidual(s, nt, n, nc, r, u, &polished));
+  if (polished < *res)
+    *res = polished;
+  else
+    PetscCall(MoveTo(nt, nt->rplain, r, u, vd));
+  PetscFunctionReturn(0);
+}
+
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
    -solver_newton_switch_tol. Then outer iterations: each solves, by at most -solver_prox_inner_max Newton steps, the
    proximal problem with W + sigma I (or W + sigma P) and v^d - sigma r_c around the current r_c = r, and moves r_c to
@@ -551,6 +587,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
       }
     }
   }
+  if (res > s->tol && nglobal > 0) PetscCall(Polish(s, nt, n, nc, r, u, vd, &res));
   stats->iterations = steps;
   stats->criterion  = res;
   stats->reason     = nglobal == 0 ? KERGS_SOLVER_CONVERGED_NO_CONTACTS : KERGS_SOLVER_DIVERGED_MAX_IT;
