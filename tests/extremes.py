@@ -112,6 +112,9 @@ CASES = {
     # (those impulses'), stops the run as a blow-up
     "infeasible_continue": ("watch", 1, ["-options_file", STRAIGHT, "-solver_type", "newton", "-on_infeasible", "continue"], 2,
                             r"blow-up in step 1: the kinetic energy", {"rows": 1}),
+    # velocities finite but beyond what an energy can hold: stopped before the next step's ghost layer works on them
+    "gravity_overflow": ("watch", 2, ["-options_file", CONFINE5, "-gravity", "0,-1e300", "-steps", 5], 2,
+                         r"blow-up in step 1: the kinetic energy overflows"),
     "outside_box": ("watch", 1, ["-options_file", CONFINE500, "-box", "0,0,0.4,1.2"], 1,
                     r"starts outside the container: its centre is behind wall box_right"),
     # -- time steps from 1e-7 to 1e-1 of the characteristic time ----------------------------------------------------
