@@ -6,3 +6,9 @@ add_test(NAME macro_response
                  --dir ${CMAKE_CURRENT_BINARY_DIR}/macro_response
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(macro_response PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 120 LABELS step)
+# scripts/plot_biaxial.py draws a short run's response as two PNGs (not blank), and refuses a run without a box.
+add_test(NAME plot_biaxial
+         COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_plot_biaxial.py --kergs $<TARGET_FILE:kergs_exe> --mpiexec ${MPIEXEC_EXECUTABLE}
+                 --dir ${CMAKE_CURRENT_BINARY_DIR}/plot_biaxial
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(plot_biaxial PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 120 LABELS scripts)
