@@ -20,7 +20,7 @@
 #include <kergs/detect.h>
 #include <kergs/files.h>
 
-#define KERGS_RESULTS_MAXSTATS 64
+#define KERGS_RESULTS_MAXSTATS 128
 
 typedef struct _p_KergsResults *KergsResults;
 

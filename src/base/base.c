@@ -10,7 +10,7 @@
 #endif
 
 PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO, KERGS_Exchange;
-PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition, KERGS_Watch;
+PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition, KERGS_Watch, KERGS_Macro;
 
 static PetscBool PackageInitialized = PETSC_FALSE;
 static char     *RunOptions         = NULL; /* KergsProvenanceSetOptions: the options of the run as given (rank 0) */
@@ -47,6 +47,7 @@ PetscErrorCode KergsInitializePackage(void)
   PetscCall(PetscLogEventRegister("KergsPredict", classid, &KERGS_Predict));
   PetscCall(PetscLogEventRegister("KergsPartition", classid, &KERGS_Partition));
   PetscCall(PetscLogEventRegister("KergsWatch", classid, &KERGS_Watch));
+  PetscCall(PetscLogEventRegister("KergsMacro", classid, &KERGS_Macro));
   PetscFunctionReturn(0);
 }
 

@@ -160,6 +160,7 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   PetscCall(KergsResultsRecord(res, "nnz_W", nnz_W));
   PetscCall(KergsStepperRecordSolve(res, ss));
   PetscCall(RecordPartition(res, &pm));
+  PetscCall(KergsStepperRecordMacro(st));
   PetscCall(KergsResultsEndStep(res));
   if (!st->quiet)
     PetscCall(PetscPrintf(st->comm,

@@ -71,6 +71,9 @@ struct _p_KergsStepper {
    step's summary line (src/step/statistics.c). */
 PETSC_INTERN PetscErrorCode KergsStepperRecordStep(KergsStepper, const KergsSolveStats *, PetscLogDouble detect_seconds,
                                                    PetscLogDouble assemble_seconds);
+/* The macroscopic response of the step (src/step/macro.c, docs/results.md): stresses, strains, solid fraction,
+   coordination, anisotropies and sliding contacts, into the current row. Collective. */
+PETSC_INTERN PetscErrorCode KergsStepperRecordMacro(KergsStepper);
 /* The solve's figures (common ones, then the type's own figures and texts) into the current row. */
 PETSC_INTERN PetscErrorCode KergsStepperRecordSolve(KergsResults, const KergsSolveStats *);
 /* Batch use (src/step/batch.c, docs/running.md). */
