@@ -8,7 +8,7 @@
    KergsSceneAdvanceWalls, CheckWall and ViewWall; a new kind adds its case there and its name to KergsWallKinds.
    Outside the scene, the operators (V_f or V_g), the kernel and the watch (energy, work) ask whether a wall is free.
    A pressure-controlled wall is a free wall whose force the scene sets from its pressure and loaded length (WallSpan,
-   KergsSceneUpdateWallPressures) whenever the walls move: at setup, after each step's motion and after a restart. */
+   UpdateWallPressures) whenever the walls move: at setup, after each step's motion and after a restart. */
 #include <kergs/private/sceneimpl.h>
 #include <petscviewer.h>
 
@@ -297,12 +297,12 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
                              "separation of the two walls perpendicular to it, or its own length)",
                              NULL, w->pressure, &w->pressure, &pset));
   PetscOptionsEnd();
-  if (pset) PetscCall(WallCheckPressureOptions(scene->comm, w, fset));
   PetscCheck(!needs_endpoints || (aset && bset), scene->comm, PETSC_ERR_ARG_WRONGSTATE,
              "Wall %s (from -walls) needs both -wall_%s_a x,y and -wall_%s_b x,y", w->name, w->name, w->name);
   PetscCall(WallSetProgram(scene->comm, w, vel, vset, nvals, prog));
   if (w->kind == KERGS_WALL_DRIVEN) PetscCall(KergsWallVelocityAt(w, time, w->v));
   PetscCall(PetscFree(prog));
+  if (pset) PetscCall(WallCheckPressureOptions(scene->comm, w, fset));
   PetscFunctionReturn(0);
 }
 
