@@ -6,7 +6,8 @@
 TEST is one of:
   restart   10 + 10 steps of confine500 against 20 (scripts/compare_results.py: bit for bit) on 2 ranks; 4 + 4 steps,
             2 -> 1 and 1 -> 2 ranks, against the uninterrupted 8, frictionless and solved to 1e-10 (velocities unique): the
-            first 4 rows bit for bit, the end within the solver's tolerance
+            first 4 rows bit for bit, the end within the solver's tolerance; a pressure-controlled wall over a closed box's
+            moving height, 10 + 10 steps against 20 bit for bit
   signals   SIGTERM and SIGINT sent to the ranks, SIGUSR1 to mpiexec (which forwards it): exit status 4, the results file
             complete under its final name, the checkpoint of the last step; a restart continues the same file
   kill      SIGKILL: the .tmp left is readable and holds every flushed row and snapshot; a restart from the last
@@ -128,6 +129,21 @@ def test_restart(k):
             # would move the grains by 1e-5 m or more in 4 steps
             check(sa == sb == 8 and dx < 1e-10 and dv < 1e-8,
                   f"restart {first} -> {second} ranks: step 8 within the solver's tolerance (positions {dx:.1e} m, velocities {dv:.1e} m/s)")
+    test_restart_pressure(k)
+
+
+def test_restart_pressure(k):
+    """A pressure-controlled wall's force is set from the restored walls: box_right under a pressure over the height of
+    a closed box whose top moves down (its force changes every step), 10 + 10 steps against 20, bit for bit."""
+    common = [*PAPER500, "-quiet", "-box_open_top", "0", "-wall_box_top_velocity", "0,-0.05", "-wall_box_right_velocity", "0,0",
+              "-wall_box_right_type", "free", "-wall_box_right_mass", "0.1", "-wall_box_right_pressure", "200"]
+    k.run(2, *common, "-steps", 20, "-output", k.path("PA.h5"), log="PA.log")
+    p1 = k.run(2, *common, "-steps", 10, "-output", k.path("PB.h5"), "-checkpoint_every", 10, log="PB1.log")
+    p2 = k.run(2, "-restart", k.path("PB.checkpoint.h5"), "-steps", 20, log="PB2.log")
+    check(p1.returncode == 0 and p2.returncode == 0, "restart, pressure wall: 10 steps, then the restart to 20, run")
+    rc, out = compare(k.path("PA.h5"), k.path("PB.h5"))
+    check(rc == 0, "restart, pressure wall: 10 + 10 steps give the 20-step run bit for bit (the force from the restored height) "
+          + out[:300])
 
 
 def test_signals(k):

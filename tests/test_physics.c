@@ -1,6 +1,7 @@
 /* Physics with known answers, through the whole engine (scene -> detect -> operators -> NLGS -> update).
    Runs on 1 and 2 ranks; every check is global. */
-static const char help[] = "kergs physics tests: column, slopes, wedged pair, momentum balance, adjoint of H, non-convergence.\n";
+static const char help[] =
+    "kergs physics tests: column, slopes, wedged pair, momentum balance, adjoint of H, non-convergence, pressure wall.\n";
 
 #include "testing.h"
 
@@ -519,6 +520,57 @@ static PetscErrorCode TestActiveOnlyW(void)
   PetscFunctionReturn(0);
 }
 
+/* Normal impulse of the step on wall w, summed over every rank's contacts. */
+static PetscErrorCode WallImpulse(KergsStepper st, PetscInt w, PetscReal *rn)
+{
+  PetscFunctionBeginUser;
+  *rn = 0;
+  for (PetscInt k = 0; k < st->contacts->n; k++)
+    if (st->contacts->c[k].kind == KERGS_CONTACT_DISK_WALL && st->contacts->c[k].b == w) *rn += st->contacts->c[k].r[0];
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, rn, 1, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
+  PetscFunctionReturn(0);
+}
+
+/* A pressure-controlled wall: without gravity, box_right under pressure p presses a row of three disks against
+   box_left. At rest, its contact impulse over a step is p L dt, L the separation of box_bottom and box_top at the
+   step's start; box_top then moves down by 0.1 (at 10 m/s on [0.02, 0.03)) without touching the row, and the force
+   follows, to 0.9 p dt once it stops. The rigid row makes the answer exact: only the solver's tolerance is left. */
+static PetscErrorCode TestPressureWall(void)
+{
+  const PetscReal p = 10, dt = 1e-3;
+  KergsStepper    st;
+  PetscReal       worst = 0, first = 0, last = 0, ek, vmax;
+
+  PetscFunctionBeginUser;
+  PetscCall(MakeStepper("-gravity 0,0 -friction 0.3 -dt 1e-3 -disks_source lattice -lattice_type square -lattice_n 3,1 "
+                        "-lattice_radius 0.1 -lattice_origin 0.1,0.5 -box 0,0,0.6,1 -wall_box_right_type free -wall_box_right_mass 1 "
+                        "-wall_box_right_pressure 10 -wall_box_top_program 0.02,0,-10,0.03,0,0 -alert 0.01 -solver_tol 1e-13 "
+                        "-solver_max_it 20000",
+                        &st));
+  for (PetscInt s = 0; s < 40; s++) {
+    const KergsWall *walls = st->scene->walls;
+    const PetscReal  L     = walls[2].a[1] - walls[0].a[1]; /* box_top above box_bottom, at the step's start */
+    PetscReal        rn;
+
+    PetscCall(KergsStepperStep(st));
+    PetscCall(WallImpulse(st, 1, &rn));
+    if (s < 5) continue; /* the lattice's rounding gaps close in the first steps */
+    worst = PetscMax(worst, PetscAbsReal(rn - p * L * dt) / (p * dt));
+    if (s == 5) first = rn;
+    last = rn;
+  }
+  PetscCall(KergsSceneKineticEnergy(st->scene, &ek, &vmax));
+  PetscCall(Check((PetscBool)(worst < 1e-8), "pressure wall: impulse = p x (box_top - box_bottom) x dt every step (relative)", worst, 0));
+  PetscCall(
+      Check((PetscBool)(PetscAbsReal(first - p * dt) < 1e-8 * p * dt), "pressure wall: p x 1 x dt before box_top moves", first / dt, p));
+  PetscCall(Check((PetscBool)(PetscAbsReal(last / first - 0.9) < 1e-8), "pressure wall: the force shrinks with the length (0.9)",
+                  last / first, 0.9));
+  PetscCall(Check((PetscBool)(vmax < 1e-8 && PetscAbsReal(st->scene->walls[1].v[0]) < 1e-8), "pressure wall: the row and the wall at rest",
+                  PetscMax(vmax, PetscAbsReal(st->scene->walls[1].v[0])), 0));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
@@ -533,6 +585,7 @@ int main(int argc, char **argv)
   PetscCall(TestActiveOnlyW());
   PetscCall(TestInfeasibleRow());
   PetscCall(TestConvergedResidual());
+  PetscCall(TestPressureWall());
   {
     int code = Finish();
     PetscCall(PetscFinalize());

@@ -333,6 +333,58 @@ static PetscErrorCode TestWalls(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
+/* Pressure-controlled walls: force = pressure x loaded length along the inward normal. A box wall's length is the
+   separation of the two box walls perpendicular to it, an oblique wall's its own |b - a|, and the force follows the
+   spanning walls when they move (here through KergsSceneRestoreWall, as a restart moves them). */
+static PetscErrorCode TestPressureWalls(MPI_Comm comm)
+{
+  KergsScene s;
+  PetscReal  len[4];
+
+  PetscFunctionBeginUser;
+  PetscCall(SceneGood(comm,
+                      "-box 0,0,2,1 -wall_box_right_type free -wall_box_right_mass 1 -wall_box_right_pressure 3 "
+                      "-wall_box_top_type free -wall_box_top_mass 1 -wall_box_top_pressure 3 "
+                      "-walls lone -wall_lone_a 5,5 -wall_lone_b 8,9 -wall_lone_type free -wall_lone_mass 1 -wall_lone_pressure 2 "
+                      "-disks_x 1,0.5 -disks_radius 0.1",
+                      &s));
+  if (!s) PetscFunctionReturn(0);
+  PetscCall(KergsSceneWallLoadedLength(s, 1, &len[0]));
+  PetscCall(KergsSceneWallLoadedLength(s, 2, &len[1]));
+  PetscCall(KergsSceneWallLoadedLength(s, 4, &len[2]));
+  PetscCall(CheckTrue(comm, (PetscBool)(s->walls[1].span[0] == 0 && s->walls[1].span[1] == 2 && Close(len[0], 1.0, 1e-15)),
+                      "pressure: box_right spans box_bottom to box_top, length 1"));
+  PetscCall(CheckTrue(comm, (PetscBool)(s->walls[2].span[0] == 1 && s->walls[2].span[1] == 3 && Close(len[1], 2.0, 1e-15)),
+                      "pressure: box_top spans box_right to box_left, length 2"));
+  PetscCall(CheckTrue(comm, (PetscBool)(s->walls[4].span[0] == -1 && Close(len[2], 5.0, 1e-15)),
+                      "pressure: an oblique wall without perpendicular walls takes its own length 5"));
+  PetscCall(CheckTrue(comm, (PetscBool)(Close(s->walls[1].force[0], -3.0, 1e-15) && s->walls[1].force[1] == 0.0),
+                      "pressure: box_right pushed inward by 3 x 1"));
+  PetscCall(CheckTrue(comm, (PetscBool)(Close(s->walls[2].force[1], -6.0, 1e-15) && PetscAbsReal(s->walls[2].force[0]) < 1e-15),
+                      "pressure: box_top pushed inward by 3 x 2"));
+  PetscCall(CheckTrue(comm, (PetscBool)(Close(s->walls[4].force[0], -8.0, 1e-14) && Close(s->walls[4].force[1], 6.0, 1e-14)),
+                      "pressure: the oblique wall pushed along its normal (-0.8, 0.6) by 2 x 5"));
+  {
+    const PetscReal a[2] = {2, 0.4}, b[2] = {0, 0.4}, v[2] = {0, 0}, disp[2] = {0, -0.6};
+    PetscCall(KergsSceneRestoreWall(s, 2, a, b, v, disp)); /* box_top lowered to y = 0.4 */
+  }
+  PetscCall(KergsSceneWallLoadedLength(s, 1, &len[3]));
+  PetscCall(CheckTrue(comm, (PetscBool)(Close(len[3], 0.4, 1e-15) && Close(s->walls[1].force[0], -1.2, 1e-15)),
+                      "pressure: box_right's length and force follow box_top (0.4, -1.2)"));
+  PetscCall(KergsSceneView(s, PETSC_VIEWER_STDOUT_(comm)));
+  PetscCall(KergsSceneDestroy(&s));
+
+  PetscCall(SceneGood(comm,
+                      "-box 0,0,2,1 -box_open_top -wall_box_right_type free -wall_box_right_mass 1 -wall_box_right_pressure 3 "
+                      "-disks_x 1,0.5 -disks_radius 0.1",
+                      &s));
+  if (!s) PetscFunctionReturn(0);
+  PetscCall(CheckTrue(comm, (PetscBool)(s->walls[1].span[0] == -1 && Close(s->walls[1].force[0], -3.0, 1e-15)),
+                      "pressure: an open box's side wall has no top, its own length 1"));
+  PetscCall(KergsSceneDestroy(&s));
+  PetscFunctionReturn(0);
+}
+
 /* KergsSceneSetDisks directly, and the kinetic energy. */
 static PetscErrorCode TestSetDisksEnergy(MPI_Comm comm)
 {
@@ -396,6 +448,14 @@ static PetscErrorCode TestErrors(MPI_Comm comm)
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_program 1,0,0,0.5,0,0", "times must increase"},
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_program 1,0", "-wall_w_program"},
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_program 1,0,0 -wall_w_velocity 1,0", "not both"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_pressure 5", "Wall w is driven: -wall_w_pressure"},
+      {"-disks_x 0.5,0.5 -disks_radius 0.1 -box 0,0,1,1 -wall_box_left_pressure 5", "Wall box_left is driven"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_pressure -1", "-wall_w_pressure -1"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_pressure inf", "-wall_w_pressure inf"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_pressure nan", "-wall_w_pressure nan"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_pressure 5 -wall_w_force 1,0",
+       "-wall_w_pressure or -wall_w_force, not both"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_pressure 5", "Free wall w: mass"},
       {"-walls w,w -wall_w_a 0,0 -wall_w_b 1,0", "used twice"},
       {"-walls w -wall_w_a 0,0,1 -wall_w_b 1,0", "-wall_w_a"},
       {"-disks_x 0,0 -disks_radius 0.1 -disks_material 1", "Grain 0 has material 1"},
@@ -460,6 +520,7 @@ int main(int argc, char **argv)
     PetscCall(TestLattice(comm));
     PetscCall(TestRandom(comm));
     PetscCall(TestWalls(comm));
+    PetscCall(TestPressureWalls(comm));
     PetscCall(TestSetDisksEnergy(comm));
     PetscCall(TestErrors(comm));
   }

@@ -38,8 +38,14 @@ typedef struct {
   PetscInt  nprog;
   PetscReal prog_t[KERGS_MAX_PROGRAM];
   PetscReal prog_v[KERGS_MAX_PROGRAM][KERGS_DIM];
-  /* free wall: translational mass and applied force (pressure x length) */
+  /* free wall: translational mass and applied force */
   PetscReal mass, force[KERGS_DIM];
+  /* pressure-controlled free wall: force = pressure x loaded length along n, set again after every move of the walls.
+     The loaded length is the separation of the two walls perpendicular to this one that face each other across it,
+     span[0] facing along a->b and span[1] against it; without exactly one of each (span -1), the wall's own |b - a|. */
+  PetscBool has_pressure;
+  PetscReal pressure;
+  PetscInt  span[2];
   PetscReal v[KERGS_DIM];    /* current velocity */
   PetscReal disp[KERGS_DIM]; /* displacement since the start of the run */
 } KergsWall;
@@ -131,6 +137,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneRestoreDisks(KergsScene, PetscInt ndisks, 
 /* The clock and the alert distance (computed from the radii at the start of the run, kept as it was) */
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreState(KergsScene, PetscInt step, PetscReal time, PetscReal alert);
 /* Wall w's endpoints, velocity and displacement since the start of the run (KERGS_DIM values each) */
+/* Wall w's loaded length (KergsWall.span): what its pressure multiplies. */
+PETSC_EXTERN PetscErrorCode KergsSceneWallLoadedLength(KergsScene, PetscInt w, PetscReal *length);
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreWall(KergsScene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
                                                   const PetscReal disp[]);
 /* The ghost layer as a checkpoint keeps it (src/scene/ghosts.c): whether it exists, the owned disks' positions when it

@@ -6,13 +6,91 @@
    a body with a mass under an applied force (its DOFs are in V_f, updated by the solve). Every function below that
    depends on the kind switches on it: KergsWallVelocityAt, WallSetProgram, WallSetFromOptions (the kind's options),
    KergsSceneAdvanceWalls, CheckWall and ViewWall; a new kind adds its case there and its name to KergsWallKinds.
-   Outside the scene, the operators (V_f or V_g), the kernel and the watch (energy, work) ask whether a wall is free. */
+   Outside the scene, the operators (V_f or V_g), the kernel and the watch (energy, work) ask whether a wall is free.
+   A pressure-controlled wall is a free wall whose force the scene sets from its pressure and loaded length (WallSpan,
+   UpdateWallPressures) whenever the walls move: at setup, after each step's motion and after a restart. */
 #include <kergs/private/sceneimpl.h>
 #include <petscviewer.h>
 
 const char *const KergsWallKinds[] = {"driven", "free", "KergsWallKind", "KERGS_WALL_", NULL};
 
 #define KERGS_WALL_PREFIX_LEN 128
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Pressure-controlled walls                                                                        */
+
+/* Unit tangent t = (b - a)/|b - a| and left normal n = (-t_y, t_x) of a wall (it points to the disks' side). */
+static void WallFrame(const KergsWall *w, PetscReal t[], PetscReal n[])
+{
+  const PetscReal len = PetscSqrtReal(PetscSqr(w->b[0] - w->a[0]) + PetscSqr(w->b[1] - w->a[1]));
+
+  t[0] = len > 0.0 ? (w->b[0] - w->a[0]) / len : 0.0; /* a degenerate wall: CheckWall names it */
+  t[1] = len > 0.0 ? (w->b[1] - w->a[1]) / len : 0.0;
+  n[0] = -t[1];
+  n[1] = t[0];
+}
+
+/* The two walls that bound the sample along wall w: a wall whose normal is +t faces along a->b (the lower bound of
+   the sample along t), one whose normal is -t faces against it (the upper bound). Walls translate and never rotate,
+   so the pair found at setup holds for the run. A box's wall gets the opposite pair (box_right: box_bottom and
+   box_top); anything else, -1 (its own length). The tolerance accepts walls given with rounded endpoints. */
+static void WallSpan(const KergsWall walls[], PetscInt nwalls, PetscInt w, PetscInt span[2])
+{
+  const PetscReal parallel = 1.0 - 1e-9;
+  PetscReal       t[KERGS_DIM], n[KERGS_DIM];
+  PetscInt        count[2] = {0, 0}, found[2] = {-1, -1};
+
+  WallFrame(&walls[w], t, n);
+  for (PetscInt k = 0; k < nwalls; k++) {
+    PetscReal tk[KERGS_DIM], nk[KERGS_DIM], c;
+
+    if (k == w) continue;
+    WallFrame(&walls[k], tk, nk);
+    c = nk[0] * t[0] + nk[1] * t[1];
+    if (c >= parallel) found[0] = k, count[0]++;
+    if (c <= -parallel) found[1] = k, count[1]++;
+  }
+  span[0] = count[0] == 1 && count[1] == 1 ? found[0] : -1;
+  span[1] = count[0] == 1 && count[1] == 1 ? found[1] : -1;
+}
+
+/* The separation along t of the two spanning walls (zero once they cross), or the wall's own |b - a|. */
+static PetscReal WallLoadedLength(const KergsWall walls[], PetscInt w)
+{
+  const KergsWall *wall = &walls[w];
+  PetscReal        t[KERGS_DIM], n[KERGS_DIM];
+
+  WallFrame(wall, t, n);
+  if (wall->span[0] < 0 || wall->span[1] < 0) return PetscSqrtReal(PetscSqr(wall->b[0] - wall->a[0]) + PetscSqr(wall->b[1] - wall->a[1]));
+  {
+    const PetscReal *lo = walls[wall->span[0]].a, *hi = walls[wall->span[1]].a;
+    return PetscMax(0.0, t[0] * (hi[0] - lo[0]) + t[1] * (hi[1] - lo[1]));
+  }
+}
+
+PetscErrorCode KergsSceneWallLoadedLength(KergsScene scene, PetscInt w, PetscReal *length)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(w >= 0 && w < scene->nwalls, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "Scene %s: no wall %" PetscInt_FMT " (it has %" PetscInt_FMT ")", scene->name, w, scene->nwalls);
+  *length = WallLoadedLength(scene->walls, w);
+  PetscFunctionReturn(0);
+}
+
+/* force = pressure x loaded length x n: the pressure pushes the wall towards the disks. Explicit in the length: a step
+   uses the length at its start (the biaxial test's lateral stress, constant to O(dt v_wall / L) per step). */
+static void UpdateWallPressures(KergsScene sc)
+{
+  for (PetscInt w = 0; w < sc->nwalls; w++) {
+    KergsWall *wall = &sc->walls[w];
+    PetscReal  t[KERGS_DIM], n[KERGS_DIM], f;
+
+    if (!wall->has_pressure) continue;
+    WallFrame(wall, t, n);
+    f = wall->pressure * WallLoadedLength(sc->walls, w);
+    for (PetscInt d = 0; d < KERGS_DIM; d++) wall->force[d] = f * n[d];
+  }
+}
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Velocities and motion                                                                            */
@@ -56,6 +134,7 @@ PetscErrorCode KergsSceneAdvanceWalls(KergsScene sc, const PetscReal wvold[])
       wall->disp[d] += dx;
     }
   }
+  UpdateWallPressures(sc);
   PetscFunctionReturn(0);
 }
 
@@ -82,6 +161,7 @@ PetscErrorCode KergsSceneRestoreWall(KergsScene scene, PetscInt w, const PetscRe
     scene->walls[w].v[d]    = v[d];
     scene->walls[w].disp[d] = disp[d];
   }
+  UpdateWallPressures(scene);
   PetscFunctionReturn(0);
 }
 
@@ -168,6 +248,21 @@ static PetscErrorCode WallSetProgram(MPI_Comm comm, KergsWall *w, const PetscRea
   PetscFunctionReturn(0);
 }
 
+/* -wall_<name>_pressure: a free wall's, finite and non-negative, instead of a constant -wall_<name>_force. */
+static PetscErrorCode WallCheckPressureOptions(MPI_Comm comm, KergsWall *w, PetscBool force_set)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(w->kind == KERGS_WALL_FREE, comm, PETSC_ERR_ARG_INCOMP,
+             "Wall %s is driven: -wall_%s_pressure applies to free walls only (-wall_%s_type free -wall_%s_mass m)", w->name, w->name,
+             w->name, w->name);
+  PetscCheck(KergsSceneFinite(w->pressure) && w->pressure >= 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Wall %s: -wall_%s_pressure %g must be finite and non-negative", w->name, w->name, (double)w->pressure);
+  PetscCheck(!force_set, comm, PETSC_ERR_ARG_INCOMP,
+             "Wall %s: give -wall_%s_pressure or -wall_%s_force, not both (the pressure sets the wall's force)", w->name, w->name, w->name);
+  w->has_pressure = PETSC_TRUE;
+  PetscFunctionReturn(0);
+}
+
 /* The options of one wall, prefix wall_<name>_. Declared walls must give both endpoints; box walls may
    override theirs. */
 static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBool needs_endpoints, PetscReal time)
@@ -175,7 +270,7 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
   char      prefix[KERGS_WALL_PREFIX_LEN], title[KERGS_WALL_PREFIX_LEN];
   PetscReal vel[KERGS_DIM] = {0}, *prog;
   PetscInt  nvals;
-  PetscBool aset, bset, vset;
+  PetscBool aset, bset, vset, fset, pset;
 
   PetscFunctionBeginUser;
   PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "wall_%s_", w->name));
@@ -196,13 +291,18 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
                                  "Driven wall velocity program t0,vx,vy,t1,vx,vy,...: (vx,vy) from t_k to t_{k+1}, zero before t0", &nvals,
                                  &prog, NULL));
   PetscCall(PetscOptionsReal("-mass", "Mass of a free wall", NULL, w->mass, &w->mass, NULL));
-  PetscCall(KergsOptionsVector(PetscOptionsObject, "-force", "Applied force fx,fy on a free wall (pressure x length)", w->force, NULL));
+  PetscCall(KergsOptionsVector(PetscOptionsObject, "-force", "Constant applied force fx,fy on a free wall", w->force, &fset));
+  PetscCall(PetscOptionsReal("-pressure",
+                             "Pressure (N/m) on a free wall: force = pressure x loaded length, along the normal, every step (the "
+                             "separation of the two walls perpendicular to it, or its own length)",
+                             NULL, w->pressure, &w->pressure, &pset));
   PetscOptionsEnd();
   PetscCheck(!needs_endpoints || (aset && bset), scene->comm, PETSC_ERR_ARG_WRONGSTATE,
              "Wall %s (from -walls) needs both -wall_%s_a x,y and -wall_%s_b x,y", w->name, w->name, w->name);
   PetscCall(WallSetProgram(scene->comm, w, vel, vset, nvals, prog));
   if (w->kind == KERGS_WALL_DRIVEN) PetscCall(KergsWallVelocityAt(w, time, w->v));
   PetscCall(PetscFree(prog));
+  if (pset) PetscCall(WallCheckPressureOptions(scene->comm, w, fset));
   PetscFunctionReturn(0);
 }
 
@@ -245,6 +345,8 @@ PetscErrorCode KergsSceneSetWalls(KergsScene scene, KergsWallsSpec *spec)
   }
   for (PetscInt w = 0; w < scene->nwalls; w++)
     PetscCall(WallSetFromOptions(scene, &scene->walls[w], w >= nbox ? PETSC_TRUE : PETSC_FALSE, scene->time));
+  for (PetscInt w = 0; w < scene->nwalls; w++) WallSpan(scene->walls, scene->nwalls, w, scene->walls[w].span);
+  UpdateWallPressures(scene);
   PetscCall(PetscStrNArrayDestroy(spec->nnames, &spec->names));
   PetscFunctionReturn(0);
 }
@@ -272,6 +374,10 @@ static PetscErrorCode CheckWall(KergsScene scene, const KergsWall *w)
              w->name, (int)w->kind);
   PetscCheck(w->kind != KERGS_WALL_FREE || (KergsSceneFinite(w->mass) && w->mass > 0.0), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Free wall %s: mass %g must be positive (-wall_%s_mass)", w->name, (double)w->mass, w->name);
+  PetscCheck(!w->has_pressure || w->kind == KERGS_WALL_FREE, comm, PETSC_ERR_ARG_INCOMP,
+             "Wall %s is driven: a pressure applies to free walls only (-wall_%s_type free)", w->name, w->name);
+  PetscCheck(!w->has_pressure || (KergsSceneFinite(w->pressure) && w->pressure >= 0.0), comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "Wall %s: pressure %g must be finite and non-negative (-wall_%s_pressure)", w->name, (double)w->pressure, w->name);
   PetscCheck(w->nprog >= 0 && w->nprog <= KERGS_MAX_PROGRAM, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Wall %s: %" PetscInt_FMT " program pieces, at most %d", w->name, w->nprog, KERGS_MAX_PROGRAM);
   for (PetscInt k = 0; k < w->nprog; k++) {
@@ -293,7 +399,7 @@ PetscErrorCode KergsSceneCheckWalls(KergsScene scene)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode ViewWall(PetscViewer viewer, const KergsWall *w)
+static PetscErrorCode ViewWall(PetscViewer viewer, const KergsWall walls[], const KergsWall *w)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscViewerASCIIPrintf(viewer, "wall %s: %s %s (%g, %g) -> (%g, %g), material %" PetscInt_FMT, w->name, KergsWallKinds[w->kind],
@@ -301,8 +407,14 @@ static PetscErrorCode ViewWall(PetscViewer viewer, const KergsWall *w)
                                    w->material));
   PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
   if (w->kind == KERGS_WALL_FREE) {
-    PetscCall(PetscViewerASCIIPrintf(viewer, ", mass %g, force (%g, %g), velocity (%g, %g)\n", (double)w->mass, (double)w->force[0],
+    PetscCall(PetscViewerASCIIPrintf(viewer, ", mass %g, force (%g, %g), velocity (%g, %g)", (double)w->mass, (double)w->force[0],
                                      (double)w->force[1], (double)w->v[0], (double)w->v[1]));
+    if (w->has_pressure && w->span[0] >= 0)
+      PetscCall(PetscViewerASCIIPrintf(viewer, ", pressure %g over the length from %s to %s", (double)w->pressure, walls[w->span[0]].name,
+                                       walls[w->span[1]].name));
+    else if (w->has_pressure)
+      PetscCall(PetscViewerASCIIPrintf(viewer, ", pressure %g over its own length", (double)w->pressure));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
   } else if (w->nprog == 0) {
     PetscCall(PetscViewerASCIIPrintf(viewer, ", at rest\n"));
   } else {
@@ -319,6 +431,6 @@ static PetscErrorCode ViewWall(PetscViewer viewer, const KergsWall *w)
 PetscErrorCode KergsSceneViewWalls(KergsScene scene, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
-  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(ViewWall(viewer, &scene->walls[w]));
+  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(ViewWall(viewer, scene->walls, &scene->walls[w]));
   PetscFunctionReturn(0);
 }
