@@ -67,6 +67,19 @@ static PetscErrorCode EvaluateFunction(KergsSolver s, Newton *nt, PetscInt n, Pe
   PetscFunctionReturn(0);
 }
 
+/* Contact a's impulse ra and natural map e (KergsLawNaturalMap) from the arrays of r and u = W r + v^d. */
+static void ContactNaturalMap(KergsSolver s, Newton *nt, PetscInt nc, PetscInt a, const PetscScalar rl[], const PetscScalar ul[],
+                              PetscReal ra[], PetscReal e[])
+{
+  PetscReal ua[KERGS_MAXCOMP];
+
+  for (PetscInt c = 0; c < nc; c++) {
+    ra[c] = PetscRealPart(rl[a * nc + c]);
+    ua[c] = PetscRealPart(ul[a * nc + c]);
+  }
+  KergsLawNaturalMap(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a], e);
+}
+
 /* The natural residual of the original problem (KergsLawNaturalResidualScaled, docs/solver.md) from r and u = W r + v^d. */
 static PetscErrorCode NaturalResidual(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res)
 {
@@ -77,12 +90,8 @@ static PetscErrorCode NaturalResidual(KergsSolver s, Newton *nt, PetscInt n, Pet
   PetscCall(VecGetArrayRead(r, &rl));
   PetscCall(VecGetArrayRead(u, &ul));
   for (PetscInt a = 0; a < n; a++) {
-    PetscReal ra[KERGS_MAXCOMP], ua[KERGS_MAXCOMP], e[KERGS_MAXCOMP];
-    for (PetscInt c = 0; c < nc; c++) {
-      ra[c] = PetscRealPart(rl[a * nc + c]);
-      ua[c] = PetscRealPart(ul[a * nc + c]);
-    }
-    KergsLawNaturalMap(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a], e);
+    PetscReal ra[KERGS_MAXCOMP], e[KERGS_MAXCOMP];
+    ContactNaturalMap(s, nt, nc, a, rl, ul, ra, e);
     for (PetscInt c = 0; c < nc; c++) {
       sums[0] += e[c] * e[c];
       sums[1] += ra[c] * ra[c];
@@ -469,12 +478,8 @@ static PetscErrorCode Polish(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc,
   PetscCall(VecGetArrayRead(u, &ul));
   PetscCall(VecGetArray(nt->rc, &pl));
   for (PetscInt a = 0; a < n; a++) {
-    PetscReal ra[KERGS_MAXCOMP], ua[KERGS_MAXCOMP], e[KERGS_MAXCOMP];
-    for (PetscInt c = 0; c < nc; c++) {
-      ra[c] = PetscRealPart(rl[a * nc + c]);
-      ua[c] = PetscRealPart(ul[a * nc + c]);
-    }
-    KergsLawNaturalMap(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a], e);
+    PetscReal ra[KERGS_MAXCOMP], e[KERGS_MAXCOMP];
+    ContactNaturalMap(s, nt, nc, a, rl, ul, ra, e);
     for (PetscInt c = 0; c < nc; c++) pl[a * nc + c] = ra[c] - e[c];
   }
   PetscCall(VecRestoreArray(nt->rc, &pl));
