@@ -14,6 +14,8 @@ endfunction()
 kergs_bad_input(malformed_file "malformed.opts" -options_file tests/data/malformed.opts)
 kergs_bad_input(unknown_option "unknown option -disks_radios" -options_file cases/confine5.opts -disks_radios 0.5)
 kergs_bad_input(negative_radius "radius.*-0.5" -options_file cases/confine5.opts -disks_radius -0.5)
+kergs_bad_input(radius_ratio_area "random_radius_law area: the ratio rmax/rmin = 20" -disks_source random -random_n 10 -random_box 0,0,1,1
+                -random_radius 0.01,0.2 -random_radius_law area -steps 0)
 kergs_bad_input(nan_position "(nan|finite)" -options_file cases/confine5.opts -disks_x 0.5,nan,1.5,0.52,2.5,0.49,3.5,0.515,4.5,0.5)
 kergs_bad_input(overlap "grains 1 and 2 overlap" -options_file cases/confine5.opts -disks_x 0.5,0.5,1.5,0.5,2.2,0.5,3.5,0.5,4.5,0.5)
 # a truncated copy of the shipped sample, made before the test runs

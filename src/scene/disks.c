@@ -7,6 +7,13 @@ typedef enum { DISKS_LIST, DISKS_LATTICE, DISKS_RANDOM, DISKS_FILE } DiskSource;
 static const char *const DiskSources[] = {"list", "lattice", "random", "file"};
 
 typedef enum { LATTICE_SQUARE, LATTICE_HEX } LatticeType;
+/* How -disks_source random draws a radius in [rmin, rmax]: uniform in r, or uniform in area (pi r^2), the law of the
+   standard polydisperse biaxial sample, which gives as much solid area to small as to large disks. */
+typedef enum { RADIUS_UNIFORM, RADIUS_AREA } RadiusLaw;
+static const char *const RadiusLaws[] = {"uniform", "area"};
+/* The widest size ratio rmax/rmin the area law accepts: the cells are sized for rmax, so a wider ratio wastes most
+   of the box, and the biaxial literature stays within it. */
+#define KERGS_RADIUS_RATIO_MAX 10.0
 static const char *const LatticeTypes[] = {"square", "hex"};
 
 /* Everything the disk options say, read at once so that -help lists every source's options. */
@@ -24,7 +31,7 @@ typedef struct {
   PetscReal lattice_radius, lattice_origin[KERGS_DIM], lattice_spacing;
   PetscBool lattice_n_set, lattice_spacing_set;
   /* random */
-  PetscInt  random_n, random_seed;
+  PetscInt  random_n, random_seed, random_radius_law;
   PetscReal random_box[4], random_radius[2];
   PetscBool random_box_set, random_radius_set;
   /* file */
@@ -57,6 +64,8 @@ static PetscErrorCode DiskOptionsRead(MPI_Comm comm, DiskOptions *o)
                               &o->random_box_set));
   PetscCall(KergsOptionsReals(PetscOptionsObject, "-random_radius", "random: radius range rmin,rmax (uniform distribution)", 2,
                               o->random_radius, &o->random_radius_set));
+  PetscCall(PetscOptionsEList("-random_radius_law", "random: law of the radius in [rmin, rmax]: uniform in r, or uniform in area", NULL,
+                              RadiusLaws, 2, RadiusLaws[o->random_radius_law], &o->random_radius_law, NULL));
   PetscCall(PetscOptionsInt("-random_seed", "random: seed of the generator (same seed, same sample)", NULL, o->random_seed, &o->random_seed,
                             NULL));
   PetscCall(PetscOptionsString("-sample_input", "file: sample file (HDF5) of an earlier run", NULL, o->sample, o->sample, sizeof(o->sample),
@@ -169,8 +178,16 @@ static PetscErrorCode DisksFromLattice(KergsScene scene, const DiskOptions *o)
   PetscFunctionReturn(0);
 }
 
+/* A radius in [rmin, rmax] from a uniform draw u in [0, 1): r = rmin + (rmax - rmin) u, or for the area law
+   r = sqrt(rmin^2 + (rmax^2 - rmin^2) u), so that r^2 is uniform in [rmin^2, rmax^2]. */
+static PetscReal RandomRadius(RadiusLaw law, PetscReal rmin, PetscReal rmax, PetscReal u)
+{
+  if (law == RADIUS_AREA) return PetscSqrtReal(rmin * rmin + (rmax * rmax - rmin * rmin) * u);
+  return rmin + (rmax - rmin) * u;
+}
+
 /* random: the box is cut into square cells of side 2 rmax + gap, filled row by row from the bottom left, one disk
-   per cell with a uniform radius in [rmin, rmax] and its centre moved by a uniform offset of at most rmax - r in
+   per cell with a radius in [rmin, rmax] drawn by -random_radius_law and its centre moved by a uniform offset of at most rmax - r in
    each direction. A disk stays gap/2 inside its cell, so no two disks overlap. Three draws per disk from
    rand48 with the given seed: the same sample on every rank and for every number of ranks. */
 static PetscErrorCode DisksFromRandom(KergsScene scene, const DiskOptions *o)
@@ -194,6 +211,9 @@ static PetscErrorCode DisksFromRandom(KergsScene scene, const DiskOptions *o)
   PetscCheck(o->random_radius_set, comm, PETSC_ERR_ARG_WRONGSTATE, "-disks_source random needs -random_radius rmin,rmax");
   PetscCheck(rmin > 0.0 && rmax >= rmin && !PetscIsInfOrNanReal(rmax), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-random_radius %g,%g: need 0 < rmin <= rmax", (double)rmin, (double)rmax);
+  PetscCheck(o->random_radius_law != RADIUS_AREA || rmax <= KERGS_RADIUS_RATIO_MAX * rmin, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-random_radius %g,%g with -random_radius_law area: the ratio rmax/rmin = %g is above %g", (double)rmin, (double)rmax,
+             (double)(rmax / rmin), (double)KERGS_RADIUS_RATIO_MAX);
   ncx_real = PetscFloorReal((box[2] - box[0]) / cell);
   ncy_real = PetscFloorReal((box[3] - box[1]) / cell);
   PetscCheck(ncx_real * ncy_real >= (PetscReal)n, comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -211,7 +231,7 @@ static PetscErrorCode DisksFromRandom(KergsScene scene, const DiskOptions *o)
     PetscReal      u[3], slack;
 
     for (PetscInt d = 0; d < 3; d++) PetscCall(PetscRandomGetValueReal(rnd, &u[d]));
-    r[k]                 = rmin + (rmax - rmin) * u[0];
+    r[k]                 = RandomRadius((RadiusLaw)o->random_radius_law, rmin, rmax, u[0]);
     slack                = rmax - r[k];
     x[KERGS_DIM * k]     = box[0] + (i + 0.5) * cell + (2.0 * u[1] - 1.0) * slack;
     x[KERGS_DIM * k + 1] = box[1] + (j + 0.5) * cell + (2.0 * u[2] - 1.0) * slack;
