@@ -313,18 +313,18 @@ static PetscErrorCode DecideConvergence(KergsSolver s, KergsOperators ops, Kergs
    u_n >= 0) 0 <= w . u = (W w) . r + q, so that |r|_2 >= -q / |W w|_2: no solution has impulses below that bound,
    whatever the friction. The step is infeasible when the bound exceeds -solver_infeasible_ratio times the problem's
    impulse scale: sqrt(active contacts) times the impulse that stops its fastest contact (largest free velocity over
-   the mean W_nn), the size of |r|_2 when every contact carries that impulse. Measured on confine5_straight's first
-   steps: 1.5e4 to 1e6 times for newton, tresca and snesvi; capped NLGS leaves too little evidence (2 to 1,100 times:
-   DIVERGED_MAX_IT); feasible steps that capped NLGS fails on, confine500's: at most 0.3. The weights of w, largest 1,
+   the mean W_nn), the size of |r|_2 when every contact carries that impulse. Measured on confine5_straight: 3.3e4
+   to 1.7e6 times for newton, tresca and snesvi on step 1; capped NLGS leaves too little evidence on its first steps (7
+   to 1,700 times: DIVERGED_MAX_IT); feasible steps that capped NLGS fails on, confine500's: at most 0.3. The weights of w, largest 1,
    are kept per local contact in s->infeasible (KergsSolverGetInfeasibleNetwork). */
 static PetscErrorCode DetectInfeasible(KergsSolver s, KergsOperators ops, KergsSolveStats *stats, PetscReal *ratio)
 {
-  const PetscScalar *r, *vd, *g;
-  PetscScalar       *w;
+  const PetscScalar *r, *vd, *g, *w;
+  PetscScalar       *wl;
+  PetscReal         *diag, wmax = 0.0, bound, scale;
+  PetscReal          sums[4] = {0, 0, 0, 0}, vmax = 0.0; /* active contacts, q = w . v^d_n, |W w|^2, sum of their W_nn */
   KergsDofLayout     layout;
-  PetscReal          loc[5] = {0, 0, 0, 0, 0}, glob[5]; /* max w, q, |W w|^2, max |v^d_n|, sum W_nn */
-  PetscReal          wmax, rnorm, bound, scale;
-  PetscInt           n, nc, nactive;
+  PetscInt           n, nc;
   Vec                rv, vdv, wv, gv;
   Mat                W;
 
@@ -335,71 +335,56 @@ static PetscErrorCode DetectInfeasible(KergsSolver s, KergsOperators ops, KergsS
   PetscCall(VecGetLocalSize(rv, &n));
   nc = layout.ncomp;
   n /= nc;
+  /* w: the normal impulses of the active contacts, compressive part, scaled to a largest weight of 1 */
   PetscCall(VecDuplicate(rv, &wv));
-  PetscCall(VecDuplicate(rv, &gv));
   PetscCall(VecGetArrayRead(rv, &r));
-  PetscCall(VecGetArray(wv, &w));
+  PetscCall(VecGetArray(wv, &wl));
+  for (PetscInt k = 0; k < n * nc; k++) wl[k] = 0.0;
   for (PetscInt a = 0; a < n; a++) {
-    for (PetscInt c = 0; c < nc; c++) w[a * nc + c] = 0.0;
-    if (s->active[a]) w[a * nc] = PetscMax(PetscRealPart(r[a * nc]), 0.0);
-    loc[0] = PetscMax(loc[0], PetscRealPart(w[a * nc]));
-    loc[1] += PetscSqr(PetscRealPart(w[a * nc]));
+    if (s->active[a]) wl[a * nc] = PetscMax(PetscRealPart(r[a * nc]), 0.0);
+    wmax = PetscMax(wmax, PetscRealPart(wl[a * nc]));
   }
   PetscCall(VecRestoreArrayRead(rv, &r));
-  PetscCall(VecRestoreArray(wv, &w));
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &loc[0], 1, MPIU_REAL, MPIU_MAX, s->comm));
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &loc[1], 1, MPIU_REAL, MPIU_SUM, s->comm));
-  wmax  = loc[0];
-  rnorm = PetscSqrtReal(loc[1]);
-  PetscCall(PetscFree(s->infeasible));
+  PetscCall(VecRestoreArray(wv, &wl));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &wmax, 1, MPIU_REAL, MPIU_MAX, s->comm));
   if (!(wmax > 0 && PetscIsNormalReal(wmax))) {
     PetscCall(VecDestroy(&wv));
-    PetscCall(VecDestroy(&gv));
     PetscFunctionReturn(0);
   }
   PetscCall(VecScale(wv, 1.0 / wmax));
+  PetscCall(VecDuplicate(rv, &gv));
   PetscCall(MatMult(W, wv, gv));
-  {
-    PetscReal *diag;
-    PetscCall(PetscMalloc1(n * nc * nc, &diag));
-    PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, diag));
-    PetscCall(VecGetArrayRead(wv, (const PetscScalar **)&w));
-    PetscCall(VecGetArrayRead(gv, &g));
-    PetscCall(VecGetArrayRead(vdv, &vd));
-    nactive = 0;
-    loc[1] = loc[2] = loc[3] = loc[4] = 0.0;
-    for (PetscInt a = 0; a < n; a++) {
-      if (!s->active[a]) continue;
-      nactive++;
-      loc[1] += PetscRealPart(w[a * nc]) * PetscRealPart(vd[a * nc]);
-      for (PetscInt c = 0; c < nc; c++) loc[2] += PetscSqr(PetscRealPart(g[a * nc + c]));
-      loc[3] = PetscMax(loc[3], PetscAbsReal(PetscRealPart(vd[a * nc])));
-      loc[4] += diag[a * nc * nc]; /* W_nn */
-    }
-    PetscCall(VecRestoreArrayRead(vdv, &vd));
-    PetscCall(VecRestoreArrayRead(gv, &g));
-    PetscCall(VecRestoreArrayRead(wv, (const PetscScalar **)&w));
-    PetscCall(PetscFree(diag));
+  PetscCall(PetscMalloc1(n * nc * nc, &diag));
+  PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, diag));
+  PetscCall(VecGetArrayRead(wv, &w));
+  PetscCall(VecGetArrayRead(gv, &g));
+  PetscCall(VecGetArrayRead(vdv, &vd));
+  for (PetscInt a = 0; a < n; a++) {
+    if (!s->active[a]) continue;
+    sums[0] += 1.0;
+    sums[1] += PetscRealPart(w[a * nc]) * PetscRealPart(vd[a * nc]);
+    for (PetscInt c = 0; c < nc; c++) sums[2] += PetscSqr(PetscRealPart(g[a * nc + c]));
+    sums[3] += diag[a * nc * nc]; /* W_nn */
+    vmax = PetscMax(vmax, PetscAbsReal(PetscRealPart(vd[a * nc])));
   }
-  glob[0] = (PetscReal)nactive;
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &glob[0], 1, MPIU_REAL, MPIU_SUM, s->comm));
-  PetscCall(MPIU_Allreduce(&loc[1], &glob[1], 2, MPIU_REAL, MPIU_SUM, s->comm));
-  PetscCall(MPIU_Allreduce(&loc[3], &glob[3], 1, MPIU_REAL, MPIU_MAX, s->comm));
-  PetscCall(MPIU_Allreduce(&loc[4], &glob[4], 1, MPIU_REAL, MPIU_SUM, s->comm));
-  scale = glob[4] > 0 ? glob[3] / (glob[4] / glob[0]) * PetscSqrtReal(glob[0]) : 0.0;
-  bound = glob[1] < 0 ? (glob[2] > 0 ? -glob[1] / PetscSqrtReal(glob[2]) : PETSC_INFINITY) : 0.0;
-  PetscCall(PetscInfo(NULL, "infeasibility test: w . v^d_n %g, |W w| %g, impulse bound %g, impulse scale %g, |r_n| %g\n", (double)glob[1],
-                      (double)PetscSqrtReal(glob[2]), (double)bound, (double)scale, (double)rnorm));
+  PetscCall(VecRestoreArrayRead(vdv, &vd));
+  PetscCall(VecRestoreArrayRead(gv, &g));
+  PetscCall(PetscFree(diag));
+  PetscCall(VecDestroy(&gv));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 4, MPIU_REAL, MPIU_SUM, s->comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &vmax, 1, MPIU_REAL, MPIU_MAX, s->comm));
+  scale = sums[3] > 0 ? vmax / (sums[3] / sums[0]) * PetscSqrtReal(sums[0]) : 0.0;
+  bound = sums[1] < 0 ? (sums[2] > 0 ? -sums[1] / PetscSqrtReal(sums[2]) : PETSC_INFINITY) : 0.0;
+  PetscCall(PetscInfo(NULL, "infeasibility test: w . v^d_n %g, |W w| %g, impulse bound %g, impulse scale %g\n", (double)sums[1],
+                      (double)PetscSqrtReal(sums[2]), (double)bound, (double)scale));
   *ratio = scale > 0 ? PetscMin(bound / scale, PETSC_MAX_REAL) : 0.0; /* finite, as every statistic */
   if (scale > 0 && bound > s->infeasible_ratio * scale) {
     stats->reason = KERGS_SOLVER_DIVERGED_INFEASIBLE;
     PetscCall(PetscMalloc1(n, &s->infeasible));
-    PetscCall(VecGetArrayRead(wv, (const PetscScalar **)&w));
     for (PetscInt a = 0; a < n; a++) s->infeasible[a] = PetscRealPart(w[a * nc]);
-    PetscCall(VecRestoreArrayRead(wv, (const PetscScalar **)&w));
   }
+  PetscCall(VecRestoreArrayRead(wv, &w));
   PetscCall(VecDestroy(&wv));
-  PetscCall(VecDestroy(&gv));
   PetscFunctionReturn(0);
 }
 

@@ -159,8 +159,7 @@ const char *KergsSignalName(int sig)
   return sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : sig == SIGUSR1 ? "SIGUSR1" : "a signal";
 }
 
-/* Whether this rank's owned disks and the walls are finite; the first bad grain id (PETSC_MAX_INT: none). */
-static PetscInt FirstNonFiniteGrain(KergsScene sc)
+PetscInt KergsStepperFirstNonFiniteGrain(KergsScene sc)
 {
   KergsDisks       D;
   const KergsWall *walls;
@@ -188,7 +187,7 @@ PetscErrorCode KergsStepperPoll(KergsStepper st, KergsPoll *poll)
   PetscInt       v[3], g[3];
   PetscMPIInt    rank;
   PetscLogDouble now;
-  const PetscInt bad = FirstNonFiniteGrain(st->scene);
+  const PetscInt bad = KergsStepperFirstNonFiniteGrain(st->scene);
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(st->comm, &rank));

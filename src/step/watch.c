@@ -202,19 +202,6 @@ static PetscErrorCode WatchAlert(KergsStepper st, PetscInt step)
   PetscFunctionReturn(0);
 }
 
-/* Whether every disk's position and velocity is finite, over all ranks. */
-static PetscErrorCode StateFinite(KergsStepper st, PetscBool *finite)
-{
-  KergsDisks D;
-  PetscBool  ok = PETSC_TRUE;
-
-  PetscFunctionBeginUser;
-  PetscCall(KergsSceneGetDisks(st->scene, &D));
-  for (PetscInt i = 0; i < KERGS_DIM * D.nowned && ok; i++) ok = (PetscBool)(!PetscIsInfOrNanReal(D.x[i]) && !PetscIsInfOrNanReal(D.v[i]));
-  PetscCall(MPIU_Allreduce(&ok, finite, 1, MPIU_BOOL, MPI_LAND, st->comm));
-  PetscFunctionReturn(0);
-}
-
 /* After a step's statistics: decide whether the run blew up or its solver diverged; st->failure says what (empty:
    neither) and st->failure_status the exit status. The same on every rank: every figure is global. */
 static PetscErrorCode WatchStep(KergsStepper st, const KergsSolveStats *ss)
@@ -232,9 +219,9 @@ static PetscErrorCode WatchStep(KergsStepper st, const KergsSolveStats *ss)
     /* positions or velocities not finite: the poll names the grain; finite but too large for their energy to be
        (-gravity 0,-1e300: velocities of 1e297 m/s) is a blow-up named here, before the next step's detection and
        ghost layer work on such positions */
-    PetscBool finite;
-    PetscCall(StateFinite(st, &finite));
-    if (finite) {
+    PetscInt bad = KergsStepperFirstNonFiniteGrain(st->scene);
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT, MPI_MIN, st->comm));
+    if (bad == PETSC_MAX_INT) {
       PetscCall(PetscSNPrintf(st->failure, sizeof(st->failure),
                               "blow-up in step %" PetscInt_FMT ": the kinetic energy overflows (velocities beyond 1e150 m/s)", step));
       st->failure_status = KERGS_EXIT_BLOWUP;

@@ -106,6 +106,8 @@ PETSC_INTERN PetscErrorCode KergsStepperWatchOptions(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperFindOutside(KergsStepper, PetscInt *grain, PetscInt *wall);
 PETSC_INTERN PetscErrorCode KergsStepperCheckContainer(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperEnergy(KergsStepper, PetscReal *ek, PetscReal *vmax);
+/* Whether this rank's owned disks and the walls are finite: the first bad grain id (PETSC_MAX_INT: none; -1: a wall). */
+PETSC_INTERN PetscInt       KergsStepperFirstNonFiniteGrain(KergsScene);
 PETSC_INTERN PetscErrorCode KergsStepperExternalWork(KergsStepper, const PetscReal vold[], const PetscReal wvold[], PetscReal *work,
                                                      PetscReal *driven_work);
 /* The message of a step the solver proved infeasible (KergsSolverGetInfeasibleNetwork): the grains and walls of the
