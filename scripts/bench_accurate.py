@@ -48,8 +48,8 @@ if a.quick:
     parts = [p for p in parts if p in ("confine500", "siconos")]
 if a.big:
     parts.append("big")
-B100K = ["-options_file", "cases/biaxial.opts", "-lattice_n", "400,250", "-box", "0,0,4.005,2.17009", "-alert", "5e-4"]
-B1M = ["-options_file", "cases/biaxial.opts", "-lattice_n", "1000,1000", "-box", "0,0,10.005,8.665254", "-alert", "5e-4"]
+B100K = ["-options_file", "cases/jammed_lattice.opts", "-lattice_n", "400,250", "-box", "0,0,4.005,2.17009", "-alert", "5e-4"]
+B1M = ["-options_file", "cases/jammed_lattice.opts", "-lattice_n", "1000,1000", "-box", "0,0,10.005,8.665254", "-alert", "5e-4"]
 NEWTON = ["-solver_type", "newton", "-solver_max_it", "1000"]
 
 
@@ -94,8 +94,8 @@ if "confine500" in parts:
               "newton_every_step_1e-10": every, "target": "every step <= 1e-10 and ratio <= 0.2", "met": every and ratio <= 0.2})
 
 if "biaxial20k" in parts:
-    g = run("biaxial20k_nlgs_quad_1e-4", 1, ["-options_file", "cases/biaxial.opts", "-steps", "5", "-solver_max_it", "1000000"])
-    w = run("biaxial20k_newton_1e-8", 1, ["-options_file", "cases/biaxial.opts", "-steps", "5"] + NEWTON + ["-solver_tol", "1e-8"])
+    g = run("biaxial20k_nlgs_quad_1e-4", 1, ["-options_file", "cases/jammed_lattice.opts", "-steps", "5", "-solver_max_it", "1000000"])
+    w = run("biaxial20k_newton_1e-8", 1, ["-options_file", "cases/jammed_lattice.opts", "-steps", "5"] + NEWTON + ["-solver_tol", "1e-8"])
     if g is not None and w is not None:
         every = bool(np.all(w["residual"] <= 1e-8))
         tg, tw = float(np.sum(g["solve_seconds"])), float(np.sum(w["solve_seconds"]))

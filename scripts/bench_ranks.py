@@ -32,14 +32,14 @@ a = ap.parse_args()
 env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
 tmp = tempfile.mkdtemp(prefix="kergs-ranks.")
-# the biaxial case at 20,000 disks (cases/biaxial.opts) and its 100,000-disk version of scripts/bench
+# the biaxial case at 20,000 disks (cases/jammed_lattice.opts) and its 100,000-disk version of scripts/bench
 SIZES = {20000: [], 100000: ["-lattice_n", "400,250", "-box", "0,0,4.005,2.17009", "-alert", "5e-4"]}
 PHASES = ("step_seconds", "detect_seconds", "assemble_seconds", "solve_seconds", "sweep_seconds")
 
 
 def run(size, ranks, steps):
     path = os.path.join(tmp, f"biaxial{size}_{ranks}.h5")
-    cmd = ["mpiexec", "-n", str(ranks), a.kergs, "-options_file", "cases/biaxial.opts", *SIZES[size], "-steps", str(steps),
+    cmd = ["mpiexec", "-n", str(ranks), a.kergs, "-options_file", "cases/jammed_lattice.opts", *SIZES[size], "-steps", str(steps),
            "-solver_type", "nlgs", "-solver_criterion", "quad", "-solver_tol", str(a.tol), "-solver_max_it", str(a.max_it),
            "-partition_work", "measured", "-partition_check_every", "1", "-output", path, "-quiet"]
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)

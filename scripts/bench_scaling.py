@@ -24,7 +24,7 @@ for n in [int(x) for x in a.sizes.split(",")]:
     width = 2 * r * nx + r
     height = r + (ny - 1) * math.sqrt(3) * r + r + 1e-6
     path = os.path.join(tmp, f"n{nx * ny}.h5")
-    cmd = ["mpiexec", "-n", "1", a.kergs, "-options_file", "cases/biaxial.opts", "-lattice_n", f"{nx},{ny}",
+    cmd = ["mpiexec", "-n", "1", a.kergs, "-options_file", "cases/jammed_lattice.opts", "-lattice_n", f"{nx},{ny}",
            "-box", f"0,0,{width:.9g},{height:.9g}", "-steps", str(a.steps), "-solver_type", a.solver, "-output", path] + extra
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if p.returncode != 0:
