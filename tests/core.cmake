@@ -24,6 +24,10 @@ set_tests_properties(make_truncated_sample PROPERTIES FIXTURES_SETUP truncated_s
 kergs_bad_input(truncated_sample "truncated.h5" -options_file cases/confine500.opts -sample_input ${CMAKE_BINARY_DIR}/truncated.h5)
 set_tests_properties(bad_input_truncated_sample PROPERTIES FIXTURES_REQUIRED truncated_sample)
 kergs_bad_input(missing_sample "no_such_sample.h5" -options_file cases/confine500.opts -sample_input tests/data/no_such_sample.h5)
+# -box_from_sample: a sample written before samples recorded their box, -box as well, no sample at all
+kergs_bad_input(box_from_sample_none "records no box" -options_file cases/biaxial_small.opts -sample_input cases/deposit500.h5)
+kergs_bad_input(box_from_sample_and_box "Give -box or -box_from_sample, not both" -options_file cases/biaxial_small.opts -box 0,0,1,1)
+kergs_bad_input(box_from_sample_no_file "needs -disks_source file" -options_file cases/confine5.opts -box_from_sample)
 kergs_bad_input(bad_solver "solver_type" -options_file cases/confine5.opts -solver_type nlgz)
 kergs_bad_input(bad_dt "dt" -options_file cases/confine5.opts -dt -1)
 

@@ -98,11 +98,15 @@ PETSC_EXTERN PetscErrorCode KergsSceneReserve(KergsScene, PetscInt n);
 /* Disk source "file": replace the scene's disks with those of a sample file written by KergsSampleWrite (kergs/sample.h;
    materials must exist in the scene, grain ids must be distinct non-negative integers). Collective. */
 PETSC_EXTERN PetscErrorCode KergsSampleRead(KergsScene, const char path[]);
+/* The box x0,y0,x1,y1 a sample file records (its run's four box walls where they stood), for -box_from_sample. */
+PETSC_EXTERN PetscErrorCode KergsSampleReadBox(MPI_Comm, const char path[], PetscReal box[4]);
 
 /* Accessors. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetDisks(KergsScene, KergsDisks *);
 /* The walls (replicated on every rank); their positions and velocities are the scene's to change. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetWalls(KergsScene, PetscInt *nwalls, const KergsWall **walls);
+/* Where the four walls of -box stand now, as x0,y0,x1,y1 (they move by translation only); has is false without all four. */
+PETSC_EXTERN PetscErrorCode KergsSceneGetBox(KergsScene, PetscBool *has, PetscReal box[4]);
 PETSC_EXTERN PetscErrorCode KergsSceneGetName(KergsScene, const char **name);
 PETSC_EXTERN PetscErrorCode KergsSceneGetComm(KergsScene, MPI_Comm *);
 PETSC_EXTERN PetscErrorCode KergsSceneGetTimeStep(KergsScene, PetscReal *dt, PetscReal *theta);

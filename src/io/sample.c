@@ -8,6 +8,23 @@
 
 #define KERGS_SAMPLE_GROUP "/sample"
 
+/* /sample/box: where the box walls stand, for -box_from_sample (a compaction's free walls end where the sample fits). */
+static PetscErrorCode SampleWriteBox(PetscViewer viewer, KergsScene scene)
+{
+  PetscBool   has;
+  PetscReal   box[4];
+  MPI_Comm    comm;
+  PetscMPIInt rank;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetBox(scene, &has, box));
+  if (!has) PetscFunctionReturn(0);
+  PetscCall(KergsSceneGetComm(scene, &comm));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCall(KergsViewBlocks(viewer, comm, "box", rank ? 0 : 1, 4, box));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSampleWrite(KergsScene scene, const char path[])
 {
   KergsDisks  D;
@@ -44,6 +61,7 @@ PetscErrorCode KergsSampleWrite(KergsScene scene, const char path[])
   PetscCall(KergsViewBlocks(viewer, comm, "radius", nl, 1, D.radius));
   PetscCall(KergsViewIntegers(viewer, comm, "material", nl, D.material));
   PetscCall(KergsViewIntegers(viewer, comm, "id", nl, D.id));
+  PetscCall(SampleWriteBox(viewer, scene));
   PetscCall(PetscViewerHDF5PopGroup(viewer));
   PetscCall(PetscViewerDestroy(&viewer));
   PetscCall(KergsFileCommit(comm, tmp, path));

@@ -197,6 +197,49 @@ static PetscErrorCode SampleApply(KergsScene scene, const SampleData *s)
   PetscFunctionReturn(0);
 }
 
+/* The box is optional in a sample (a run without -box records none), so its absence gets its own message. */
+static PetscErrorCode SampleLoadBox(PetscViewer viewer, MPI_Comm comm, const char path[], PetscReal box[4])
+{
+  PetscBool  has;
+  PetscReal *b;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5HasGroup(viewer, KERGS_SAMPLE_GROUP, &has));
+  PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no group %s", path, KERGS_SAMPLE_GROUP);
+  PetscCall(PetscViewerHDF5PushGroup(viewer, KERGS_SAMPLE_GROUP));
+  PetscCall(PetscViewerHDF5HasDataset(viewer, "box", &has));
+  PetscCheck(
+      has, comm, PETSC_ERR_FILE_UNEXPECTED,
+      "Sample file %s records no box (%s/box): the run that wrote it had no -box walls; give -box x0,y0,x1,y1 instead of -box_from_sample",
+      path, KERGS_SAMPLE_GROUP);
+  PetscCall(SampleLoadField(viewer, comm, path, "box", 1, 4, &b));
+  PetscCall(PetscViewerHDF5PopGroup(viewer));
+  for (PetscInt k = 0; k < 4; k++) box[k] = b[k];
+  PetscCall(PetscFree(b));
+  PetscCheck(FirstNonFinite(box, 1, 4) < 0 && box[2] > box[0] && box[3] > box[1], comm, PETSC_ERR_FILE_UNEXPECTED,
+             "Sample file %s: its box %g,%g,%g,%g is not x0 < x1, y0 < y1", path, (double)box[0], (double)box[1], (double)box[2],
+             (double)box[3]);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSampleReadBox(MPI_Comm comm, const char path[], PetscReal box[4])
+{
+  PetscViewer    viewer;
+  PetscErrorCode ierr;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsInitializePackage());
+  PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
+  PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
+  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL));
+  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
+  ierr = SampleLoadBox(viewer, comm, path, box);
+  PetscCall(PetscViewerDestroy(&viewer));
+  PetscCall(ierr);
+  PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSampleRead(KergsScene scene, const char path[])
 {
   MPI_Comm       comm = scene->comm;

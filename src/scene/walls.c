@@ -149,6 +149,27 @@ PetscErrorCode KergsSceneGetWalls(KergsScene scene, PetscInt *nwalls, const Kerg
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsSceneGetBox(KergsScene scene, PetscBool *has, PetscReal box[4])
+{
+  /* box[k] is coordinate axis[k] of the wall named names[k]: x0 of box_left, y0 of box_bottom, ... */
+  const char    *names[4] = {"box_left", "box_bottom", "box_right", "box_top"};
+  const PetscInt axis[4]  = {0, 1, 0, 1};
+  PetscInt       found    = 0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < 4; k++)
+    for (PetscInt w = 0; w < scene->nwalls; w++) {
+      PetscBool same;
+
+      PetscCall(PetscStrcmp(scene->walls[w].name, names[k], &same));
+      if (!same) continue;
+      box[k] = scene->walls[w].a[axis[k]];
+      found++;
+    }
+  *has = found == 4 ? PETSC_TRUE : PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsSceneRestoreWall(KergsScene scene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
                                      const PetscReal disp[])
 {
@@ -176,9 +197,32 @@ PetscErrorCode KergsSceneWallsOptions(PetscOptionItems *PetscOptionsObject, Kerg
   PetscCall(KergsOptionsReals(PetscOptionsObject, "-box",
                               "Box x0,y0,x1,y1: driven walls box_bottom, box_right, box_top, box_left facing inward", 4, spec->box,
                               &spec->box_set));
+  PetscCall(
+      PetscOptionsBool("-box_from_sample",
+                       "Box from the sample file of -sample_input: where the run that wrote it left its four box walls (instead of -box)",
+                       NULL, spec->box_from_sample, &spec->box_from_sample, NULL));
   PetscCall(PetscOptionsBool("-box_open_top", "Omit the top wall of -box", NULL, spec->open_top, &spec->open_top, NULL));
   PetscCall(KergsOptionsStringList(PetscOptionsObject, "-walls", "Names of further walls, each set by -wall_<name>_a, _b, _type, ...",
                                    &spec->nnames, &spec->names, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* -box_from_sample: the box a compaction ended in, recorded with its sample, so that the test that starts from the
+   sample confines it exactly (a box typed by hand from another seed's sample would cut grains or leave a gap). */
+static PetscErrorCode WallsBoxFromSample(MPI_Comm comm, KergsWallsSpec *spec)
+{
+  char      path[PETSC_MAX_PATH_LEN], source[16] = "";
+  PetscBool set, is_file;
+
+  PetscFunctionBeginUser;
+  PetscCheck(!spec->box_set, comm, PETSC_ERR_ARG_INCOMP, "Give -box or -box_from_sample, not both");
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-disks_source", source, sizeof(source), NULL));
+  PetscCall(PetscStrcmp(source, "file", &is_file));
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-sample_input", path, sizeof(path), &set));
+  PetscCheck(is_file && set && path[0], comm, PETSC_ERR_ARG_WRONGSTATE,
+             "-box_from_sample takes the box of the sample the disks come from: it needs -disks_source file -sample_input <path>");
+  PetscCall(KergsSampleReadBox(comm, path, spec->box));
+  spec->box_set = PETSC_TRUE;
   PetscFunctionReturn(0);
 }
 
@@ -335,6 +379,7 @@ PetscErrorCode KergsSceneSetWalls(KergsScene scene, KergsWallsSpec *spec)
   PetscCall(PetscFree(scene->walls));
   scene->nwalls = 0;
   PetscCall(PetscCalloc1(4 + spec->nnames, &scene->walls));
+  if (spec->box_from_sample) PetscCall(WallsBoxFromSample(scene->comm, spec));
   if (spec->box_set) PetscCall(SceneBoxWalls(scene, spec->box, spec->open_top, &nbox, scene->walls));
   scene->nwalls = nbox;
   for (PetscInt k = 0; k < spec->nnames; k++) {

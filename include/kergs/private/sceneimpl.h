@@ -58,7 +58,7 @@ PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene);
    block by KergsSceneWallsOptions; each wall then has an options block of its own (prefix wall_<name>_), read by
    KergsSceneSetWalls once the scene's block has ended. */
 typedef struct {
-  PetscBool box_set, open_top;
+  PetscBool box_set, open_top, box_from_sample;
   PetscReal box[4]; /* x0,y0,x1,y1 */
   PetscInt  nnames;
   char    **names; /* the names given to -walls */
