@@ -15,6 +15,7 @@ struct _p_KergsStepper {
   KergsResults   results;
   KergsPartition partition;                      /* ownership of the grains by the ranks (-partition_*) */
   PetscReal      rest_speed;                     /* -stop_at_rest: stop once every disk is slower than this (0: never) */
+  PetscReal      rest_energy;                    /* -stop_at_rest_energy: or once the kinetic energy per grain is below this */
   char           sample_out[PETSC_MAX_PATH_LEN]; /* -sample_output */
   PetscInt       fclib_step;                     /* -fclib_step: export this step's problem (-1: none) */
   char           fclib_path[PETSC_MAX_PATH_LEN];
