@@ -19,9 +19,9 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    2 % (measured 0.1 % and 0.1 %; row by row the median gap is 0.9 % and 0.4 %, the largest 15 %, the walls' and
    grains' inertia). At mu = 0.5 the walls' friction adds to the boundary's stress what wall_sxx leaves out (the
    average sxx is 23 % above it, syy 3 % below), so the Love-Weber stress is checked against the whole boundary's
-   (the moment of every wall traction over the box area, friction included) at each snapshot, to 10 % (measured
-   largest gap 6.4 %, 1.3 % on average); the lateral walls hold sigma3 = 1: wall_sxx averages 1 to 2 % (measured
-   1.005, 1.003 frictionless);
+   (the moment of every wall traction over the box area, friction included) at each snapshot, to 15 %, and on
+   average over the snapshots to 3 % (measured largest gap 6.4 %, 1.3 % on average); the lateral walls hold
+   sigma3 = 1: wall_sxx averages 1 to 2 % (measured 1.005, 1.003 frictionless);
 6. residual strength of frictionless disks: the same shear at -friction 0 ends (mean over the last third of the run)
    at q/p between 0.02 and 0.15 (measured 0.051-0.056; about 0.1 at the critical state in the literature) and below half
    the frictional run's (measured 0.34).
@@ -50,7 +50,8 @@ SMALL = ["-random_n", 120, "-random_box", "0,0,0.46,0.46", "-box", "0,0,0.46,0.4
 DENSER_BY = 0.01  # frictionless against mu = 0.5 compaction (measured 0.023)
 RB_TOL = 0.03  # |q/p - (a_c + a_n + a_t)/2| (measured 0.016)
 WALL_MEAN_TOL = 0.02  # run-averaged Love-Weber against wall stress, frictionless (measured 0.1 %)
-BOUNDARY_TOL = 0.10  # Love-Weber against the whole boundary's stress at a snapshot, mu = 0.5 (measured 6.4 %)
+BOUNDARY_TOL = 0.15  # Love-Weber against the whole boundary's stress at any snapshot, mu = 0.5 (measured 6.4 %)
+BOUNDARY_MEAN_TOL = 0.03  # the same, averaged over the snapshots (measured 1.3 %)
 SIGMA3_TOL = 0.02  # run-averaged wall_sxx against sigma3 (measured 0.5 %)
 Q_FRICTIONLESS = (0.02, 0.15)  # q/p over the last third of the frictionless shear (measured 0.056)
 
@@ -132,8 +133,9 @@ def biaxial(k, out, p, q0):
         boundary += [abs(s["sxx"][row] / bxx - 1), abs(s["syy"][row] / byy - 1)]
     check(worst < STRAIN_TOL and eps[-1] > 0.015, "strain_axial (last %.5f) is the top wall's travel over H0 to %.1e" % (eps[-1], worst))
     rothenburg_bathurst("mu = 0.5", s)
-    check(max(boundary) < BOUNDARY_TOL, "mu = 0.5: Love-Weber sxx, syy equal the boundary's at %d snapshots to %.3f (mean %.3f, < %g)"
-          % (len(boundary) // 2, max(boundary), np.mean(boundary), BOUNDARY_TOL))
+    check(max(boundary) < BOUNDARY_TOL and np.mean(boundary) < BOUNDARY_MEAN_TOL,
+          "mu = 0.5: Love-Weber sxx, syy equal the boundary's at %d snapshots to %.3f (< %g), on average to %.3f (< %g)"
+          % (len(boundary) // 2, max(boundary), BOUNDARY_TOL, np.mean(boundary), BOUNDARY_MEAN_TOL))
     sigma3("mu = 0.5", s)
     return q[-len(q) // 3:].mean()
 
