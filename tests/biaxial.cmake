@@ -1,7 +1,21 @@
 # The quick biaxial workflow: cases/compact_small.opts compacts 300 area-law disks under four pressure walls until at
-# rest, cases/biaxial_small.opts shears that sample at constant sigma3; tests/check_biaxial.py checks the physics.
+# rest, cases/biaxial_small.opts shears that sample at constant sigma3, each also at another friction (120 grains
+# compacted at mu = 0 and 0.5; the shear at mu = 0), two 1-rank runs at a time; tests/check_biaxial.py checks the
+# physics: packing, Rothenburg-Bathurst, contacts' stress against the walls', frictionless residual strength.
 add_test(NAME biaxial_small
          COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_biaxial.py --kergs $<TARGET_FILE:kergs_exe> --mpiexec ${MPIEXEC_EXECUTABLE}
                  --dir ${CMAKE_CURRENT_BINARY_DIR}/biaxial_small
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-set_tests_properties(biaxial_small PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 180 LABELS step)
+set_tests_properties(biaxial_small PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 400 LABELS step)
+
+# Bad input for the biaxial test. A driven wall that shears the sample at an inertial number above 0.1 gets a warning
+# at the start (not an error: the run goes on and exits 0) naming the wall, I and the formula's terms, printed by rank 0
+# only. biaxial_small's top wall at 2 m/s over H0 = 0.527 m: eps_dot = 3.79 /s, I = 0.119.
+add_test(NAME biaxial_inertial_warning
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/expect_output.sh
+                 "kergs: warning: wall box_top shears the sample at the inertial number I = eps_dot d sqrt\\(rho / sigma3\\) = 0\\.119, above 0\\.1 .*eps_dot = 2\\.? m/s / 0\\.527.* m = 3\\.79.* /s .* d = 0\\.0312.* m .* rho = 1\\.? kg/m\\^2, sigma3 = 1\\.? N/m"
+                 "kergs: done, exit status 0" --
+                 ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} 2 ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS}
+                 -options_file cases/biaxial_small.opts -wall_box_top_velocity 0,-2 -steps 0 -output_none
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(biaxial_inertial_warning PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)

@@ -1,17 +1,38 @@
 #!/usr/bin/python3
-"""The quick biaxial workflow through the executable, on one rank: cases/compact_small.opts then cases/biaxial_small.opts.
+"""The quick biaxial workflow through the executable, one rank a run, two runs at a time: cases/compact_small.opts then
+cases/biaxial_small.opts, each also run with another friction, to check physics that can fail.
 
 1. compaction: the run ends at rest (its own -stop_at_rest), the radii follow the area law (r^2 uniform: its mean is
    (rmin^2 + rmax^2)/2 within 3 standard errors), the solid fraction lies in [0.80, 0.83] (measured 0.8167: 300
    frictionless disks of size ratio 2; the loose start is 0.445), and the Love-Weber stress from the contacts equals
    the walls' pressure p in both directions to 1 % (measured 0.2 %), and the sample records its box (/sample/box, where
    the free walls stopped) as its grains' hull to 1e-5 (measured 1e-10), which biaxial_small takes by -box_from_sample;
-2. biaxial: q/p, 0 at the end of the isotropic compaction (below 0.05, measured 0.015), stays above 0.2 over the run (measured 0.30 to
-   0.37), and strain_axial equals the top wall's travel (from the snapshots' walls) over the initial height to 1e-6.
+2. friction and density: the same options on 120 grains in a 0.46 m box (NLGS to quad 1e-4), compacted at mu = 0 and
+   at mu = 0.5, both to rest: the frictionless packing ends denser by more than 0.01 (measured 0.8070 against 0.7842,
+   a gap of 0.023; 0.808 against 0.787 with newton);
+3. biaxial: q/p, 0 at the end of the isotropic compaction (below 0.05, measured 0.015), stays above 0.2 over the run
+   (measured 0.30 to 0.40), and strain_axial equals the top wall's travel (from the snapshots' walls) over the initial
+   height to 1e-6;
+4. Rothenburg-Bathurst along the shear: q/p = (a_c + a_n + a_t)/2 in every row to 0.03 (measured largest gap 0.016 at
+   mu = 0.5 - a_t/2 is 0.03 to 0.08 of it - and 0.010-0.013 frictionless);
+5. stress from contacts against stress from walls along the shear, quasi-static (I = 9.5e-4). Frictionless: the
+   Love-Weber sxx and syy equal wall_sxx and wall_syy (normal forces over the walls' lengths) averaged over the run to
+   2 % (measured 0.1 % and 0.1 %; row by row the median gap is 0.9 % and 0.4 %, the largest 15 %, the walls' and
+   grains' inertia). At mu = 0.5 the walls' friction adds to the boundary's stress what wall_sxx leaves out (the
+   average sxx is 23 % above it, syy 3 % below), so the Love-Weber stress is checked against the whole boundary's
+   (the moment of every wall traction over the box area, friction included) at each snapshot, to 15 %, and on
+   average over the snapshots to 3 % (measured largest gap 6.4 %, 1.3 % on average); the lateral walls hold
+   sigma3 = 1: wall_sxx averages 1 to 2 % (measured 1.005, 1.003 frictionless);
+6. residual strength of frictionless disks: the same shear at -friction 0 ends (mean over the last third of the run)
+   at q/p between 0.02 and 0.15 (measured 0.051-0.056, at 1.8 % strain: not yet the critical state) and below half
+   the frictional run's (measured 0.34);
+7. -stop_at_rest_energy alone (the 120 grains of 2, at mu = 0): the run stops at the first step whose kinetic energy
+   per grain is below it, after one above.
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
 import argparse
+import concurrent.futures
 import os
 import sys
 
@@ -20,18 +41,28 @@ import numpy as np
 
 from checks import Kergs, check, failures
 
-P = 1.0  # -wall_box_<side>_pressure of cases/compact_small.opts
+P = 1.0  # -wall_box_<side>_pressure of cases/compact_small.opts (sigma3 of cases/biaxial_small.opts)
 RMIN, RMAX = 0.01, 0.02  # its -random_radius
+DT = 2e-3  # cases/biaxial_small.opts' -dt
 PHI_BAND = (0.80, 0.83)
 STRESS_TOL = 0.01
 Q_ISOTROPIC, Q_SHEARED = 0.05, 0.2
 STRAIN_TOL = 1e-6
 BOX_TOL = 1e-5  # the walls at rest against the outermost grains (measured 1e-8)
+SMALL_N = 120
+REST_ENERGY = 1e-7  # -stop_at_rest_energy of the third small compaction (J/m per grain)
+SMALL = ["-random_n", SMALL_N, "-random_box", "0,0,0.46,0.46", "-box", "0,0,0.46,0.46", "-solver_type", "nlgs", "-solver_criterion", "quad",
+         "-solver_tol", 1e-4, "-solver_max_it", 1000]
+DENSER_BY = 0.01  # frictionless against mu = 0.5 compaction (measured 0.023)
+RB_TOL = 0.03  # |q/p - (a_c + a_n + a_t)/2| (measured 0.016)
+WALL_MEAN_TOL = 0.02  # run-averaged Love-Weber against wall stress, frictionless (measured 0.1 %)
+BOUNDARY_TOL = 0.15  # Love-Weber against the whole boundary's stress at any snapshot, mu = 0.5 (measured 6.4 %)
+BOUNDARY_MEAN_TOL = 0.03  # the same, averaged over the snapshots (measured 1.3 %)
+SIGMA3_TOL = 0.02  # run-averaged wall_sxx against sigma3 (measured 0.5 %)
+Q_FRICTIONLESS = (0.02, 0.15)  # q/p over the last third of the frictionless shear (measured 0.056)
 
 
-def compaction(k):
-    out, sample = k.path("compact.h5"), k.path("sample.h5")
-    p = k.run(1, "-options_file", "cases/compact_small.opts", "-output", out, "-sample_output", sample, log="compact.log")
+def compaction(k, out, sample, p):
     if not check(p.returncode == 0, "compaction runs (exit %d)" % p.returncode):
         return None
     check("(at rest)" in p.stdout, "compaction ends at rest")
@@ -49,14 +80,57 @@ def compaction(k):
     check(abs(r2.mean() - mean) < 3 * sem, "area law: mean r^2 %.4e against %.4e (+- %.1e)" % (r2.mean(), mean, 3 * sem))
     hull = [(x[:, 0] - r).min(), (x[:, 1] - r).min(), (x[:, 0] + r).max(), (x[:, 1] + r).max()]
     check(np.abs(box - hull).max() < BOX_TOL, "the sample's box %s is its grains' hull to %g" % (np.round(box, 5), BOX_TOL))
-    return sample, q
+    return q
 
 
-def biaxial(k, sample, q0):
-    out = k.path("biaxial.h5")
-    p = k.run(1, "-options_file", "cases/biaxial_small.opts", "-sample_input", sample, "-output", out, log="biaxial.log")
-    if not check(p.returncode == 0, "biaxial runs (exit %d)" % p.returncode):
+def rest_by_energy(out, p):
+    """-stop_at_rest_energy alone: the run stops at the first step whose kinetic energy per grain is below it."""
+    if not check(p.returncode == 0 and "(at rest)" in p.stdout, "compaction with -stop_at_rest_energy ends at rest (exit %d)" % p.returncode):
         return
+    ek = h5py.File(out, "r")["stats/kinetic_energy"][()] / SMALL_N
+    check(len(ek) >= 2 and ek[-1] < REST_ENERGY <= ek[-2], "at rest by energy: %.2e per grain after %.2e, across %g" % (ek[-1], ek[-2], REST_ENERGY))
+
+
+def friction_density(k, runs):
+    """The small compactions at mu = 0 and mu = 0.5: both at rest, the frictionless one denser."""
+    phi = {}
+    for mu, (out, p) in runs.items():
+        if not check(p.returncode == 0 and "(at rest)" in p.stdout, "small compaction at mu = %s ends at rest (exit %d)" % (mu, p.returncode)):
+            return
+        phi[mu] = h5py.File(out, "r")["stats/solid_fraction"][-1]
+    check(phi[0] - phi[0.5] > DENSER_BY, "frictionless compaction denser: solid fraction %.4f at mu = 0 against %.4f at mu = 0.5 "
+          "(more than %g)" % (phi[0], phi[0.5], DENSER_BY))
+
+
+def boundary_stress(snap):
+    """The boundary's stress (sxx, syy) at a snapshot: the moment of every wall traction, friction included, over the
+    box's area (walls: bottom, right, top, left); equals Love-Weber's in static equilibrium without body forces."""
+    x, rad, a, kind = snap["x"][()], snap["radius"][()], snap["a"][()].astype(int), snap["kind"][()]
+    n, r, walls = snap["n"][()], snap["r"][()], snap["walls"][()]
+    on = (kind != 0) & (r[:, 0] > 0)
+    t = np.stack([-n[:, 1], n[:, 0]], axis=1)
+    f = (r[on, :1] * n[on] + r[on, 1:2] * t[on]) / DT
+    point = x[a[on]] - rad[a[on]][:, None] * n[on]
+    area = (walls[1, 0] - walls[3, 0]) * (walls[2, 1] - walls[0, 1])
+    return -np.sum(f[:, 0] * point[:, 0]) / area, -np.sum(f[:, 1] * point[:, 1]) / area
+
+
+def rothenburg_bathurst(tag, s):
+    q, half = s["q_over_p"][()], 0.5 * (s["a_c"][()] + s["a_n"][()] + s["a_t"][()])
+    gap = np.abs(q - half).max()
+    check(gap < RB_TOL, "%s: q/p = (a_c + a_n + a_t)/2 in every row to %.4f (< %g)" % (tag, gap, RB_TOL))
+
+
+def sigma3(tag, s):
+    mean = s["wall_sxx"][()].mean()
+    check(abs(mean - P) < SIGMA3_TOL * P, "%s: the lateral walls hold sigma3: wall_sxx averages %.4f (%g to %g)" % (tag, mean, P, SIGMA3_TOL))
+
+
+def biaxial(k, out, p, q0):
+    """The frictional shear: q/p, strain from the walls, Rothenburg-Bathurst, Love-Weber against the boundary."""
+    if not check(p.returncode == 0, "biaxial runs (exit %d)" % p.returncode):
+        return None
+    check("warning: wall" not in p.stdout, "no inertial-number warning at I = 9.5e-4")
     f = h5py.File(out, "r")
     s, snaps = f["stats"], f["snapshots"]
     q = s["q_over_p"][()]
@@ -64,14 +138,38 @@ def biaxial(k, sample, q0):
     steps, eps = s["step"][()], s["strain_axial"][()]
     first = snaps[sorted(snaps.keys())[0]]["walls"][()]
     h0 = first[2, 1] - first[0, 1]  # walls: bottom, right, top, left
-    worst = 0.0
+    worst, boundary = 0.0, []
     for key in sorted(snaps.keys())[1:]:
         g = snaps[key]
         w = g["walls"][()]
         travel = (h0 - (w[2, 1] - w[0, 1])) / h0
         row = np.flatnonzero(steps == g.attrs["step"])[0]
         worst = max(worst, abs(eps[row] - travel))
+        bxx, byy = boundary_stress(g)
+        boundary += [abs(s["sxx"][row] / bxx - 1), abs(s["syy"][row] / byy - 1)]
     check(worst < STRAIN_TOL and eps[-1] > 0.015, "strain_axial (last %.5f) is the top wall's travel over H0 to %.1e" % (eps[-1], worst))
+    rothenburg_bathurst("mu = 0.5", s)
+    check(max(boundary) < BOUNDARY_TOL and np.mean(boundary) < BOUNDARY_MEAN_TOL,
+          "mu = 0.5: Love-Weber sxx, syy equal the boundary's at %d snapshots to %.3f (< %g), on average to %.3f (< %g)"
+          % (len(boundary) // 2, max(boundary), BOUNDARY_TOL, np.mean(boundary), BOUNDARY_MEAN_TOL))
+    sigma3("mu = 0.5", s)
+    return q[-len(q) // 3:].mean()
+
+
+def frictionless(k, out, p, q_frictional):
+    """The same shear at mu = 0: Rothenburg-Bathurst, Love-Weber against the walls, a small residual strength."""
+    if not check(p.returncode == 0, "frictionless biaxial runs (exit %d)" % p.returncode):
+        return
+    s = h5py.File(out, "r")["stats"]
+    rothenburg_bathurst("mu = 0", s)
+    for contacts, walls in (("sxx", "wall_sxx"), ("syy", "wall_syy")):
+        rel = abs(s[contacts][()].mean() / s[walls][()].mean() - 1)
+        check(rel < WALL_MEAN_TOL, "mu = 0: Love-Weber %s equals %s averaged over the run to %.4f (< %g)" % (contacts, walls, rel, WALL_MEAN_TOL))
+    sigma3("mu = 0", s)
+    q = s["q_over_p"][()]
+    q = q[-len(q) // 3:].mean()
+    check(Q_FRICTIONLESS[0] < q < Q_FRICTIONLESS[1] and q < 0.5 * q_frictional,
+          "mu = 0: residual strength q/p %.4f in (%g, %g), below half the frictional %.4f" % (q, *Q_FRICTIONLESS, q_frictional))
 
 
 def main():
@@ -81,9 +179,28 @@ def main():
     ap.add_argument("--dir", required=True)
     k = Kergs(ap.parse_args())
     os.makedirs(k.dir, exist_ok=True)
-    got = compaction(k)
-    if got:
-        biaxial(k, *got)
+    out, sample = k.path("compact.h5"), k.path("sample.h5")
+    small = {mu: k.path("small_%g.h5" % mu) for mu in (0, 0.5)}
+    with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:  # one rank a run, two runs at a time
+        compact = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", "-output", out, "-sample_output", sample,
+                              log="compact.log")
+        smalls = {mu: pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", mu, "-output", small[mu],
+                                  "-sample_output", k.path("small_%g.sample.h5" % mu), log="small_%g.log" % mu) for mu in (0.5, 0)}
+        by_energy = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-stop_at_rest", 0, "-stop_at_rest_energy",
+                                REST_ENERGY, "-output", k.path("small_energy.h5"), "-sample_output", k.path("small_energy.sample.h5"),
+                                log="small_energy.log")
+        q0 = compaction(k, out, sample, compact.result())
+        got = q0 is not None
+        if got:
+            args = ["-options_file", "cases/biaxial_small.opts", "-sample_input", sample]  # its -box_from_sample
+            shear = {mu: pool.submit(k.run, 1, *args, "-friction", mu, "-output", k.path("biaxial_%g.h5" % mu), log="biaxial_%g.log" % mu)
+                     for mu in (0.5, 0)}
+        friction_density(k, {mu: (small[mu], job.result()) for mu, job in smalls.items()})
+        rest_by_energy(k.path("small_energy.h5"), by_energy.result())
+        if got:
+            q_frictional = biaxial(k, k.path("biaxial_0.5.h5"), shear[0.5].result(), q0)
+            if q_frictional is not None:
+                frictionless(k, k.path("biaxial_0.h5"), shear[0].result(), q_frictional)
     print("%d failure(s)" % len(failures))
     return 1 if failures else 0
 

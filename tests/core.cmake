@@ -18,6 +18,13 @@ kergs_bad_input(radius_ratio_area "random_radius_law area: the ratio rmax/rmin =
                 -random_radius 0.01,0.2 -random_radius_law area -steps 0)
 kergs_bad_input(nan_position "(nan|finite)" -options_file cases/confine5.opts -disks_x 0.5,nan,1.5,0.52,2.5,0.49,3.5,0.515,4.5,0.5)
 kergs_bad_input(overlap "grains 1 and 2 overlap" -options_file cases/confine5.opts -disks_x 0.5,0.5,1.5,0.5,2.2,0.5,3.5,0.5,4.5,0.5)
+# A sample (biaxial test) that does not fit its box (-box) is refused before the first solve, naming the grain and the wall:
+# biaxial_small's sample with the left wall moved in by 5 mm (grain 0, radius 11 mm, then crosses it by 4.4 mm), by
+# 20 mm (grain 0's centre is behind it).
+kergs_bad_input(sample_crosses_box "grain 0 crosses wall box_left by 0\\.0044" -options_file cases/biaxial_small.opts
+                -box 0.09,0.08763,0.63620,0.61472 -steps 1)
+kergs_bad_input(sample_outside_box "Grain 0 starts outside the container: its centre is behind wall box_left" -options_file
+                cases/biaxial_small.opts -box 0.105,0.08763,0.63620,0.61472 -steps 1)
 # a truncated copy of the shipped sample, made before the test runs
 add_test(NAME make_truncated_sample COMMAND sh -c "head -c 3000 ${CMAKE_SOURCE_DIR}/cases/deposit500.h5 > ${CMAKE_BINARY_DIR}/truncated.h5")
 set_tests_properties(make_truncated_sample PROPERTIES FIXTURES_SETUP truncated_sample)
@@ -25,6 +32,7 @@ kergs_bad_input(truncated_sample "truncated.h5" -options_file cases/confine500.o
 set_tests_properties(bad_input_truncated_sample PROPERTIES FIXTURES_REQUIRED truncated_sample)
 kergs_bad_input(missing_sample "no_such_sample.h5" -options_file cases/confine500.opts -sample_input tests/data/no_such_sample.h5)
 # -box_from_sample: a sample written before samples recorded their box, -box as well, no sample at all
+kergs_bad_input(stop_at_rest_energy "stop_at_rest_energy" -options_file cases/confine5.opts -stop_at_rest_energy -1)
 kergs_bad_input(box_from_sample_none "records no box" -options_file cases/biaxial_small.opts -sample_input cases/deposit500.h5)
 kergs_bad_input(box_from_sample_and_box "Give -box or -box_from_sample, not both" -options_file cases/biaxial_small.opts -box 0,0,1,1)
 kergs_bad_input(box_from_sample_no_file "needs -disks_source file" -options_file cases/confine5.opts -box_from_sample)

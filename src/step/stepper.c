@@ -174,8 +174,8 @@ static PetscErrorCode CheckInitialOverlaps(KergsStepper st)
   }
   if (nbad) PetscCall(KergsResultsDiscard(st->results)); /* opened already: no results of a run that did not start */
   PetscCheck(nbad == 0, st->comm, PETSC_ERR_USER_INPUT,
-             "The initial packing has overlapping grains (see the pairs printed above); raise -initial_overlap_tol to accept "
-             "interpenetrations up to that fraction of the smaller radius");
+             "The initial packing has overlapping grains, or a grain crossing a wall (printed above); move them, or the wall (-box), or "
+             "raise -initial_overlap_tol to accept interpenetrations up to that fraction of the smaller radius");
   PetscFunctionReturn(0);
 }
 
@@ -326,6 +326,7 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   st->status = KERGS_EXIT_DONE;
   PetscCall(KergsSceneGetStep(sc, &step, NULL, &nsteps));
   if (step == 0) PetscCall(KergsStepperCheckContainer(st)); /* before any file is written */
+  PetscCall(KergsStepperWarnInertialNumber(st));
   PetscCheck(st->fclib_step <= nsteps, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-fclib_step %" PetscInt_FMT " is beyond the run (-steps %" PetscInt_FMT "): no such step to export", st->fclib_step, nsteps);
   PetscCall(KergsStepperEnergyFloor(st));

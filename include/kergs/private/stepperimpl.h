@@ -106,6 +106,7 @@ PETSC_INTERN PetscErrorCode KergsStepperProgress(KergsStepper, PetscBool force);
 PETSC_INTERN PetscErrorCode KergsStepperWatchOptions(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperFindOutside(KergsStepper, PetscInt *grain, PetscInt *wall);
 PETSC_INTERN PetscErrorCode KergsStepperCheckContainer(KergsStepper);
+PETSC_INTERN PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperEnergy(KergsStepper, PetscReal *ek, PetscReal *vmax);
 /* Whether this rank's owned disks and the walls are finite: the first bad grain id (PETSC_MAX_INT: none; -1: a wall). */
 PETSC_INTERN PetscInt       KergsStepperFirstNonFiniteGrain(KergsScene);

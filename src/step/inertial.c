@@ -1,0 +1,100 @@
+/* kergs stepper: the inertial number of a biaxial-like run, told once at its start. With walls under pressure (the
+   confining sigma3) and a driven wall moving along its normal, each such wall shears the sample at
+   I = eps_dot d sqrt(rho / sigma3) (GDR MiDi, Eur. Phys. J. E 14 (2004) 341): eps_dot the wall's normal speed
+   over its distance to the wall facing it, d the mean grain diameter, rho the grains' density (their mass over their
+   area). The quasi-static regime is I below about 1e-3; above 0.1 the response is that of a dense inertial flow, not
+   of the sample: a warning, not an error (a fast run may be wanted, for a test of the code). */
+#include <kergs/private/stepperimpl.h>
+
+#define KERGS_INERTIAL_WARN 0.1
+
+/* A wall's unit inward normal (the left normal of a -> b) */
+static void WallNormal(const KergsWall *w, PetscReal n[])
+{
+  const PetscReal dx = w->b[0] - w->a[0], dy = w->b[1] - w->a[1], len = PetscSqrtReal(dx * dx + dy * dy);
+
+  n[0] = len > 0 ? -dy / len : 0.0;
+  n[1] = len > 0 ? dx / len : 0.0;
+}
+
+/* The distance from wall w to the nearest wall facing it (antiparallel normal, in front of it); 0: none. */
+static PetscReal FacingDistance(PetscInt nwalls, const KergsWall walls[], PetscInt w)
+{
+  PetscReal n[KERGS_DIM], best = 0;
+
+  WallNormal(&walls[w], n);
+  for (PetscInt k = 0; k < nwalls; k++) {
+    PetscReal m[KERGS_DIM], dist;
+    WallNormal(&walls[k], m);
+    if (k == w || n[0] * m[0] + n[1] * m[1] > -1 + 1e-9) continue;
+    dist = n[0] * (walls[k].a[0] - walls[w].a[0]) + n[1] * (walls[k].a[1] - walls[w].a[1]);
+    if (dist > 0 && (best == 0 || dist < best)) best = dist;
+  }
+  return best;
+}
+
+/* The mean diameter and the density (total mass over total area) of every grain. Collective. */
+static PetscErrorCode GrainScales(KergsStepper st, PetscReal *d, PetscReal *rho)
+{
+  KergsDisks D;
+  PetscReal  sums[3] = {0, 0, 0}; /* diameters, masses, areas */
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(st->scene, &D));
+  for (PetscInt i = 0; i < D.nowned; i++) {
+    sums[0] += 2 * D.radius[i];
+    sums[1] += D.mass[i];
+    sums[2] += PETSC_PI * D.radius[i] * D.radius[i];
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 3, MPIU_REAL, MPIU_SUM, st->comm));
+  *d   = D.ndisks > 0 ? sums[0] / D.ndisks : 0;
+  *rho = sums[2] > 0 ? sums[1] / sums[2] : 0;
+  PetscFunctionReturn(0);
+}
+
+/* sigma3: the smallest positive pressure of the pressure-controlled walls (0: none) */
+static PetscReal ConfiningPressure(PetscInt nwalls, const KergsWall walls[])
+{
+  PetscReal sigma3 = 0;
+
+  for (PetscInt w = 0; w < nwalls; w++)
+    if (walls[w].kind == KERGS_WALL_FREE && walls[w].has_pressure && walls[w].pressure > 0 && (sigma3 == 0 || walls[w].pressure < sigma3))
+      sigma3 = walls[w].pressure;
+  return sigma3;
+}
+
+/* Before the first step, rank 0 prints one warning per driven wall whose inertial number exceeds 0.1, with the terms
+   of the formula. Silent without a pressure wall or without a driven wall moving along its normal. Collective. */
+PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper st)
+{
+  const KergsWall *walls;
+  PetscInt         nwalls;
+  PetscReal        sigma3, d = 0, rho = 0, time;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  PetscCall(KergsSceneGetStep(st->scene, NULL, &time, NULL));
+  sigma3 = ConfiningPressure(nwalls, walls);
+  if (sigma3 == 0) PetscFunctionReturn(0);
+  PetscCall(GrainScales(st, &d, &rho));
+  for (PetscInt w = 0; w < nwalls; w++) {
+    PetscReal n[KERGS_DIM], v[KERGS_DIM], speed, dist, rate, inertial;
+    if (walls[w].kind != KERGS_WALL_DRIVEN) continue;
+    PetscCall(KergsWallVelocityAt(&walls[w], time, v));
+    WallNormal(&walls[w], n);
+    speed = PetscAbsReal(n[0] * v[0] + n[1] * v[1]);
+    dist  = FacingDistance(nwalls, walls, w);
+    if (!(speed > 0) || !(dist > 0)) continue;
+    rate     = speed / dist;
+    inertial = rate * d * PetscSqrtReal(rho / sigma3);
+    if (!(inertial > KERGS_INERTIAL_WARN)) continue;
+    PetscCall(PetscPrintf(st->comm,
+                          "kergs: warning: wall %s shears the sample at the inertial number I = eps_dot d sqrt(rho / sigma3) = %.3g, above "
+                          "%g (quasi-static: about 1e-3): eps_dot = %g m/s / %g m = %g /s (its normal speed over the distance to the "
+                          "wall facing it), d = %g m (mean diameter), rho = %g kg/m^2, sigma3 = %g N/m (the pressure walls); lower "
+                          "its speed\n",
+                          walls[w].name, (double)inertial, (double)KERGS_INERTIAL_WARN, (double)speed, (double)dist, (double)rate,
+                          (double)d, (double)rho, (double)sigma3));
+  }
+  PetscFunctionReturn(0);
+}
