@@ -14,4 +14,4 @@ set_tests_properties(dem_compare_pressure_quick PROPERTIES ENVIRONMENT "${KERGS_
 add_test(NAME dem_compare_biaxial_quick
          COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_dem_compare.py --scene biaxial --kergs $<TARGET_FILE:kergs_exe> --dir ${CMAKE_CURRENT_BINARY_DIR}/dem_compare_biaxial_quick
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-set_tests_properties(dem_compare_biaxial_quick PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 600 LABELS scripts)
+set_tests_properties(dem_compare_biaxial_quick PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 900 LABELS scripts)
