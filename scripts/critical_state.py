@@ -39,9 +39,9 @@ def run(a, args, log):
 
 
 def sample_box(path):
+    """The box the compaction's walls stopped in, which the sample records (the shear starts in it: -box_from_sample)."""
     with h5py.File(path, "r") as f:
-        x, r = f["sample/x"][()], f["sample/radius"][()]
-    return [(x[:, 0] - r).min(), (x[:, 1] - r).min(), (x[:, 0] + r).max(), (x[:, 1] + r).max()]
+        return f["sample/box"][()].ravel()
 
 
 def pipeline(a, name, mu):
@@ -53,7 +53,7 @@ def pipeline(a, name, mu):
     b = sample_box(sample)
     speed = a.inertial / D_MEAN * (b[3] - b[1])  # I = eps_dot d sqrt(rho / sigma3), rho = sigma3 = 1
     steps = int(round(a.strain / (a.inertial / D_MEAN) / DT))
-    run(a, ["-options_file", "cases/biaxial_small.opts", "-sample_input", sample, "-box", ",".join("%.6f" % v for v in b),
+    run(a, ["-options_file", "cases/biaxial_small.opts", "-sample_input", sample,
             "-wall_box_top_velocity", "0,%g" % -speed, "-wall_box_top_infinite", "-wall_box_bottom_infinite", "-steps", steps,
             "-output", out, "-output_every", 100], name + ".shear.log")
     return out
