@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""scripts/tradeoff_biaxial --quick (cases/biaxial_small.opts to 0.1 % strain): the machinery of the biaxial trade.
+"""scripts/tradeoff_biaxial --quick (cases/biaxial_small.opts to 0.06 % strain): the machinery of the biaxial trade.
 
 Every run row holds the macroscopic results (finite peak and critical q/p, the solid fraction of the compacted sample
 within 0.01 of its 0.8167, Z above 3); the settings are applied (the paper's capped NLGS never sweeps more than 150

@@ -22,9 +22,9 @@ kergs_bad_input(overlap "grains 1 and 2 overlap" -options_file cases/confine5.op
 # biaxial_small's sample with the left wall moved in by 5 mm (grain 0, radius 11 mm, then crosses it by 4.4 mm), by
 # 20 mm (grain 0's centre is behind it).
 kergs_bad_input(sample_crosses_box "grain 0 crosses wall box_left by 0\\.0044" -options_file cases/biaxial_small.opts
-                -box 0.09,0.08763,0.63620,0.61472 -steps 1)
+                -box_from_sample false -box 0.09,0.08763,0.63620,0.61472 -steps 1)
 kergs_bad_input(sample_outside_box "Grain 0 starts outside the container: its centre is behind wall box_left" -options_file
-                cases/biaxial_small.opts -box 0.105,0.08763,0.63620,0.61472 -steps 1)
+                cases/biaxial_small.opts -box_from_sample false -box 0.105,0.08763,0.63620,0.61472 -steps 1)
 # a truncated copy of the shipped sample, made before the test runs
 add_test(NAME make_truncated_sample COMMAND sh -c "head -c 3000 ${CMAKE_SOURCE_DIR}/cases/deposit500.h5 > ${CMAKE_BINARY_DIR}/truncated.h5")
 set_tests_properties(make_truncated_sample PROPERTIES FIXTURES_SETUP truncated_sample)
