@@ -73,7 +73,8 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                              st->rest_speed, &st->rest_speed, NULL));
   PetscCall(
       PetscOptionsReal("-stop_at_rest_energy",
-                       "Or stop once the kinetic energy per grain (J/m) is below this, after the packing has had more (0: not this way)",
+                       "Or stop once the kinetic energy per grain (J/m) is below this, after the packing has had more (0: not this way; "
+                       "when given, it alone says that the packing has moved)",
                        "", st->rest_energy, &st->rest_energy, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
@@ -291,10 +292,12 @@ static const char *EndText(KergsStepper st, PetscBool rest, char buf[], size_t l
   }
 }
 
-/* At rest, once the packing has been set in motion: every grain slower than -stop_at_rest, or the kinetic energy per
-   grain below -stop_at_rest_energy. The second is for solvers stopped at a loose tolerance (NLGS to quad 1e-4), whose
-   answers keep a few grains of a 5,000-disk packing at rest jiggling above any useful speed threshold while the
-   energy per grain is 1e-5 of p d^2 (docs/biaxial.md). */
+/* At rest: every grain slower than -stop_at_rest, or the kinetic energy per grain below -stop_at_rest_energy, once the
+   packing has been set in motion - its energy per grain above -stop_at_rest_energy when that is given (a compaction's
+   first steps are slower than any useful speed rule allows but not yet moving: 20,000 grains start at 2e-9 J/m each),
+   else a grain faster than -stop_at_rest. The energy rule is for solvers stopped at a loose tolerance (NLGS to quad
+   1e-4), whose answers keep a few grains of a 5,000-disk packing at rest above any useful speed threshold while the
+   energy per grain is 4e-6 of p d^2 (docs/biaxial.md). */
 static PetscErrorCode StepperAtRest(KergsStepper st, PetscBool *rest)
 {
   KergsDisks D;
@@ -304,7 +307,7 @@ static PetscErrorCode StepperAtRest(KergsStepper st, PetscBool *rest)
   PetscCall(KergsSceneKineticEnergy(st->scene, &ek, &vmax));
   PetscCall(KergsSceneGetDisks(st->scene, &D));
   per_grain = D.ndisks > 0 ? ek / D.ndisks : 0.0;
-  if ((st->rest_speed > 0 && vmax >= st->rest_speed) || (st->rest_energy > 0 && per_grain >= st->rest_energy)) st->moved = PETSC_TRUE;
+  if (st->rest_energy > 0 ? per_grain >= st->rest_energy : vmax >= st->rest_speed) st->moved = PETSC_TRUE;
   *rest = (PetscBool)(st->moved && ((st->rest_speed > 0 && vmax < st->rest_speed) || (st->rest_energy > 0 && per_grain < st->rest_energy)));
   PetscFunctionReturn(0);
 }
