@@ -2,11 +2,7 @@
 # rest, cases/biaxial_small.opts shears that sample at constant sigma3, each also at another friction (120 grains
 # compacted at mu = 0 and 0.5; the shear at mu = 0), two 1-rank runs at a time; tests/check_biaxial.py checks the
 # physics: packing, Rothenburg-Bathurst, contacts' stress against the walls', frictionless residual strength.
-add_test(NAME biaxial_small
-         COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_biaxial.py --kergs $<TARGET_FILE:kergs_exe> --mpiexec ${MPIEXEC_EXECUTABLE}
-                 --dir ${CMAKE_CURRENT_BINARY_DIR}/biaxial_small
-         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-set_tests_properties(biaxial_small PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 400 LABELS step)
+kergs_python_check(biaxial_small check_biaxial.py PROCESSORS 2 TIMEOUT 400 LABELS step)
 
 # Bad input for the biaxial test. A driven wall that shears the sample at an inertial number above 0.1 gets a warning
 # at the start (not an error: the run goes on and exits 0) naming the wall, I and the formula's terms, printed by rank 0

@@ -31,9 +31,7 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
-import argparse
 import concurrent.futures
-import os
 import sys
 
 import h5py
@@ -173,12 +171,7 @@ def frictionless(k, out, p, q_frictional):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--kergs", required=True)
-    ap.add_argument("--mpiexec", required=True)
-    ap.add_argument("--dir", required=True)
-    k = Kergs(ap.parse_args())
-    os.makedirs(k.dir, exist_ok=True)
+    k = Kergs.from_command_line(__doc__.splitlines()[0])
     out, sample = k.path("compact.h5"), k.path("sample.h5")
     small = {mu: k.path("small_%g.h5" % mu) for mu in (0, 0.5)}
     with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:  # one rank a run, two runs at a time

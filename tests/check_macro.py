@@ -14,8 +14,6 @@
 
   check_macro.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
-import argparse
-import os
 import sys
 
 import h5py
@@ -162,13 +160,7 @@ def open_box(k):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--kergs", required=True)
-    ap.add_argument("--mpiexec", required=True)
-    ap.add_argument("--dir", required=True)
-    a = ap.parse_args()
-    os.makedirs(a.dir, exist_ok=True)
-    k = Kergs(a)
+    k = Kergs.from_command_line(__doc__.splitlines()[0])
     for ranks in (1, 2):
         static_confined(k, ranks)
     frictionless(k)

@@ -7,7 +7,6 @@ reason (no box, so no strain).
 
   check_plot_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 The shebang is /usr/bin/python3 on purpose: Debian's h5py and matplotlib import only there."""
-import argparse
 import os
 import subprocess
 import sys
@@ -37,13 +36,7 @@ def picture(path):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--kergs", required=True)
-    ap.add_argument("--mpiexec", required=True)
-    ap.add_argument("--dir", required=True)
-    a = ap.parse_args()
-    os.makedirs(a.dir, exist_ok=True)
-    k = Kergs(a)
+    k = Kergs.from_command_line(__doc__.splitlines()[0])
     out, prefix = k.path("biaxial.h5"), k.path("biaxial")
     for suffix in ("_stress.png", "_structure.png"):
         if os.path.exists(prefix + suffix):

@@ -1,6 +1,7 @@
 """What the Python tests share (as tests/testing.h for the C ones): one line per check, the failures kept, and a
 runner for the kergs under test."""
 
+import argparse
 import os
 import subprocess
 
@@ -22,6 +23,17 @@ class Kergs:
 
     def __init__(self, a):
         self.kergs, self.mpiexec, self.dir = os.path.abspath(a.kergs), a.mpiexec, os.path.abspath(a.dir)
+
+    @classmethod
+    def from_command_line(cls, description=None):
+        """The kergs of the test's command line (--kergs, --mpiexec, --dir), its scratch directory created."""
+        ap = argparse.ArgumentParser(description=description)
+        ap.add_argument("--kergs", required=True)
+        ap.add_argument("--mpiexec", required=True)
+        ap.add_argument("--dir", required=True)
+        k = cls(ap.parse_args())
+        os.makedirs(k.dir, exist_ok=True)
+        return k
 
     def cmd(self, ranks, args):
         return [self.mpiexec, "-n", str(ranks), self.kergs] + [str(x) for x in args]

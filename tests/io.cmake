@@ -15,8 +15,4 @@ set_tests_properties(io_plot PROPERTIES FIXTURES_REQUIRED io_results TIMEOUT 120
 # xdmf: the XDMF file beside the results (-output_xdmf) opened headless with ParaView's VTK XDMF reader (vtkXdmfReader,
 # Debian's python3-paraview) and compared with the HDF5 file (h5py) at every time step: disk points and radii, contact
 # lines and their normal and tangential impulses, walls; after a finished run, a restart and a SIGKILL (tests/check_xdmf.py).
-add_test(NAME xdmf
-         COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_xdmf.py --kergs $<TARGET_FILE:kergs_exe> --mpiexec ${MPIEXEC_EXECUTABLE}
-                 --dir ${CMAKE_CURRENT_BINARY_DIR}/xdmf
-         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-set_tests_properties(xdmf PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 180)
+kergs_python_check(xdmf check_xdmf.py PROCESSORS 2 TIMEOUT 180)
