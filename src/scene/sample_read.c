@@ -197,6 +197,16 @@ static PetscErrorCode SampleApply(KergsScene scene, const SampleData *s)
   PetscFunctionReturn(0);
 }
 
+/* A sample file opened for reading; PETSc's viewer is only ever given a good file. */
+static PetscErrorCode SampleOpen(MPI_Comm comm, const char path[], PetscViewer *viewer)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
+  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL));
+  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, viewer));
+  PetscFunctionReturn(0);
+}
+
 /* The box is optional in a sample (a run without -box records none), so its absence gets its own message. */
 static PetscErrorCode SampleLoadBox(PetscViewer viewer, MPI_Comm comm, const char path[], PetscReal box[4])
 {
@@ -229,10 +239,8 @@ PetscErrorCode KergsSampleReadBox(MPI_Comm comm, const char path[], PetscReal bo
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
-  PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
-  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL));
-  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
+  PetscCall(SampleOpen(comm, path, &viewer));
   ierr = SampleLoadBox(viewer, comm, path, box);
   PetscCall(PetscViewerDestroy(&viewer));
   PetscCall(ierr);
@@ -249,10 +257,8 @@ PetscErrorCode KergsSampleRead(KergsScene scene, const char path[])
 
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
-  PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
-  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL)); /* PETSc's viewer is only ever given a good file */
-  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
+  PetscCall(SampleOpen(comm, path, &viewer));
   ierr = SampleLoad(viewer, comm, path, &s);
   PetscCall(PetscViewerDestroy(&viewer));
   if (!ierr) ierr = SampleValidate(scene, path, &s);
