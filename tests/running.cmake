@@ -21,6 +21,11 @@ kergs_bad_input(not_a_checkpoint "deposit500.h5 is not a kergs checkpoint" -rest
 # a solver type checks its own integer options where it reads them (KergsOptionsInt), kernel and predictor options too
 kergs_bad_input(newton_count_overflow "Option .solver_newton_reuse_its: 3000000000 is out of the range"
                 -options_file cases/confine5.opts -solver_type newton -solver_newton_reuse_its 3000000000)
+# newton's second attempt: a negative rho factor or an empty window is refused, naming the option
+kergs_bad_input(newton_second_rho "-solver_newton_second_rho -0.1 must be 0 .none. or positive"
+                -options_file cases/confine5.opts -solver_type newton -solver_newton_second_rho -0.1)
+kergs_bad_input(newton_second_window "-solver_newton_second_window 0 must be positive"
+                -options_file cases/confine5.opts -solver_type newton -solver_newton_second_window 0)
 kergs_bad_input(kernel_count_overflow "Option .kernel_diag_batch: -3000000000 is out of the range"
                 -options_file cases/confine5.opts -solver_type nlgsjac -kernel_diag_batch -3000000000)
 # a checkpoint's .tmp (a write that did not finish) is not restarted from; an export of a step beyond the run is refused

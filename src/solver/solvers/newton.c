@@ -142,10 +142,19 @@ static PetscErrorCode DestroyStepObjects(Newton *nt)
   PetscCall(VecDestroy(&nt->rc));
   PetscCall(VecDestroy(&nt->ueff));
   PetscCall(VecDestroy(&nt->rplain));
+  PetscCall(VecDestroy(&nt->rstart));
+  PetscCall(VecDestroy(&nt->rbest));
   PetscCall(MatDestroy(&nt->Jprox));
   PetscCall(VecDestroy(&nt->kx));
   PetscCall(VecDestroy(&nt->kpx));
   PetscFunctionReturn(0);
+}
+
+/* rho = factor / W_aa,nn on every local contact: the Alart-Curnier function of the attempts that follow. */
+static void SetRho(Newton *nt, PetscInt n, PetscReal factor)
+{
+  nt->rho_used = factor;
+  for (PetscInt a = 0; a < n; a++) nt->rho[a] = factor * nt->rho_nat[a];
 }
 
 static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops)
@@ -175,8 +184,8 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   for (PetscInt a = 0; a < n; a++) {
     const PetscReal wnn = blocks[a * nc * nc];
     nt->rho_nat[a]      = wnn > 0 ? 1.0 / wnn : 1.0;
-    nt->rho[a]          = nt->rho_factor * nt->rho_nat[a];
   }
+  SetRho(nt, n, nt->rho_factor);
   PetscCall(PetscFree(blocks));
   PetscCall(VecDuplicate(r, &nt->F));
   PetscCall(VecDuplicate(r, &nt->d));
@@ -187,6 +196,8 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(VecDuplicate(r, &nt->rc));
   PetscCall(VecDuplicate(r, &nt->ueff));
   PetscCall(VecDuplicate(r, &nt->rplain));
+  PetscCall(VecDuplicate(r, &nt->rstart));
+  PetscCall(VecDuplicate(r, &nt->rbest));
   PetscFunctionReturn(0);
 }
 
@@ -411,14 +422,14 @@ static PetscErrorCode ImpulseScale(KergsSolver s, Newton *nt, PetscInt n, PetscI
    The smoothing
    keeps J = A + B W nonsingular away from eps = 0 except on W's kernel where B is that of a stick contact; J's W part is
    regularised by sigma = kappa * natural residual * mean W_nn (within sigma_max; a Levenberg-Marquardt term: F keeps W,
-   so the limit solves the original problem). Stops at the tolerance, at max_it, on a failed linear solve, or after
+   so the limit solves the original problem). Stops at the tolerance, at `limit` Newton steps in all, on a failed linear solve, or after
    -solver_newton_stall_steps steps in a row at one eps that each cut |F_eps| by less than a tenth (J nearly singular
    as eps -> 0): the proximal iterations go on from there. The first such stall of a solve (up to
    -solver_newton_smoothing_raises of them) instead raises eps a hundredfold and goes on from the current point: eps was
    lowered too early, while a few contacts were still far from their piece (on pressure20k's cold first step, two
    contacts closing at 5e-4 m/s with r_n = 0 held the residual at 1e-3), and the smoother function lets them move. */
 static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd,
-                                    PetscReal wmean, PetscReal scale, PetscInt *steps, PetscReal *res)
+                                    PetscReal wmean, PetscReal scale, PetscInt limit, PetscInt *steps, PetscReal *res)
 {
   PetscReal merit, m0, epsmin;
   PetscInt  stalls = 0, raises = 0;
@@ -429,7 +440,7 @@ static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, Petsc
   PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_FALSE, &merit));
   nt->eps = PetscMin(nt->smooth_eps * scale, 10.0 * PetscSqrtReal(2.0 * merit / (PetscReal)nglobal));
   epsmin  = 1e-12 * nt->smooth_eps * scale;
-  while (*res > s->tol && *steps < s->max_it && nt->eps > 0) {
+  while (*res > s->tol && *steps < limit && nt->eps > 0) {
     const PetscInt b0 = nt->backtracks;
     PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_TRUE, &merit));
     while (PetscSqrtReal(2.0 * merit) <= 0.1 * nt->eps * PetscSqrtReal((PetscReal)nglobal) && nt->eps > epsmin) {
@@ -494,68 +505,49 @@ static PetscErrorCode Polish(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc,
   PetscFunctionReturn(0);
 }
 
-/* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
-   -solver_newton_switch_tol. Then outer iterations: each solves, by at most -solver_prox_inner_max Newton steps, the
-   proximal problem with W + sigma I (or W + sigma P) and v^d - sigma r_c around the current r_c = r, and moves r_c to
-   its solution. The
-   proximal term makes every inner Jacobian nonsingular (without it, -solver_prox none, J is singular where stick
-   contacts carry a hyperstatic network); at the fixed point it vanishes, so r solves the original problem. The first
-   outer iteration is plain Newton (sigma_min), kept only if it lowered the natural residual. -solver_max_it caps the
-   Newton steps. */
-static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
-                                         KergsSolveStats *stats)
+/* One attempt from r: outer iterations, each solving, by at most -solver_prox_inner_max Newton steps, the proximal
+   problem with W + sigma I (or W + sigma P) and v^d - sigma r_c around the current r_c = r, and moving r_c to its
+   solution. The proximal term makes every inner Jacobian nonsingular (without it, -solver_prox none, J is singular
+   where stick contacts carry a hyperstatic network); at the fixed point it vanishes, so r solves the original problem.
+   The first outer iteration is plain Newton (sigma_min), kept only if it lowered the natural residual; with
+   `smoothing`, the smoothing phase follows it unless it gained a thousandfold. Ends at the tolerance, once *steps
+   reaches `limit`, or (window > 0) after an outer iteration that ends `window` Newton steps after the natural residual
+   last gained tenfold; *res is the natural residual on entry and on exit. */
+static PetscErrorCode Attempt(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd, PetscReal wmean,
+                              PetscBool smoothing, PetscInt limit, PetscInt window, PetscInt *steps, PetscReal *res_io)
 {
-  Newton        *nt = (Newton *)s->data;
-  KergsDofLayout layout;
-  PetscInt       n, nglobal, nc, steps = 0;
-  PetscReal      res = 0.0, rmax, wmean = 1.0, alpha = nt->alpha;
-  PetscLogDouble t0, t1;
-  PetscBool      ok, smoothing;
-  Vec            r, u, vd;
+  PetscReal res = *res_io, alpha = nt->alpha, mark_res = *res_io;
+  PetscInt  outer = 0, mark_step = *steps;
+  PetscBool ok;
 
   PetscFunctionBeginUser;
-  (void)scene;
-  PetscCall(PetscTime(&t0));
-  PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
-  PetscCall(KergsOperatorsGetLayout(ops, &layout));
-  PetscCall(KergsOperatorsGetContactVectors(ops, &r, &u, &vd));
-  PetscCall(VecGetSize(r, &nglobal));
-  nc             = layout.ncomp;
-  nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = 0;
-  nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = 0;
-  nt->linear_seconds = nt->sigma = nt->merit = 0.0;
-  PetscCall(MeanCompliance(s, nt, n, &wmean));
-  PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
-  PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
-  if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
-  nt->smooth_steps = 0;
-  smoothing        = (PetscBool)(nt->smoothing && nt->prox != NEWTON_PROX_NONE); /* the phase hands over to the proximal iterations */
-  while (res > s->tol && nglobal > 0 && steps < s->max_it) {
+  while (res > s->tol && nglobal > 0 && *steps < limit) {
     PetscReal before = res, inner_tol;
     PetscCall(VecCopy(r, nt->rc));
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res)); /* |e| at the centre (after a rejected outer iteration too) */
     /* the first attempt is plain Newton (the smallest sigma): enough when the warm start lies on the solution's piece
        of F, and the residual (absolute at r = 0) says little about the distance to the solution */
     nt->sigma = nt->prox != NEWTON_PROX_NONE
-                    ? (nt->outer == 0 ? nt->sigma_min : PetscClipInterval(alpha * res, nt->sigma_min, nt->sigma_max)) * wmean
+                    ? (outer == 0 ? nt->sigma_min : PetscClipInterval(alpha * res, nt->sigma_min, nt->sigma_max)) * wmean
                     : 0.0;
     /* |F| scales with rho where the natural residual's map uses 1 / W_nn: a smaller rho asks for a smaller |F| */
-    inner_tol = nt->inner_rtol * PetscMin(1.0, nt->rho_factor) * nt->enorm;
+    inner_tol = nt->inner_rtol * PetscMin(1.0, nt->rho_used) * nt->enorm;
     {
-      const PetscInt before_steps = steps;
+      const PetscInt before_steps = *steps;
       /* with smoothing, the plain attempt gets 3 Newton steps: enough on the solution's piece (a few contacts); it
          stops after one that gained less than tenfold, as little as possible lost otherwise */
-      const PetscBool plain = (PetscBool)(nt->outer == 0 && smoothing);
-      PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(plain ? 3 : nt->inner_max, s->max_it - steps), inner_tol, plain, &steps, &ok));
-      if (steps == before_steps) { /* an outer iteration without a Newton step still counts: the loop ends */
-        steps++;
-        PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, steps));
+      const PetscBool plain = (PetscBool)(outer == 0 && smoothing);
+      PetscCall(InnerNewton(s, nt, n, nc, r, u, vd, PetscMin(plain ? 3 : nt->inner_max, limit - *steps), inner_tol, plain, steps, &ok));
+      if (*steps == before_steps) { /* an outer iteration without a Newton step still counts: the loop ends */
+        (*steps)++;
+        PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, *steps));
       }
     }
     PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
+    outer++;
     nt->outer++;
     ok = (PetscBool)(PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */
-    if (nt->outer == 1 && nt->prox != NEWTON_PROX_NONE && res >= before) {
+    if (outer == 1 && nt->prox != NEWTON_PROX_NONE && res >= before) {
       /* plain Newton from the warm start went elsewhere (along W's near-kernel, where sigma_min barely holds it): back */
       PetscCall(MoveTo(nt, nt->rc, r, u, vd));
       res = before;
@@ -572,23 +564,92 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
     }
     PetscCall(PetscInfo(NULL,
                         "outer %" PetscInt_FMT " (%" PetscInt_FMT " Newton steps): natural residual %g -> %g, inner solved %d, alpha %g\n",
-                        nt->outer, steps, (double)before, (double)res, (int)ok, (double)alpha));
+                        nt->outer, *steps, (double)before, (double)res, (int)ok, (double)alpha));
     /* unless plain Newton gained three orders of magnitude (it is then on the solution's piece, where the proximal
        iterations finish in a few steps), smoothing Newton from the warm start, then the proximal iterations if needed */
-    if (nt->outer == 1 && smoothing && res > 1e-3 * before && res > s->tol && steps < s->max_it) {
+    if (outer == 1 && smoothing && res > 1e-3 * before && res > s->tol && *steps < limit) {
       PetscReal scale, plain_res = res, start_res = before; /* before: the natural residual at the warm start, nt->rc */
       PetscCall(ImpulseScale(s, nt, n, nc, vd, &scale));
       if (scale > 0) {
         PetscCall(VecCopy(r, nt->rplain));
         PetscCall(MoveTo(nt, nt->rc, r, u, vd));
         res = start_res;
-        PetscCall(SolveSmoothed(s, nt, n, nc, nglobal, r, u, vd, wmean, scale, &steps, &res));
+        PetscCall(SolveSmoothed(s, nt, n, nc, nglobal, r, u, vd, wmean, scale, limit, steps, &res));
         /* the proximal iterations go on from the best of the warm start, the plain attempt's end and the smoothing's */
         if (PetscMin(start_res, plain_res) < res) {
           PetscCall(MoveTo(nt, start_res <= plain_res ? nt->rc : nt->rplain, r, u, vd));
           res = PetscMin(start_res, plain_res);
         }
         alpha = nt->alpha; /* the plain attempt's outcome says nothing about the proximal problems from here */
+      }
+    }
+    if (res <= 0.1 * mark_res) { /* a tenfold gain since the mark */
+      mark_res  = res;
+      mark_step = *steps;
+    } else if (window > 0 && *steps - mark_step >= window) {
+      PetscCall(PetscInfo(NULL, "attempt stalled: no tenfold gain in %" PetscInt_FMT " Newton steps (natural residual %g)\n",
+                          *steps - mark_step, (double)res));
+      break;
+    }
+  }
+  *res_io = res;
+  PetscFunctionReturn(0);
+}
+
+/* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
+   -solver_newton_switch_tol, then an Attempt. When it stalls (-solver_newton_second_window Newton steps without a
+   tenfold gain of the natural residual), a second Attempt starts again from the same point with the rest of
+   -solver_max_it and rho times -solver_newton_second_rho, and the better end of the two is kept. The Alart-Curnier merit has minima that
+   are not solutions, and which ones depends on rho: on the pile of radius ratio 100 of docs/running.md (mass ratio 1e4), six steps of 40 to
+   110 contacts that newton left at natural residuals of 1e-4 to 0.1 after 1,000 Newton steps (one still at 8e-5 after 20,000) were each
+   solved in 25 to 113 Newton steps with rho / 10. -solver_max_it caps the Newton steps of both. */
+static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
+                                         KergsSolveStats *stats)
+{
+  Newton        *nt = (Newton *)s->data;
+  KergsDofLayout layout;
+  PetscInt       n, nglobal, nc, steps = 0;
+  PetscReal      res = 0.0, rmax, wmean = 1.0;
+  PetscLogDouble t0, t1;
+  PetscBool      smoothing, second;
+  Vec            r, u, vd;
+
+  PetscFunctionBeginUser;
+  (void)scene;
+  PetscCall(PetscTime(&t0));
+  PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
+  PetscCall(KergsOperatorsGetLayout(ops, &layout));
+  PetscCall(KergsOperatorsGetContactVectors(ops, &r, &u, &vd));
+  PetscCall(VecGetSize(r, &nglobal));
+  nc             = layout.ncomp;
+  nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = 0;
+  nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = nt->second_attempts = 0;
+  nt->linear_seconds = nt->sigma = nt->merit = 0.0;
+  PetscCall(MeanCompliance(s, nt, n, &wmean));
+  PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
+  PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
+  if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
+  nt->smooth_steps = 0;
+  smoothing        = (PetscBool)(nt->smoothing && nt->prox != NEWTON_PROX_NONE); /* the phase hands over to the proximal iterations */
+  second           = (PetscBool)(nt->second_rho > 0 && s->max_it >= 2);
+  if (second) PetscCall(VecCopy(r, nt->rstart));
+  {
+    const PetscReal start_res = res;
+    PetscCall(Attempt(s, nt, n, nc, nglobal, r, u, vd, wmean, smoothing, s->max_it, second ? nt->second_window : 0, &steps, &res));
+    if (second && res > s->tol && nglobal > 0 && steps < s->max_it) {
+      const PetscReal first = res;
+      PetscCall(PetscInfo(NULL, "first attempt ended at natural residual %g after %" PetscInt_FMT " Newton steps: a second, rho times %g\n",
+                          (double)first, steps, (double)nt->second_rho));
+      nt->second_attempts++;
+      PetscCall(VecCopy(r, nt->rbest));
+      PetscCall(MoveTo(nt, nt->rstart, r, u, vd));
+      res = start_res;
+      SetRho(nt, n, nt->rho_factor * nt->second_rho);
+      PetscCall(Attempt(s, nt, n, nc, nglobal, r, u, vd, wmean, smoothing, s->max_it, 0, &steps, &res));
+      SetRho(nt, n, nt->rho_factor);
+      if (first < res) {
+        PetscCall(MoveTo(nt, nt->rbest, r, u, vd));
+        res = first;
       }
     }
   }
@@ -620,6 +681,7 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "reused_factorizations", (PetscReal)nt->reused));
   PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
   PetscCall(KergsSolveStatsAdd(st, "smoothing_steps", (PetscReal)nt->smooth_steps));
+  PetscCall(KergsSolveStatsAdd(st, "second_attempts", (PetscReal)nt->second_attempts));
   PetscFunctionReturn(0);
 }
 
@@ -678,6 +740,13 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_smoothing_raises",
                             "Smoothing Newton: stalls of a solve that raise eps a hundredfold instead of ending the phase", "",
                             nt->smooth_raises, &nt->smooth_raises, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_second_rho",
+                             "A solve that stalls (-solver_newton_second_window) starts again from the warm start with rho times "
+                             "this, and keeps the better end (0: no second attempt)",
+                             "", nt->second_rho, &nt->second_rho, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_second_window",
+                            "Newton steps without a tenfold gain of the natural residual after which the second attempt starts", "",
+                            nt->second_window, &nt->second_window, NULL));
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_max_sweeps",
                             "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol", "", nt->max_sweeps,
                             &nt->max_sweeps, NULL));
@@ -705,6 +774,10 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              "-solver_newton_smoothing_eps %g must be positive", (double)nt->smooth_eps);
   PetscCheck(nt->rho_factor > 0 && PetscIsNormalReal(nt->rho_factor), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_rho %g must be positive", (double)nt->rho_factor);
+  PetscCheck(nt->second_window > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_second_window %" PetscInt_FMT " must be positive",
+             nt->second_window);
+  PetscCheck(nt->second_rho == 0 || (nt->second_rho > 0 && PetscIsNormalReal(nt->second_rho * nt->rho_factor)), s->comm,
+             PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_second_rho %g must be 0 (none) or positive", (double)nt->second_rho);
   PetscCheck(nt->shift >= 0 && !PetscIsInfOrNanReal(nt->shift), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_shift %g must be non-negative", (double)nt->shift);
   PetscCheck(nt->armijo > 0 && nt->armijo < 0.5, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_armijo %g must lie in (0, 0.5)",
@@ -751,6 +824,12 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
       PetscCall(PetscViewerASCIIPrintf(
           viewer, "  its first %" PetscInt_FMT " stall(s) of a solve raise eps a hundredfold instead of ending it\n", nt->smooth_raises));
   }
+  if (nt->second_rho > 0)
+    PetscCall(PetscViewerASCIIPrintf(viewer,
+
+                                     "After %" PetscInt_FMT
+                                     " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
+                                     nt->second_window, (double)nt->second_rho));
   if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
   PetscCall(KSPView(nt->ksp, viewer));
   PetscFunctionReturn(0);
@@ -801,6 +880,8 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->smoothing      = PETSC_TRUE;
   nt->smooth_eps     = 4.0;
   nt->smooth_raises  = 1;
+  nt->second_rho     = 0.1;
+  nt->second_window  = 250;
   PetscCall(NewtonCreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 1000; /* the cap of the tradeoff study's reference runs (docs/tradeoff.md) */

@@ -27,6 +27,7 @@ typedef struct {
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
   Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */
+  Vec        rstart, rbest; /* the first Attempt's start and end, kept while the second runs */
   PetscReal *A, *B;         /* per local contact, ncomp x ncomp row-major: J = A + B W */
   PetscReal *Aused, *Bused; /* the blocks of the Jacobian last assembled */
   PetscReal *Afact, *Bfact; /* the blocks of the Jacobian last factored */
@@ -64,6 +65,10 @@ typedef struct {
   PetscInt  smooth_raises;         /* -solver_newton_smoothing_raises: stalls that raise eps instead of ending the phase */
   PetscReal eps;                   /* > 0: F is the smoothed Alart-Curnier function with this eps */
   PetscInt  smooth_steps;          /* Newton steps of the last solve's smoothing phase */
+  PetscReal second_rho;            /* -solver_newton_second_rho: rho factor of a second Attempt after a failed first (0: none) */
+  PetscInt  second_window;         /* -solver_newton_second_window: Newton steps without a tenfold gain that end the first */
+  PetscReal rho_used;              /* the factor of the current Attempt's rho */
+  PetscInt  second_attempts;       /* second Attempts of the last solve (0 or 1) */
   PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
   PetscBool stale;                 /* J changed since that set-up */
   /* figures of the last solve */
