@@ -7,7 +7,8 @@ TEST is one of:
   restart   10 + 10 steps of confine500 against 20 (scripts/compare_results.py: bit for bit) on 2 ranks; 4 + 4 steps,
             2 -> 1 and 1 -> 2 ranks, against the uninterrupted 8, frictionless and solved to 1e-10 (velocities unique): the
             first 4 rows bit for bit, the end within the solver's tolerance; a pressure-controlled wall over a closed box's
-            moving height, 10 + 10 steps against 20 bit for bit
+            moving height, 10 + 10 steps against 20 bit for bit; the radius-ratio-100 pile, whose automatic alert
+            distance grows with the grains' speed, 120 + 120 steps against 240 bit for bit
   signals   SIGTERM and SIGINT sent to the ranks, SIGUSR1 to mpiexec (which forwards it): exit status 4, the results file
             complete under its final name, the checkpoint of the last step; a restart continues the same file
   kill      SIGKILL: the .tmp left is readable and holds every flushed row and snapshot; a restart from the last
@@ -130,6 +131,7 @@ def test_restart(k):
             check(sa == sb == 8 and dx < 1e-10 and dv < 1e-8,
                   f"restart {first} -> {second} ranks: step 8 within the solver's tolerance (positions {dx:.1e} m, velocities {dv:.1e} m/s)")
     test_restart_pressure(k)
+    test_restart_alert(k)
 
 
 def test_restart_pressure(k):
@@ -144,6 +146,24 @@ def test_restart_pressure(k):
     rc, out = compare(k.path("PA.h5"), k.path("PB.h5"))
     check(rc == 0, "restart, pressure wall: 10 + 10 steps give the 20-step run bit for bit (the force from the restored height) "
           + out[:300])
+
+
+def test_restart_alert(k):
+    """The automatic alert distance follows the speed (KergsSceneAdaptAlert) and the ghost layer is rebuilt as it grows:
+    the radius-ratio-100 pile of docs/running.md, whose grains fall faster than the alert's floor allows for, 120 + 120
+    steps against 240 on 2 ranks, bit for bit (the checkpoint keeps the alert's floor and the layer's margin)."""
+    common = ["-scene_name", "r100", "-gravity", "0,-9.81", "-friction", "0.3", "-dt", "1e-3", "-disks_source", "random", "-random_n",
+              "500", "-random_box", "0,0,1,6", "-random_radius", "0.0005,0.05", "-random_seed", "2013", "-box", "0,0,1,7", "-box_open_top",
+              "-quiet"]
+    k.run(2, *common, "-steps", 240, "-output", k.path("RA.h5"), log="RA.log")
+    p1 = k.run(2, *common, "-steps", 120, "-output", k.path("RB.h5"), "-checkpoint_every", 120, log="RB1.log")
+    p2 = k.run(2, "-restart", k.path("RB.checkpoint.h5"), "-steps", 240, log="RB2.log")
+    check(p1.returncode == 0 and p2.returncode == 0, "restart, automatic alert: 120 steps, then the restart to 240, run")
+    with h5py.File(k.path("RB.checkpoint.h5"), "r") as f:
+        alert, floor = float(f["state"].attrs["alert"]), float(f["state"].attrs["alert_floor"])
+    check(alert > 1.2 * floor, f"restart, automatic alert: at step 120 the alert {alert:.3g} has grown past its floor {floor:.3g}")
+    rc, out = compare(k.path("RA.h5"), k.path("RB.h5"))
+    check(rc == 0, "restart, automatic alert: 120 + 120 steps on 2 ranks give the 240-step run bit for bit " + out[:300])
 
 
 def test_signals(k):

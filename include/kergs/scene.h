@@ -117,6 +117,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneGetGravity(KergsScene, PetscReal gravity[]
 PETSC_EXTERN PetscErrorCode KergsSceneGetMaterials(KergsScene, PetscInt *nmaterials, const PetscReal **mu);
 /* Alert distance (potential contacts have a gap below it) and the rule deciding which of them are active. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetContactRule(KergsScene, PetscReal *alert, KergsGapRule *rule);
+PETSC_EXTERN PetscErrorCode KergsSceneAdaptAlert(KergsScene, PetscReal closing_speed);
+PETSC_EXTERN PetscErrorCode KergsSceneGetAlertFloor(KergsScene, PetscBool *automatic, PetscReal *floor);
 /* What the scene models: frictional (some material pair has mu > 0: contacts carry a tangential component) and
    rotating (frictional disks not locked by -disks_lock_rotation: a rotational DOF per disk). */
 PETSC_EXTERN PetscErrorCode KergsSceneGetModel(KergsScene, PetscBool *frictional, PetscBool *rotating);
@@ -139,21 +141,23 @@ PETSC_EXTERN PetscErrorCode KergsSceneRestoreDisks(KergsScene, PetscInt ndisks, 
                                                    const PetscInt material[], const PetscReal x[], const PetscReal rot[],
                                                    const PetscReal v[], const PetscReal omega[], const PetscReal radius[]);
 /* The clock and the alert distance (computed from the radii at the start of the run, kept as it was) */
-PETSC_EXTERN PetscErrorCode KergsSceneRestoreState(KergsScene, PetscInt step, PetscReal time, PetscReal alert);
+PETSC_EXTERN PetscErrorCode KergsSceneRestoreState(KergsScene, PetscInt step, PetscReal time, PetscReal alert, PetscReal alert_floor);
 /* Wall w's endpoints, velocity and displacement since the start of the run (KERGS_DIM values each) */
 /* Wall w's loaded length (KergsWall.span): what its pressure multiplies. */
 PETSC_EXTERN PetscErrorCode KergsSceneWallLoadedLength(KergsScene, PetscInt w, PetscReal *length);
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreWall(KergsScene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
                                                   const PetscReal disp[]);
 /* The ghost layer as a checkpoint keeps it (src/scene/ghosts.c): whether it exists, the owned disks' positions when it
-   was built (xref, KERGS_DIM per owned disk; they decide when it is rebuilt) and the number of layers built so far.
-   The ghosts themselves are the disks of global indices D.gidx[nowned..nlocal) (KergsSceneGetDisks). */
-PETSC_EXTERN PetscErrorCode KergsSceneGetGhostState(KergsScene, PetscBool *layer, const PetscReal **xref, PetscInt *rebuilds);
+   was built (xref, KERGS_DIM per owned disk) and its margin, the alert distance plus the skin then (both decide when
+   it is rebuilt), and the number of layers built so far. The ghosts themselves are the disks of global indices D.gidx[nowned..nlocal)
+   (KergsSceneGetDisks). */
+PETSC_EXTERN PetscErrorCode KergsSceneGetGhostState(KergsScene, PetscBool *layer, const PetscReal **xref, PetscReal *margin,
+                                                    PetscInt *rebuilds);
 /* Collective, after KergsSceneRestoreDisks on the same ranks as the checkpointed run: the ghost layer of the given
-   global indices (in that local order, fetched from their owners with their whole state), its xref and count, as if
-   never interrupted. With layer false no layer is built (the next detection builds one). */
+   global indices (in that local order, fetched from their owners with their whole state), its xref, margin and count,
+   as if never interrupted. With layer false no layer is built (the next detection builds one). */
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreGhosts(KergsScene, PetscBool layer, PetscInt nghosts, const PetscInt gidx[],
-                                                    const PetscReal xref[], PetscInt rebuilds);
+                                                    const PetscReal xref[], PetscReal margin, PetscInt rebuilds);
 
 /* Distributed state (src/scene/ghosts.c). */
 /* Collective. Rebuild the ghost layer when asked, when there is none, or when some disk moved more than

@@ -74,10 +74,11 @@ static PetscErrorCode WriteDisks(PetscViewer v, MPI_Comm comm, KergsScene sc)
   const PetscReal *xref;
   PetscBool        layer;
   PetscInt         rebuilds;
+  PetscReal        ghost_margin;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetDisks(sc, &D));
-  PetscCall(KergsSceneGetGhostState(sc, &layer, &xref, &rebuilds));
+  PetscCall(KergsSceneGetGhostState(sc, &layer, &xref, &ghost_margin, &rebuilds));
   PetscCall(PetscViewerHDF5PushGroup(v, "/disks"));
   PetscCall(KergsViewIntegers(v, comm, "id", D.nowned, D.id));
   PetscCall(KergsViewIntegers(v, comm, "material", D.nowned, D.material));
@@ -90,6 +91,7 @@ static PetscErrorCode WriteDisks(PetscViewer v, MPI_Comm comm, KergsScene sc)
   PetscCall(WriteInt(v, NULL, "ndisks", D.ndisks));
   PetscCall(WriteInt(v, NULL, "ghost_layer", layer ? 1 : 0));
   PetscCall(WriteInt(v, NULL, "ghost_rebuilds", rebuilds));
+  PetscCall(WriteReal(v, NULL, "ghost_margin", ghost_margin));
   /* the ghosts: global indices of the disks of other ranks held here, in local order */
   {
     PetscInt *gidx;
@@ -192,7 +194,7 @@ static PetscErrorCode WriteState(PetscViewer v, MPI_Comm comm, const WriteWork *
   KergsDisks          D;
   KergsPartitionState ps;
   KergsResultsState   rs;
-  PetscReal           mine[RANK_FIELDS], alert;
+  PetscReal           mine[RANK_FIELDS], alert, alert_floor;
   PetscInt            m;
   const char         *path;
   PetscBool           enabled;
@@ -204,6 +206,7 @@ static PetscErrorCode WriteState(PetscViewer v, MPI_Comm comm, const WriteWork *
   PetscCall(KergsResultsGetState(w->results, &rs));
   PetscCall(KergsResultsGetPath(w->results, &path, &enabled));
   PetscCall(KergsSceneGetContactRule(w->scene, &alert, NULL));
+  PetscCall(KergsSceneGetAlertFloor(w->scene, NULL, &alert_floor));
   mine[RANK_DSTART]          = (PetscReal)D.dstart;
   mine[RANK_NOWNED]          = (PetscReal)D.nowned;
   mine[RANK_NCONTACTS]       = (PetscReal)m;
@@ -215,6 +218,7 @@ static PetscErrorCode WriteState(PetscViewer v, MPI_Comm comm, const WriteWork *
   PetscCall(PetscViewerHDF5PopGroup(v));
   PetscCall(PetscViewerHDF5PushGroup(v, "/state"));
   PetscCall(WriteReal(v, NULL, "alert", alert));
+  PetscCall(WriteReal(v, NULL, "alert_floor", alert_floor));
   PetscCall(WriteInt(v, NULL, "partition_initialized", ps.initialized ? 1 : 0));
   PetscCall(WriteInt(v, NULL, "partition_provisional", ps.provisional ? 1 : 0));
   PetscCall(WriteInt(v, NULL, "partition_edgecut_base", ps.edgecut_base));
@@ -383,7 +387,7 @@ static PetscErrorCode ReadReal(PetscViewer v, const char path[], const char grou
 /* What the file says of the run as a whole. */
 typedef struct {
   PetscInt   ranks, step, ndisks, ncontacts, nwalls, layer, rebuilds;
-  PetscReal  time, alert;
+  PetscReal  time, alert, alert_floor, ghost_margin;
   PetscReal *rankinfo[RANK_FIELDS]; /* per saved rank */
 } Header;
 
@@ -403,6 +407,19 @@ static PetscErrorCode ReadHeader(PetscViewer v, MPI_Comm comm, const char path[]
   PetscCall(ReadInt(v, path, "/disks", "ghost_rebuilds", &h->rebuilds));
   PetscCall(ReadInt(v, path, "/walls", "nwalls", &h->nwalls));
   PetscCall(ReadReal(v, path, "/state", "alert", &h->alert));
+  {
+    PetscBool has; /* written before the alert followed the speed: it was fixed, and the ghost layer is built again */
+    PetscCall(PetscViewerHDF5HasAttribute(v, "/state", "alert_floor", &has));
+    if (has)
+      PetscCall(ReadReal(v, path, "/state", "alert_floor", &h->alert_floor));
+    else
+      h->alert_floor = h->alert;
+    PetscCall(PetscViewerHDF5HasAttribute(v, "/disks", "ghost_margin", &has));
+    if (has)
+      PetscCall(ReadReal(v, path, "/disks", "ghost_margin", &h->ghost_margin));
+    else
+      h->ghost_margin = 0.0;
+  }
   PetscCheck(h->ranks >= 1 && h->step >= 0 && h->ndisks >= 0 && h->ndisks <= KERGS_MAX_DISKS && h->nwalls >= 0, comm,
              PETSC_ERR_FILE_UNEXPECTED,
              "Checkpoint file %s: ranks %" PetscInt_FMT ", step %" PetscInt_FMT ", ndisks %" PetscInt_FMT ", nwalls %" PetscInt_FMT
@@ -445,7 +462,7 @@ static PetscErrorCode RestoreDisks(PetscViewer v, MPI_Comm comm, const char path
     imat[i] = (PetscInt)mat[i];
   }
   PetscCall(KergsSceneRestoreDisks(sc, h->ndisks, n, iid, imat, x, rot, vel, omega, radius));
-  PetscCall(KergsSceneRestoreState(sc, h->step, h->time, h->alert));
+  PetscCall(KergsSceneRestoreState(sc, h->step, h->time, h->alert, h->alert_floor));
   PetscCall(PetscFree2(iid, imat));
   PetscCall(PetscFree(id));
   PetscCall(PetscFree(mat));
@@ -619,7 +636,7 @@ static PetscErrorCode RestoreExact(PetscViewer v, MPI_Comm comm, const char path
   }
   PetscCall(PetscMalloc1(ng + 1, &gidx));
   for (PetscInt k = 0; k < ng; k++) gidx[k] = (PetscInt)g[k];
-  PetscCall(KergsSceneRestoreGhosts(sc, h->layer ? PETSC_TRUE : PETSC_FALSE, ng, gidx, xref, h->rebuilds));
+  PetscCall(KergsSceneRestoreGhosts(sc, h->layer ? PETSC_TRUE : PETSC_FALSE, ng, gidx, xref, h->ghost_margin, h->rebuilds));
   PetscCall(PetscFree(gidx));
   PetscCall(PetscFree(g));
   PetscCall(LoadContacts(v, comm, path, h, nc, &cr));
@@ -658,7 +675,7 @@ static PetscErrorCode RestoreRepartitioned(PetscViewer v, MPI_Comm comm, const c
 
   PetscFunctionBeginUser;
   PetscCall(KergsContactsRestore(ct, 0, NULL));
-  PetscCall(KergsSceneRestoreGhosts(sc, PETSC_FALSE, 0, NULL, NULL, 0));
+  PetscCall(KergsSceneRestoreGhosts(sc, PETSC_FALSE, 0, NULL, NULL, 0.0, 0));
   PetscCall(KergsPartitionSetState(p, NULL));
   PetscCall(KergsPartitionUpdate(p, sc, ct, NULL)); /* the initial partition of a new run: no contacts yet */
   PetscCall(LoadContacts(v, comm, path, h, PETSC_DETERMINE, &cr));

@@ -16,9 +16,10 @@
 
    Refresh: between rebuilds, the ghosts' positions, orientations and velocities are copied from their owners
    through a PetscSF (roots: owned disks; leaves: ghosts), one neighbour exchange per step. The layer is rebuilt
-   when a disk moved more than skin / 2 since the last build (one max-reduction per step decides) and after a
-   migration. Migration moves whole disk records (KergsExchangeRecords). Disk records travel as bytes: the ranks of
-   a run share one binary representation. */
+   once alert + 2 dmax exceeds the build's alert + skin, dmax the largest displacement of a disk since the build (one
+   max-reduction per step decides; with the alert of the build, a disk moved more than skin / 2; the automatic alert
+   may grow, KergsSceneAdaptAlert), and after a migration. Migration moves whole disk records
+   (KergsExchangeRecords). Disk records travel as bytes: the ranks of a run share one binary representation. */
 #include <kergs/private/sceneimpl.h>
 
 /* Everything a disk carries. */
@@ -254,7 +255,8 @@ static PetscErrorCode RebuildGhosts(KergsScene sc)
   PetscCallMPI(MPI_Comm_rank(sc->comm, &rank));
   sc->nlocal = sc->nowned;
   PetscCall(GatherBoxes(sc, &boxes, &rmax));
-  reach = 2.0 * rmax + sc->alert + GhostSkin(sc, rmax);
+  sc->ghost_margin = sc->alert + GhostSkin(sc, rmax);
+  reach            = 2.0 * rmax + sc->ghost_margin;
   PetscCall(PetscMalloc2(size, &sendcount, size, &recvcount));
   PetscCall(SelectGhostsToSend(sc, boxes, reach, sendcount, &send));
   PetscCall(KergsExchangeRecords(sc->comm, sizeof(DiskRecord), sendcount, send, recvcount, &recv, &nrecv));
@@ -357,7 +359,7 @@ PetscErrorCode KergsSceneUpdateGhosts(KergsScene sc, PetscBool rebuild)
   if (!rebuild && sc->ghost_sf) { /* a layer exists on every rank, or on none (migration and SetDisks drop it everywhere) */
     PetscReal dmax = 0.0, rmax = 0.0;
     PetscCall(MaxDisplacement(sc, &dmax, &rmax));
-    rebuild = (PetscBool)(2.0 * dmax > GhostSkin(sc, rmax));
+    rebuild = (PetscBool)(sc->alert + 2.0 * dmax > sc->ghost_margin);
   } else
     rebuild = PETSC_TRUE;
   if (rebuild) PetscCall(RebuildGhosts(sc));
@@ -378,9 +380,10 @@ PetscErrorCode KergsSceneRefreshGhosts(KergsScene sc)
 /* ------------------------------------------------------------------------------------------------ */
 /* Checkpoints                                                                                      */
 
-PetscErrorCode KergsSceneGetGhostState(KergsScene sc, PetscBool *layer, const PetscReal **xref, PetscInt *rebuilds)
+PetscErrorCode KergsSceneGetGhostState(KergsScene sc, PetscBool *layer, const PetscReal **xref, PetscReal *margin, PetscInt *rebuilds)
 {
   PetscFunctionBeginUser;
+  if (margin) *margin = sc->ghost_margin;
   if (layer) *layer = sc->ghost_sf ? PETSC_TRUE : PETSC_FALSE;
   if (xref) *xref = sc->ghost_sf ? sc->xref : NULL;
   if (rebuilds) *rebuilds = sc->ghost_rebuilds;
@@ -388,7 +391,7 @@ PetscErrorCode KergsSceneGetGhostState(KergsScene sc, PetscBool *layer, const Pe
 }
 
 PetscErrorCode KergsSceneRestoreGhosts(KergsScene sc, PetscBool layer, PetscInt nghosts, const PetscInt gidx[], const PetscReal xref[],
-                                       PetscInt rebuilds)
+                                       PetscReal margin, PetscInt rebuilds)
 {
   PetscMPIInt  size;
   PetscInt    *ranges, mine[2] = {sc->dstart, sc->dend}, *all;
@@ -398,6 +401,7 @@ PetscErrorCode KergsSceneRestoreGhosts(KergsScene sc, PetscBool layer, PetscInt 
 
   PetscFunctionBeginUser;
   sc->ghost_rebuilds = rebuilds;
+  sc->ghost_margin   = margin;
   PetscCall(PetscSFDestroy(&sc->ghost_sf));
   sc->nlocal = sc->nowned;
   PetscCallMPI(MPI_Comm_size(sc->comm, &size));

@@ -198,6 +198,21 @@ static PetscErrorCode SaveVelocities(KergsScene sc, PetscReal **vold, PetscReal 
   PetscFunctionReturn(0);
 }
 
+/* The automatic alert distance for this step (KergsSceneAdaptAlert) from the fastest closing speed at its start: two
+   grains at the fastest grain's speed vmax, or that grain and the fastest wall. */
+static PetscErrorCode StepperAdaptAlert(KergsStepper st, PetscReal vmax)
+{
+  const KergsWall *walls;
+  PetscInt         nwalls;
+  PetscReal        vwall = 0.0;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  for (PetscInt w = 0; w < nwalls; w++) vwall = PetscMax(vwall, PetscSqrtReal(PetscSqr(walls[w].v[0]) + PetscSqr(walls[w].v[1])));
+  PetscCall(KergsSceneAdaptAlert(st->scene, PetscMax(2.0 * vmax, vmax + vwall)));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsStepperStep(KergsStepper st)
 {
   KergsScene      sc = st->scene;
@@ -206,10 +221,12 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   PetscReal      *vold, *wold, *wvold;
   PetscBool       due, keepH, needsH, needsFullW, stop;
   PetscInt        step;
+  PetscReal       vmax;
 
   PetscFunctionBeginUser;
   PetscCall(PetscTime(&st->step_start));
-  PetscCall(KergsStepperEnergy(st, &st->ek_start, NULL));
+  PetscCall(KergsStepperEnergy(st, &st->ek_start, &vmax));
+  PetscCall(StepperAdaptAlert(st, vmax));
   st->sent_start = petsc_send_len + petsc_isend_len;
   PetscCall(KergsSceneGetStep(sc, &step, NULL, NULL));
   /* initial partition before the first detection, then checks every -partition_check_every steps, with the

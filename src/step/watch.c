@@ -182,16 +182,19 @@ PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[],
   PetscFunctionReturn(0);
 }
 
-/* Once per run: two grains approaching at twice the fastest speed close more than the alert distance in a step, so a
-   contact may be met before detection sees it (the rules then act on a late, deep contact). A warning, not a failure. */
+/* Once per run, with a given -alert: two grains approaching at twice the fastest speed close more than the alert
+   distance in a step, so a contact may be met before detection sees it (the rules then act on a late, deep contact). A
+   warning, not a failure. The automatic alert follows the speed instead (KergsSceneAdaptAlert). */
 static PetscErrorCode WatchAlert(KergsStepper st, PetscInt step)
 {
   PetscReal dt, alert;
+  PetscBool automatic;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetTimeStep(st->scene, &dt, NULL));
   PetscCall(KergsSceneGetContactRule(st->scene, &alert, NULL));
-  if (st->warned_alert || !(2 * st->vmax_end * dt > alert)) PetscFunctionReturn(0);
+  PetscCall(KergsSceneGetAlertFloor(st->scene, &automatic, NULL));
+  if (automatic || st->warned_alert || !(2 * st->vmax_end * dt > alert)) PetscFunctionReturn(0);
   st->warned_alert = PETSC_TRUE;
   PetscCall(PetscPrintf(st->comm,
                         "kergs: warning: after step %" PetscInt_FMT

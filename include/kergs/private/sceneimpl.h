@@ -27,6 +27,7 @@ struct _p_KergsScene {
   PetscReal  ghost_skin;     /* -ghost_skin: the layer is rebuilt once some disk moved more than half of it */
   PetscReal *xref;           /* owned positions when the layer was built */
   PetscInt   ghost_rebuilds; /* layers built so far */
+  PetscReal  ghost_margin;   /* alert + skin of the last build: rebuilt once alert + 2 dmax exceeds it */
   /* walls (replicated) */
   PetscInt   nwalls;
   KergsWall *walls;
@@ -41,7 +42,9 @@ struct _p_KergsScene {
   PetscReal    dt, theta;
   PetscInt     nsteps;
   KergsGapRule gaprule;
-  PetscReal    alert; /* alert distance: potential contacts have gap < alert */
+  PetscReal    alert;       /* alert distance: potential contacts have gap < alert */
+  PetscBool    alert_auto;  /* -alert not given: the alert follows the speed (KergsSceneAdaptAlert) */
+  PetscReal    alert_floor; /* then its smallest value, 0.1 * mean radius */
   /* clock */
   PetscInt  step;
   PetscReal time;
