@@ -155,15 +155,21 @@ def test_restart_alert(k):
     common = ["-scene_name", "r100", "-gravity", "0,-9.81", "-friction", "0.3", "-dt", "1e-3", "-disks_source", "random", "-random_n",
               "500", "-random_box", "0,0,1,6", "-random_radius", "0.0005,0.05", "-random_seed", "2013", "-box", "0,0,1,7", "-box_open_top",
               "-quiet"]
-    k.run(2, *common, "-steps", 240, "-output", k.path("RA.h5"), log="RA.log")
+    k.run(2, *common, "-steps", 240, "-output", k.path("RA.h5"), "-checkpoint_every", 240, log="RA.log")
     p1 = k.run(2, *common, "-steps", 120, "-output", k.path("RB.h5"), "-checkpoint_every", 120, log="RB1.log")
-    p2 = k.run(2, "-restart", k.path("RB.checkpoint.h5"), "-steps", 240, log="RB2.log")
-    check(p1.returncode == 0 and p2.returncode == 0, "restart, automatic alert: 120 steps, then the restart to 240, run")
     with h5py.File(k.path("RB.checkpoint.h5"), "r") as f:
         alert, floor = float(f["state"].attrs["alert"]), float(f["state"].attrs["alert_floor"])
     check(alert > 1.2 * floor, f"restart, automatic alert: at step 120 the alert {alert:.3g} has grown past its floor {floor:.3g}")
+    p2 = k.run(2, "-restart", k.path("RB.checkpoint.h5"), "-steps", 240, log="RB2.log")
+    check(p1.returncode == 0 and p2.returncode == 0, "restart, automatic alert: 120 steps, then the restart to 240, run")
     rc, out = compare(k.path("RA.h5"), k.path("RB.h5"))
     check(rc == 0, "restart, automatic alert: 120 + 120 steps on 2 ranks give the 240-step run bit for bit " + out[:300])
+    # the ghost layer too (an extra rebuild changes no physics): the checkpoints of step 240 hold the same layer
+    with h5py.File(k.path("RA.checkpoint.h5"), "r") as a, h5py.File(k.path("RB.checkpoint.h5"), "r") as b:
+        same = all(a["disks"].attrs[key] == b["disks"].attrs[key] for key in ("ghost_rebuilds", "ghost_margin"))
+        same = same and all(np.array_equal(a["disks"][key][()], b["disks"][key][()]) for key in ("xref", "ghosts"))
+        layers = int(a["disks"].attrs["ghost_rebuilds"])
+    check(same and layers > 1, f"restart, automatic alert: the same ghost layer at step 240 ({layers} built, margin, xref, ghosts)")
 
 
 def test_signals(k):

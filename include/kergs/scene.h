@@ -117,7 +117,10 @@ PETSC_EXTERN PetscErrorCode KergsSceneGetGravity(KergsScene, PetscReal gravity[]
 PETSC_EXTERN PetscErrorCode KergsSceneGetMaterials(KergsScene, PetscInt *nmaterials, const PetscReal **mu);
 /* Alert distance (potential contacts have a gap below it) and the rule deciding which of them are active. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetContactRule(KergsScene, PetscReal *alert, KergsGapRule *rule);
+/* The automatic alert distance (-alert not given), before a step's detection: its floor (0.1 * mean radius) or twice
+   the distance two bodies approaching at closing_speed close in a step, whichever is larger. A given -alert is kept. */
 PETSC_EXTERN PetscErrorCode KergsSceneAdaptAlert(KergsScene, PetscReal closing_speed);
+/* Whether the alert distance is automatic, and its floor (0 when -alert is given). */
 PETSC_EXTERN PetscErrorCode KergsSceneGetAlertFloor(KergsScene, PetscBool *automatic, PetscReal *floor);
 /* What the scene models: frictional (some material pair has mu > 0: contacts carry a tangential component) and
    rotating (frictional disks not locked by -disks_lock_rotation: a rotational DOF per disk). */
@@ -140,7 +143,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneSetRestoring(KergsScene, PetscBool);
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreDisks(KergsScene, PetscInt ndisks, PetscInt nowned, const PetscInt id[],
                                                    const PetscInt material[], const PetscReal x[], const PetscReal rot[],
                                                    const PetscReal v[], const PetscReal omega[], const PetscReal radius[]);
-/* The clock and the alert distance (computed from the radii at the start of the run, kept as it was) */
+/* The clock, and the automatic alert distance and its floor as the run left them (with -alert given, this run's value
+   is kept: the checkpointed run's, or the command line's). */
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreState(KergsScene, PetscInt step, PetscReal time, PetscReal alert, PetscReal alert_floor);
 /* Wall w's endpoints, velocity and displacement since the start of the run (KERGS_DIM values each) */
 /* Wall w's loaded length (KergsWall.span): what its pressure multiplies. */
@@ -155,13 +159,15 @@ PETSC_EXTERN PetscErrorCode KergsSceneGetGhostState(KergsScene, PetscBool *layer
                                                     PetscInt *rebuilds);
 /* Collective, after KergsSceneRestoreDisks on the same ranks as the checkpointed run: the ghost layer of the given
    global indices (in that local order, fetched from their owners with their whole state), its xref, margin and count,
-   as if never interrupted. With layer false no layer is built (the next detection builds one). */
+   as if never interrupted (a negative margin, from a checkpoint that has none: the alert plus the skin, the rule of
+   its time). With layer false no layer is built (the next detection builds one). */
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreGhosts(KergsScene, PetscBool layer, PetscInt nghosts, const PetscInt gidx[],
                                                     const PetscReal xref[], PetscReal margin, PetscInt rebuilds);
 
 /* Distributed state (src/scene/ghosts.c). */
-/* Collective. Rebuild the ghost layer when asked, when there is none, or when some disk moved more than
-   ghost_skin / 2 since the last build; otherwise leave it (its state is current after KergsSceneRefreshGhosts).
+/* Collective. Rebuild the ghost layer when asked, when there is none, or when the alert distance plus twice the
+   largest displacement of a disk since the last build exceeds that build's alert + ghost skin (with a fixed alert: a
+   disk moved more than half the skin); otherwise leave it (its state is current after KergsSceneRefreshGhosts).
    After a build, every disk of another rank whose centre is within 2 max(R) + alert + ghost_skin of this rank's
    bounding box of owned centres is a ghost here, so every pair of disks within the alert distance has both disks
    on the owner rank of each. A rebuild renumbers the ghosts: local indices of ghosts (contacts' b) are valid

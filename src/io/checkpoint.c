@@ -408,7 +408,7 @@ static PetscErrorCode ReadHeader(PetscViewer v, MPI_Comm comm, const char path[]
   PetscCall(ReadInt(v, path, "/walls", "nwalls", &h->nwalls));
   PetscCall(ReadReal(v, path, "/state", "alert", &h->alert));
   {
-    PetscBool has; /* written before the alert followed the speed: it was fixed, and the ghost layer is built again */
+    PetscBool has; /* written before the alert followed the speed: it was fixed, and the layer's margin alert + skin */
     PetscCall(PetscViewerHDF5HasAttribute(v, "/state", "alert_floor", &has));
     if (has)
       PetscCall(ReadReal(v, path, "/state", "alert_floor", &h->alert_floor));
@@ -418,7 +418,7 @@ static PetscErrorCode ReadHeader(PetscViewer v, MPI_Comm comm, const char path[]
     if (has)
       PetscCall(ReadReal(v, path, "/disks", "ghost_margin", &h->ghost_margin));
     else
-      h->ghost_margin = 0.0;
+      h->ghost_margin = -1.0;
   }
   PetscCheck(h->ranks >= 1 && h->step >= 0 && h->ndisks >= 0 && h->ndisks <= KERGS_MAX_DISKS && h->nwalls >= 0, comm,
              PETSC_ERR_FILE_UNEXPECTED,

@@ -5,8 +5,9 @@
 
    Which disks are ghosts: every rank publishes the bounding box of its owned centres (one all-gather of a few
    reals per rank); a disk is sent as a ghost to every other rank whose box, widened by the reach
-   2 max(R) + alert + skin, holds its centre. For two disks a (rank p) and b (rank q) within the alert distance
-   of each other after both moved less than skin / 2, |x_a - x_b| < R_a + R_b + alert + skin at the build, so b
+   2 max(R) + margin, margin = alert + skin at the build, holds its centre. For two disks a (rank p) and b (rank q)
+   within the current alert distance of each other after both moved at most dmax, with alert + 2 dmax <= margin (the
+   rebuild rule below), |x_a - x_b| < R_a + R_b + alert + 2 dmax <= R_a + R_b + margin at the build, so b
    is a ghost on p and a a ghost on q: each rank sees every pair that involves one of its disks, and the layer is
    symmetric. A box test over-approximates that set: by a thin band for a compact partition, but by much more for
    METIS's irregular parts (10,500 ghosts instead of about 1,000 on biaxial 100k). So the receiving rank keeps only
@@ -402,6 +403,12 @@ PetscErrorCode KergsSceneRestoreGhosts(KergsScene sc, PetscBool layer, PetscInt 
   PetscFunctionBeginUser;
   sc->ghost_rebuilds = rebuilds;
   sc->ghost_margin   = margin;
+  if (margin < 0) { /* a checkpoint without it: the alert (fixed then) plus the skin */
+    PetscReal rmax = 0.0;
+    for (PetscInt i = 0; i < sc->nowned; i++) rmax = PetscMax(rmax, sc->radius[i]);
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &rmax, 1, MPIU_REAL, MPIU_MAX, sc->comm));
+    sc->ghost_margin = sc->alert + GhostSkin(sc, rmax);
+  }
   PetscCall(PetscSFDestroy(&sc->ghost_sf));
   sc->nlocal = sc->nowned;
   PetscCallMPI(MPI_Comm_size(sc->comm, &size));

@@ -360,7 +360,7 @@ PetscErrorCode KergsSceneRestoreDisks(KergsScene scene, PetscInt ndisks, PetscIn
 /* The automatic alert distance (-alert not given): 0.1 * mean radius, or, when larger, twice the distance that two bodies
    approaching at `closing_speed` close in a step (the caller's bound: twice the fastest grain's speed, or the fastest grain
    and wall). A fixed alert missed contacts on a pile of radius ratio 100 (docs/running.md): grains falling at 4 m/s with
-   dt 1e-3 close 8 mm in a step against an alert of 2.6 mm, and a contact met undetected sank 1.5 mm into a 0.6 mm
+   dt 1e-3 close 8 mm in a step against an alert of 2.6 mm, and a contact met undetected sank 0.85 mm into a 0.6 mm
    grain; a quasi-static packing keeps the floor, and its trajectory is unchanged. A given -alert is kept as it is. */
 PetscErrorCode KergsSceneAdaptAlert(KergsScene scene, PetscReal closing_speed)
 {
@@ -381,10 +381,12 @@ PetscErrorCode KergsSceneGetAlertFloor(KergsScene scene, PetscBool *automatic, P
 PetscErrorCode KergsSceneRestoreState(KergsScene scene, PetscInt step, PetscReal time, PetscReal alert, PetscReal alert_floor)
 {
   PetscFunctionBeginUser;
-  scene->step  = step;
-  scene->time  = time;
-  scene->alert = alert;
-  if (scene->alert_auto) scene->alert_floor = alert_floor; /* the disks' options were not read: no mean radius of their own */
+  scene->step = step;
+  scene->time = time;
+  if (scene->alert_auto) { /* the disks' options were not read: no mean radius of their own */
+    scene->alert       = alert;
+    scene->alert_floor = alert_floor;
+  } /* else the -alert of this run's options: the checkpointed run's, or the command line's */
   PetscFunctionReturn(0);
 }
 
@@ -431,7 +433,8 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
       "the fastest pair closes in a step, KergsSceneAdaptAlert)",
       NULL, scene->alert, &scene->alert, alert_set));
   PetscCall(PetscOptionsReal("-ghost_skin",
-                             "Skin of the ghost layer: ghosts are rebuilt once a disk moved half of it (negative: the alert distance)",
+                             "Skin of the ghost layer: ghosts are rebuilt once the alert distance plus twice a disk's displacement "
+                             "exceeds the build's alert plus skin (negative: the alert distance)",
                              "KergsSceneUpdateGhosts", scene->ghost_skin, &scene->ghost_skin, NULL));
   PetscFunctionReturn(0);
 }

@@ -182,9 +182,10 @@ PetscErrorCode KergsStepperExternalWork(KergsStepper st, const PetscReal vold[],
   PetscFunctionReturn(0);
 }
 
-/* Once per run, with a given -alert: two grains approaching at twice the fastest speed close more than the alert
-   distance in a step, so a contact may be met before detection sees it (the rules then act on a late, deep contact). A
-   warning, not a failure. The automatic alert follows the speed instead (KergsSceneAdaptAlert). */
+/* Once per run: two grains approaching at twice the fastest speed close more than the alert distance in a step, so a
+   contact may be met before detection sees it (the rules then act on a late, deep contact). A warning, not a failure.
+   The automatic alert follows the speed at each step's start (KergsSceneAdaptAlert): it is outrun only when a step
+   more than doubled the fastest speed (an impact). */
 static PetscErrorCode WatchAlert(KergsStepper st, PetscInt step)
 {
   PetscReal dt, alert;
@@ -194,14 +195,14 @@ static PetscErrorCode WatchAlert(KergsStepper st, PetscInt step)
   PetscCall(KergsSceneGetTimeStep(st->scene, &dt, NULL));
   PetscCall(KergsSceneGetContactRule(st->scene, &alert, NULL));
   PetscCall(KergsSceneGetAlertFloor(st->scene, &automatic, NULL));
-  if (automatic || st->warned_alert || !(2 * st->vmax_end * dt > alert)) PetscFunctionReturn(0);
+  if (st->warned_alert || !(2 * st->vmax_end * dt > alert)) PetscFunctionReturn(0);
   st->warned_alert = PETSC_TRUE;
-  PetscCall(PetscPrintf(st->comm,
-                        "kergs: warning: after step %" PetscInt_FMT
-                        " grains move up to %.3g a step (fastest %.3g m/s), and two of them may "
-                        "close by twice that, more than the alert distance %.3g: contacts may be met before they are detected (raise "
-                        "-alert or lower -dt)\n",
-                        step, (double)(st->vmax_end * dt), (double)st->vmax_end, (double)alert));
+  PetscCall(PetscPrintf(
+      st->comm,
+      "kergs: warning: after step %" PetscInt_FMT " grains move up to %.3g a step (fastest %.3g m/s), and two of them may "
+      "close by twice that, more than the alert distance %.3g: contacts may be met before they are detected (%s)\n",
+      step, (double)(st->vmax_end * dt), (double)st->vmax_end, (double)alert,
+      automatic ? "the automatic alert follows from the next step; lower -dt if impacts outrun it" : "raise -alert or lower -dt"));
   PetscFunctionReturn(0);
 }
 

@@ -24,7 +24,7 @@ struct _p_KergsScene {
   /* ghost layer (src/scene/ghosts.c) */
   PetscSF    ghost_sf;       /* roots: owned disks, leaves: ghosts (NULL: no valid ghost layer) */
   PetscInt  *ghost_owner;    /* per ghost: the rank that owns it */
-  PetscReal  ghost_skin;     /* -ghost_skin: the layer is rebuilt once some disk moved more than half of it */
+  PetscReal  ghost_skin;     /* -ghost_skin: the layer reaches alert + skin beyond the owned disks (ghost_margin) */
   PetscReal *xref;           /* owned positions when the layer was built */
   PetscInt   ghost_rebuilds; /* layers built so far */
   PetscReal  ghost_margin;   /* alert + skin of the last build: rebuilt once alert + 2 dmax exceeds it */

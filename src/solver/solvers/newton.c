@@ -24,9 +24,11 @@
    stopped after one that gains less than tenfold) cuts the natural residual a thousandfold, a smoothing Newton phase
    (SolveSmoothed, -solver_newton_smoothing) solves the smoothed function (KergsLawAlartCurnierSmoothed) for eps
    falling tenfold at a time, with a Levenberg-Marquardt term in J, eps raised a hundredfold at its first stall; the
-   proximal iterations finish from where it ends. On one rank J is stored in W's AMD order (PresortContacts, newton_linear.c). The type is
-   warm-started from the previous step's impulses like every type; optional NLGS sweeps first (-solver_newton_max_sweeps,
-   -solver_newton_switch_tol). Convergence is the natural residual of the original problem (-solver_tol, default 1e-10). */
+   proximal iterations finish from where it ends. A solve that stalls starts again from the same point with a smaller
+   rho (SolverSolve_Newton, -solver_newton_second_rho). On one rank J is stored in W's AMD order (PresortContacts,
+   newton_linear.c). The type is warm-started from the previous step's impulses like every type; optional NLGS sweeps
+   first (-solver_newton_max_sweeps, -solver_newton_switch_tol). Convergence is the natural residual of the original
+   problem (-solver_tol, default 1e-10). */
 #include "newton.h"
 
 static const char *const NewtonProxes[] = {"none", "identity", "kernel", "NewtonProx", "NEWTON_PROX_", NULL};
@@ -512,7 +514,7 @@ static PetscErrorCode Polish(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc,
    The first outer iteration is plain Newton (sigma_min), kept only if it lowered the natural residual; with
    `smoothing`, the smoothing phase follows it unless it gained a thousandfold. Ends at the tolerance, once *steps
    reaches `limit`, or (window > 0) after an outer iteration that ends `window` Newton steps after the natural residual
-   last gained tenfold; *res is the natural residual on entry and on exit. */
+   last gained tenfold, the smoothing phase included; *res_io is the natural residual on entry and on exit. */
 static PetscErrorCode Attempt(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd, PetscReal wmean,
                               PetscBool smoothing, PetscInt limit, PetscInt window, PetscInt *steps, PetscReal *res_io)
 {
@@ -574,7 +576,8 @@ static PetscErrorCode Attempt(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc
         PetscCall(VecCopy(r, nt->rplain));
         PetscCall(MoveTo(nt, nt->rc, r, u, vd));
         res = start_res;
-        PetscCall(SolveSmoothed(s, nt, n, nc, nglobal, r, u, vd, wmean, scale, limit, steps, &res));
+        PetscCall(SolveSmoothed(s, nt, n, nc, nglobal, r, u, vd, wmean, scale, window > 0 ? PetscMin(limit, mark_step + window) : limit,
+                                steps, &res));
         /* the proximal iterations go on from the best of the warm start, the plain attempt's end and the smoothing's */
         if (PetscMin(start_res, plain_res) < res) {
           PetscCall(MoveTo(nt, start_res <= plain_res ? nt->rc : nt->rplain, r, u, vd));
@@ -598,7 +601,8 @@ static PetscErrorCode Attempt(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc
 
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
    -solver_newton_switch_tol, then an Attempt. When it stalls (-solver_newton_second_window Newton steps without a
-   tenfold gain of the natural residual), a second Attempt starts again from the same point with the rest of
+   tenfold gain of the natural residual), a second Attempt starts again from the same point (the warm start, after
+   those sweeps) with the rest of
    -solver_max_it and rho times -solver_newton_second_rho, and the better end of the two is kept. The Alart-Curnier merit has minima that
    are not solutions, and which ones depends on rho: on the pile of radius ratio 100 of docs/running.md (mass ratio 1e4), six steps of 40 to
    110 contacts that newton left at natural residuals of 1e-4 to 0.1 after 1,000 Newton steps (one still at 8e-5 after 20,000) were each
@@ -650,6 +654,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
       if (first < res) {
         PetscCall(MoveTo(nt, nt->rbest, r, u, vd));
         res = first;
+        PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_FALSE, &nt->merit)); /* the statistic, at rho itself */
       }
     }
   }
@@ -741,8 +746,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                             "Smoothing Newton: stalls of a solve that raise eps a hundredfold instead of ending the phase", "",
                             nt->smooth_raises, &nt->smooth_raises, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_second_rho",
-                             "A solve that stalls (-solver_newton_second_window) starts again from the warm start with rho times "
-                             "this, and keeps the better end (0: no second attempt)",
+                             "A solve that stalls (-solver_newton_second_window) starts again from its start (after any NLGS "
+                             "sweeps) with rho times this, and keeps the better end (0: no second attempt)",
                              "", nt->second_rho, &nt->second_rho, NULL));
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_second_window",
                             "Newton steps without a tenfold gain of the natural residual after which the second attempt starts", "",
@@ -777,7 +782,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCheck(nt->second_window > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_second_window %" PetscInt_FMT " must be positive",
              nt->second_window);
   PetscCheck(nt->second_rho == 0 || (nt->second_rho > 0 && PetscIsNormalReal(nt->second_rho * nt->rho_factor)), s->comm,
-             PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_second_rho %g must be 0 (none) or positive", (double)nt->second_rho);
+             PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_second_rho %g must be 0 (none) or positive, with a normal product by -solver_newton_rho %g",
+             (double)nt->second_rho, (double)nt->rho_factor);
   PetscCheck(nt->shift >= 0 && !PetscIsInfOrNanReal(nt->shift), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_shift %g must be non-negative", (double)nt->shift);
   PetscCheck(nt->armijo > 0 && nt->armijo < 0.5, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_armijo %g must lie in (0, 0.5)",
