@@ -118,7 +118,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneGetMaterials(KergsScene, PetscInt *nmateri
 /* Alert distance (potential contacts have a gap below it) and the rule deciding which of them are active. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetContactRule(KergsScene, PetscReal *alert, KergsGapRule *rule);
 /* The automatic alert distance (-alert not given), before a step's detection: its floor (0.1 * mean radius) or twice
-   the distance two bodies approaching at closing_speed close in a step, whichever is larger. A given -alert is kept. */
+   the distance two bodies approaching at closing_speed close in a step, whichever is larger, at most twice the mean
+   radius. A given -alert is kept. */
 PETSC_EXTERN PetscErrorCode KergsSceneAdaptAlert(KergsScene, PetscReal closing_speed);
 /* Whether the alert distance is automatic, and its floor (0 when -alert is given). */
 PETSC_EXTERN PetscErrorCode KergsSceneGetAlertFloor(KergsScene, PetscBool *automatic, PetscReal *floor);

@@ -154,6 +154,18 @@ static PetscErrorCode SceneMeanRadius(KergsScene scene, PetscReal *mean)
   PetscFunctionReturn(0);
 }
 
+/* The automatic alert distance (-alert not given), at its floor 0.1 * mean radius until KergsSceneAdaptAlert. */
+static PetscErrorCode SceneSetAutomaticAlert(KergsScene scene)
+{
+  PetscReal mean;
+
+  PetscFunctionBeginUser;
+  PetscCall(SceneMeanRadius(scene, &mean));
+  scene->alert = scene->alert_floor = 0.1 * mean;
+  scene->alert_auto                 = PETSC_TRUE;
+  PetscFunctionReturn(0);
+}
+
 /* (Re)place the disks: n disks at x (KERGS_DIM * n) with radii r (n); material (n) and v (KERGS_DIM * n) may
    be NULL (material 0, at rest). Ids are the indices, orientations and angular velocities zero, mass and
    inertia from the materials' densities. Collective: recomputes the ownership range [dstart, dend). */
@@ -185,13 +197,7 @@ PetscErrorCode KergsSceneSetDisks(KergsScene scene, PetscInt n, const PetscReal 
     }
   }
   PetscCall(SceneComputeMasses(scene));
-  if ((scene->alert < 0.0 || scene->alert_auto) && n > 0) {
-    PetscReal mean;
-
-    PetscCall(SceneMeanRadius(scene, &mean));
-    scene->alert = scene->alert_floor = 0.1 * mean;
-    scene->alert_auto                 = PETSC_TRUE;
-  }
+  if ((scene->alert < 0.0 || scene->alert_auto) && n > 0) PetscCall(SceneSetAutomaticAlert(scene));
   PetscCall(SceneUpdateFrictional(scene));
   PetscFunctionReturn(0);
 }
@@ -507,15 +513,11 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
   alert = scene->alert;
   PetscCall(KergsSceneDisksSetFromOptions(scene));
   PetscCall(SceneComputeMasses(scene)); /* the densities may have changed since the disks were set */
-  scene->alert_auto = (PetscBool)!alert_set;
-  if (alert_set)
-    scene->alert = alert; /* the user's value, even a negative one (then rejected) */
-  else {
-    PetscReal mean;
-
-    PetscCall(SceneMeanRadius(scene, &mean));
-    scene->alert = scene->alert_floor = 0.1 * mean;
-  }
+  if (alert_set) {
+    scene->alert      = alert; /* the user's value, even a negative one (then rejected) */
+    scene->alert_auto = PETSC_FALSE;
+  } else
+    PetscCall(SceneSetAutomaticAlert(scene));
   PetscCall(SceneUpdateFrictional(scene));
   PetscCall(PetscOptionsHasHelp(NULL, &help));
   /* -help alone lists the options of an empty scene; a restored scene is checked once its state is in place */

@@ -602,11 +602,11 @@ static PetscErrorCode Attempt(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
    -solver_newton_switch_tol, then an Attempt. When it stalls (-solver_newton_second_window Newton steps without a
    tenfold gain of the natural residual), a second Attempt starts again from the same point (the warm start, after
-   those sweeps) with the rest of
-   -solver_max_it and rho times -solver_newton_second_rho, and the better end of the two is kept. The Alart-Curnier merit has minima that
-   are not solutions, and which ones depends on rho: on the pile of radius ratio 100 of docs/running.md (mass ratio 1e4), six steps of 40 to
-   110 contacts that newton left at natural residuals of 1e-4 to 0.1 after 1,000 Newton steps (one still at 8e-5 after 20,000) were each
-   solved in 25 to 113 Newton steps with rho / 10. -solver_max_it caps the Newton steps of both. */
+   those sweeps) with the rest of -solver_max_it and rho times -solver_newton_second_rho, and the better end of the
+   two is kept. The Alart-Curnier merit has minima that are not solutions, and which ones depends on rho: on the pile
+   of radius ratio 100 of docs/running.md (mass ratio 1e4), six steps of 40 to 110 contacts that newton left at
+   natural residuals of 1e-4 to 0.1 after 1,000 Newton steps (one still at 8e-5 after 20,000) were each solved in 25
+   to 113 Newton steps with rho / 10. -solver_max_it caps the Newton steps of both. */
 static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
                                          KergsSolveStats *stats)
 {
@@ -832,11 +832,9 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
           viewer, "  its first %" PetscInt_FMT " stall(s) of a solve raise eps a hundredfold instead of ending it\n", nt->smooth_raises));
   }
   if (nt->second_rho > 0)
-    PetscCall(PetscViewerASCIIPrintf(viewer,
-
-                                     "After %" PetscInt_FMT
-                                     " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
-                                     nt->second_window, (double)nt->second_rho));
+    PetscCall(PetscViewerASCIIPrintf(
+        viewer, "After %" PetscInt_FMT " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
+        nt->second_window, (double)nt->second_rho));
   if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
   PetscCall(KSPView(nt->ksp, viewer));
   PetscFunctionReturn(0);
