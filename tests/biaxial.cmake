@@ -15,3 +15,25 @@ add_test(NAME biaxial_inertial_warning
                  -options_file cases/biaxial_small.opts -wall_box_top_velocity 0,-2 -steps 0 -output_none
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(biaxial_inertial_warning PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
+
+# scripts/tile_sample.py refuses, before writing anything: fewer than two tiles, an input that is not HDF5, a sample
+# without the box it was compacted in (cases/deposit500.h5, a deposit under gravity), and its input as its output
+# (on a copy, so that a failure cannot touch the shipped sample). Its tiling is checked in biaxial_small (item 8).
+set(TILE_SAMPLE /usr/bin/python3 ${CMAKE_SOURCE_DIR}/scripts/tile_sample.py)
+foreach(case "one_tile|at least two tiles|cases/compact_small.h5;${CMAKE_CURRENT_BINARY_DIR}/tile_one.h5;--tiles;1,1"
+             "bad_tiles|--tiles '2,x': expected two positive integers|cases/compact_small.h5;${CMAKE_CURRENT_BINARY_DIR}/tile_bad.h5;--tiles;2,x"
+             "not_hdf5|cases/confine500.opts: not a readable HDF5 file|cases/confine500.opts;${CMAKE_CURRENT_BINARY_DIR}/tile_opts.h5;--tiles;2,2"
+             "no_box|cases/deposit500.h5: no /sample/box|cases/deposit500.h5;${CMAKE_CURRENT_BINARY_DIR}/tile_nobox.h5;--tiles;2,2")
+  string(REPLACE "|" ";" parts "${case}")
+  list(GET parts 0 name)
+  list(GET parts 1 regex)
+  list(SUBLIST parts 2 -1 args)
+  add_test(NAME tile_sample_${name} COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "${regex}" ${TILE_SAMPLE} ${args}
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(tile_sample_${name} PROPERTIES TIMEOUT 30 LABELS bad_input)
+endforeach()
+add_test(NAME tile_sample_onto_input
+         COMMAND sh -c "cp cases/compact_small.h5 \"$0/tile_self.h5\" && exec \"$1\" \"is the input; write the tiling elsewhere\" /usr/bin/python3 scripts/tile_sample.py \"$0/tile_self.h5\" \"$0/tile_self.h5\" --tiles 2,2"
+                 ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(tile_sample_onto_input PROPERTIES TIMEOUT 30 LABELS bad_input)

@@ -42,13 +42,27 @@ kergs_bad_input(bad_dt "dt" -options_file cases/confine5.opts -dt -1)
 # Every scene file of cases/ builds its scene and reads every option it sets (-steps 0): a case file that names an
 # unknown option or a missing sample fails here, not in a user's batch job.
 file(GLOB KERGS_CASE_FILES CONFIGURE_DEPENDS ${CMAKE_SOURCE_DIR}/cases/*.opts)
+# biaxial_1m reads a sample that scripts/tile_sample.py writes (results/compact_1m.h5, 10 x 10 tiles of
+# cases/compact_10k.h5): here 2 x 2 tiles, the same options on 40,000 disks.
+set(CASE_TILES ${CMAKE_CURRENT_BINARY_DIR}/case_biaxial_1m.tiles.h5)
+add_test(NAME case_biaxial_1m_sample COMMAND /usr/bin/python3 scripts/tile_sample.py cases/compact_10k.h5 ${CASE_TILES} --tiles 2,2
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(case_biaxial_1m_sample PROPERTIES FIXTURES_SETUP tiles_1m TIMEOUT 30)
 foreach(c ${KERGS_CASE_FILES})
   get_filename_component(case ${c} NAME_WE)
+  set(extra "")
+  if(case STREQUAL "biaxial_1m")
+    set(extra -sample_input ${CASE_TILES})
+  endif()
   add_test(NAME case_${case}
            COMMAND $<TARGET_FILE:kergs_exe> -options_file cases/${case}.opts -steps 0 -output_none -quiet
                    -sample_output ${CMAKE_CURRENT_BINARY_DIR}/case_${case}.sample.h5 # not over cases/deposit500.h5
+                   ${extra}
            WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
   set_tests_properties(case_${case} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60)
+  if(extra)
+    set_tests_properties(case_${case} PROPERTIES FIXTURES_REQUIRED tiles_1m)
+  endif()
 endforeach()
 
 # An option that takes a value, given without one, is an error naming it before any work (KergsOptionsCheckValues):
