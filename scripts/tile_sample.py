@@ -5,20 +5,31 @@
 
 IN is a kergs sample compacted in the four walls of -box (it records them in /sample/box). Tile (i, j) is IN
 reflected in x when i is odd and in y when j is odd, and shifted by i box widths and j box heights. Every grain that
-touched a wall of IN then touches its own mirror image across the seam, along the same normal and, by symmetry, with
-the same force: a frictionless compaction's sample at rest under p stays at rest under p, seams included, and OUT is
-ready for a test without a second compaction (docs/biaxial.md, "10^6 disks"). Velocities and spins are reflected
-with the grains. OUT records the box of the whole tiling, so a test reads it with -box_from_sample.
+touched a wall of IN then touches its own mirror image across the seam, at the same point and along the same normal.
+By symmetry the two carry equal normal forces and no tangential force, which is what a frictionless wall gave them:
+a frictionless compaction's sample at rest under p stays at rest under p, seams included, and OUT is ready for a test
+without a second compaction (docs/biaxial.md, "10^6 disks"). Velocities, spins and orientations are reflected with
+the grains. OUT records the box of the whole tiling, so a test reads it with -box_from_sample.
 
 What it is not: a random sample of NX x NY times IN's size. Its grain-scale disorder repeats with a period of two
-tiles, and the seams are mirror lines. Written atomically; IN is never written.
+tiles, and the seams are mirror lines. OUT is written atomically (a temporary file in its directory, renamed); IN is
+never written.
 """
 import argparse
+import math
 import os
 import sys
+import tempfile
 
 import h5py
 import numpy as np
+
+FORMAT = "kergs sample 1"
+PER_GRAIN = {"x": 2, "v": 2, "rot": 1, "omega": 1, "radius": 1, "material": 1, "id": 1}  # docs/results.md, "Sample file"
+# A compaction leaves its grains interpenetrating its walls by its solver's tolerance: at most 7.4e-7 m in the shipped
+# samples (cases/compact_5k.h5). Grains may cross the box, and must reach each of its sides, within 1e-3 of the
+# smallest radius (1e-5 m there): a seam the grains do not reach leaves them unsupported.
+WALL_SLACK = 1e-3
 
 
 def fail(message):
@@ -27,7 +38,7 @@ def fail(message):
 
 def parse_tiles(text):
     try:
-        nx, ny = (int(w) for w in text.split(","))
+        nx, ny = (int(word) for word in text.split(","))
     except ValueError:
         fail(f"--tiles {text!r}: expected two positive integers NX,NY")
     if nx < 1 or ny < 1 or nx * ny < 2:
@@ -36,94 +47,137 @@ def parse_tiles(text):
 
 
 def read_sample(path):
+    """The sample's datasets, its group's and root's attributes, and its box."""
+    if os.path.isdir(path):
+        fail(f"{path}: is a directory, not a sample file")
+    if not os.path.isfile(path):
+        fail(f"{path}: no such file")
     try:
-        f = h5py.File(path, "r")
+        handle = h5py.File(path, "r")
     except OSError as e:
         fail(f"{path}: not a readable HDF5 file ({e})")
-    with f:
-        if f.attrs.get("kergs_format") not in (b"kergs sample 1", "kergs sample 1") or "sample" not in f:
-            fail(f"{path}: not a kergs sample (root attribute kergs_format is not 'kergs sample 1')")
-        g = f["sample"]
-        if "box" not in g:
+    with handle:
+        kind = handle.attrs.get("kergs_format")
+        if isinstance(kind, bytes):
+            kind = kind.decode()
+        if kind != FORMAT or not isinstance(handle.get("sample"), h5py.Group):
+            fail(f"{path}: not a kergs sample (root attribute kergs_format is not '{FORMAT}')")
+        group = handle["sample"]
+        if not isinstance(group.get("box"), h5py.Dataset):
             fail(f"{path}: no /sample/box: tiling needs the box the sample was compacted in (-box)")
-        data = {k: g[k][()] for k in g if k != "box"}
-        attrs = dict(g.attrs)
-        box = np.asarray(g["box"][()], dtype=float).reshape(4)
-        root = dict(f.attrs)
-    if not np.all(np.isfinite(box)) or box[2] <= box[0] or box[3] <= box[1]:
-        fail(f"{path}: /sample/box {box.tolist()} is not a box (x0, y0, x1, y1 with x1 > x0, y1 > y0)")
-    x = data.get("x")
-    if x is None or x.ndim != 2 or x.shape[1] != 2:
-        fail(f"{path}: /sample/x is missing or not N x 2 (tiling is 2D)")
-    for k, v in data.items():
-        if len(v) != len(x):
-            fail(f"{path}: /sample/{k} has {len(v)} rows, /sample/x {len(x)}")
-        if v.dtype.kind == "f" and not np.all(np.isfinite(v)):
-            fail(f"{path}: /sample/{k} holds NaN or infinite values")
-    r = data["radius"]
-    slack = 0.01 * r.min()  # a compaction leaves grains interpenetrating its walls by its solver's tolerance (1e-7 m)
-    if np.any(x - r[:, None] < box[:2] - slack) or np.any(x + r[:, None] > box[2:] + slack):
-        fail(f"{path}: grains cross /sample/box by more than 1 % of the smallest radius: the box is not where the walls stood")
-    return data, attrs, root, box
+        missing = [name for name in PER_GRAIN if not isinstance(group.get(name), h5py.Dataset)]
+        if missing:
+            fail(f"{path}: /sample lacks the dataset(s) {', '.join(missing)}")
+        data = {name: group[name][()] for name in PER_GRAIN}
+        box = np.asarray(group["box"][()], dtype=float)
+        return data, dict(group.attrs), dict(handle.attrs), box
+
+
+def validate(path, data, attrs, box):
+    """Refuse what the tiling would turn into a broken sample: shapes, values, the box where the walls stood."""
+    n = len(data["radius"]) if data["radius"].ndim == 1 else 0
+    if n == 0:
+        fail(f"{path}: /sample/radius is empty or not a list of radii")
+    for name, width in PER_GRAIN.items():
+        shape = (n, width) if width > 1 else (n,)
+        if data[name].shape != shape:
+            fail(f"{path}: /sample/{name} has shape {data[name].shape}, expected {shape}")
+        if not np.all(np.isfinite(data[name])):
+            fail(f"{path}: /sample/{name} holds NaN or infinite values")
+    if "ndisks" not in attrs or int(np.asarray(attrs["ndisks"]).ravel()[0]) != n:
+        fail(f"{path}: the attribute ndisks does not match the {n} rows of /sample/radius")
+    if len(np.unique(data["id"])) != n:
+        fail(f"{path}: /sample/id holds repeated ids")
+    if box.size != 4 or not np.all(np.isfinite(box)):
+        fail(f"{path}: /sample/box {box.ravel().tolist()} is not x0, y0, x1, y1")
+    box = box.reshape(4)
+    if box[2] <= box[0] or box[3] <= box[1]:
+        fail(f"{path}: /sample/box {box.tolist()} is not a box (x1 > x0, y1 > y0)")
+    x, r = data["x"], data["radius"]
+    gaps = np.array([(x[:, 0] - r).min() - box[0], (x[:, 1] - r).min() - box[1], box[2] - (x[:, 0] + r).max(),
+                     box[3] - (x[:, 1] + r).max()])
+    slack = WALL_SLACK * r.min()
+    if np.any(np.abs(gaps) > slack):
+        side = ("left", "bottom", "right", "top")[int(np.argmax(np.abs(gaps)))]
+        fail(f"{path}: the grains stand {np.abs(gaps).max():.3g} m off the box's {side} side (more than {slack:.3g} m): "
+             "the box is not where the compaction's walls stopped, and the seams would not touch")
+    return box
+
+
+def mirror_tile(data, box, i, j, id_offset):
+    """Tile (i, j): the sample reflected in x when i is odd, in y when j is odd, then shifted."""
+    size = box[2:] - box[:2]
+    flip = np.array([-1.0 if i % 2 else 1.0, -1.0 if j % 2 else 1.0])
+    local = data["x"] - box[:2]
+    local = np.where(flip > 0, local, size - local)
+    handedness = flip[0] * flip[1]  # a reflection reverses the sense of rotation, two restore it
+    return {
+        "x": box[:2] + np.array([i, j]) * size + local,
+        "v": data["v"] * flip,
+        "omega": data["omega"] * handedness,
+        # an orientation angle theta becomes pi - theta in a reflection in x and -theta in one in y
+        "rot": data["rot"] * handedness + (math.pi if flip[0] < 0 else 0.0),
+        "radius": data["radius"],
+        "material": data["material"],
+        "id": data["id"] + id_offset,
+    }
 
 
 def tile(data, box, nx, ny):
-    """The mirrored tiling: arrays of nx * ny copies, tile by tile (i fastest)."""
-    n = len(data["radius"])
-    width, height = box[2] - box[0], box[3] - box[1]
-    out = {k: [] for k in data}
-    for j in range(ny):
-        for i in range(nx):
-            t = j * nx + i
-            flip = np.array([-1.0 if i % 2 else 1.0, -1.0 if j % 2 else 1.0])
-            u = data["x"] - box[:2]
-            u = np.where(flip > 0, u, np.array([width, height]) - u)
-            handed = flip[0] * flip[1]  # a reflection reverses the sense of rotation, two restore it
-            for k, v in data.items():
-                if k == "x":
-                    v = box[:2] + np.array([i * width, j * height]) + u
-                elif k == "v":
-                    v = v * flip
-                elif k in ("omega", "rot"):
-                    v = v * handed
-                elif k == "id":
-                    v = v + n * t
-                out[k].append(np.asarray(v, dtype=data[k].dtype))
-    return {k: np.concatenate(v) for k, v in out.items()}, np.array([box[0], box[1], box[0] + nx * width, box[1] + ny * height])
+    """The mirrored tiling, tile by tile (i fastest), and its box. Ids stay unique: each tile's are shifted past the
+    previous tiles'."""
+    stride = int(np.max(data["id"])) + 1
+    tiles = [mirror_tile(data, box, i, j, (j * nx + i) * stride) for j in range(ny) for i in range(nx)]
+    out = {name: np.concatenate([t[name] for t in tiles]).astype(data[name].dtype) for name in PER_GRAIN}
+    size = box[2:] - box[:2]
+    return out, np.concatenate([box[:2], box[:2] + np.array([nx, ny]) * size])
 
 
-def write_sample(path, root, attrs, data, box):
-    tmp = path + ".tmp"
-    with h5py.File(tmp, "w") as h:
-        for k, v in root.items():
-            h.attrs[k] = v
-        g = h.create_group("sample")
-        for k, v in attrs.items():
-            g.attrs[k] = v
-        g.attrs["ndisks"] = np.asarray(len(data["radius"]), dtype=np.asarray(attrs["ndisks"]).dtype)
-        for k, v in data.items():
-            g.create_dataset(k, data=v)
-        g.create_dataset("box", data=box.reshape(1, 4))
-    os.replace(tmp, path)
+def write_sample(path, root_attrs, attrs, data, box):
+    """Into a temporary file of OUT's directory, renamed onto OUT once complete; removed on failure."""
+    directory = os.path.dirname(os.path.abspath(path))
+    descriptor, temporary = tempfile.mkstemp(prefix=".tile_sample.", suffix=".h5", dir=directory)
+    os.close(descriptor)
+    try:
+        with h5py.File(temporary, "w") as handle:
+            for key, value in root_attrs.items():
+                handle.attrs[key] = value
+            group = handle.create_group("sample")
+            for key, value in attrs.items():
+                group.attrs[key] = value
+            group.attrs["ndisks"] = np.asarray(len(data["radius"]), dtype=np.asarray(attrs["ndisks"]).dtype)
+            for name, values in data.items():
+                group.create_dataset(name, data=values)
+            group.create_dataset("box", data=box.reshape(1, 4))
+        os.replace(temporary, path)
+    except BaseException:
+        os.unlink(temporary)
+        raise
+
+
+def check_output(input_path, output_path):
+    directory = os.path.dirname(os.path.abspath(output_path))
+    if not os.path.isdir(directory):
+        fail(f"{output_path}: its directory {directory} does not exist")
+    if os.path.exists(output_path) and not os.path.isfile(output_path):
+        fail(f"{output_path}: exists and is not a regular file")
+    if os.path.exists(output_path) and os.path.samefile(input_path, output_path):
+        fail(f"{output_path}: is the input; write the tiling elsewhere")
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("input")
-    ap.add_argument("output")
-    ap.add_argument("--tiles", required=True, help="NX,NY")
-    a = ap.parse_args()
-    nx, ny = parse_tiles(a.tiles)
-    if not os.path.isfile(a.input):
-        fail(f"{a.input}: no such file")
-    if os.path.exists(a.output) and not os.path.isfile(a.output):
-        fail(f"{a.output}: exists and is not a regular file")
-    if os.path.exists(a.output) and os.path.samefile(a.input, a.output):
-        fail(f"{a.output}: is the input; write the tiling elsewhere")
-    data, attrs, root, box = read_sample(a.input)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("input")
+    parser.add_argument("output")
+    parser.add_argument("--tiles", required=True, help="NX,NY")
+    args = parser.parse_args()
+    nx, ny = parse_tiles(args.tiles)
+    data, attrs, root_attrs, box = read_sample(args.input)
+    box = validate(args.input, data, attrs, box)
+    check_output(args.input, args.output)
     tiled, tiled_box = tile(data, box, nx, ny)
-    write_sample(a.output, root, attrs, tiled, tiled_box)
-    print(f"tile_sample.py: {a.output}: {len(tiled['radius'])} disks ({nx} x {ny} mirrored tiles of {len(data['radius'])}), box "
+    write_sample(args.output, root_attrs, attrs, tiled, tiled_box)
+    print(f"tile_sample.py: {args.output}: {len(tiled['radius'])} disks ({nx} x {ny} mirrored tiles of {len(data['radius'])}), box "
           + ",".join(f"{b:.9g}" for b in tiled_box))
 
 

@@ -1,7 +1,8 @@
 # The quick biaxial workflow: cases/compact_small.opts compacts 300 area-law disks under four pressure walls until at
 # rest, cases/biaxial_small.opts shears that sample at constant sigma3, each also at another friction (120 grains
 # compacted at mu = 0 and 0.5; the shear at mu = 0), two 1-rank runs at a time; tests/check_biaxial.py checks the
-# physics: packing, Rothenburg-Bathurst, contacts' stress against the walls', frictionless residual strength.
+# physics: packing, Rothenburg-Bathurst, contacts' stress against the walls', frictionless residual strength, and that
+# the sample mirrored into 2 x 3 tiles by scripts/tile_sample.py stays at rest on 2 ranks.
 kergs_python_check(biaxial_small check_biaxial.py PROCESSORS 2 TIMEOUT 400 LABELS step)
 
 # Bad input for the biaxial test. A driven wall that shears the sample at an inertial number above 0.1 gets a warning
@@ -17,8 +18,9 @@ add_test(NAME biaxial_inertial_warning
 set_tests_properties(biaxial_inertial_warning PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
 
 # scripts/tile_sample.py refuses, before writing anything: fewer than two tiles, an input that is not HDF5, a sample
-# without the box it was compacted in (cases/deposit500.h5, a deposit under gravity), and its input as its output
-# (on a copy, so that a failure cannot touch the shipped sample). Its tiling is checked in biaxial_small (item 8).
+# without the box it was compacted in (cases/deposit500.h5, a deposit under gravity), a box its grains do not reach
+# (seams that would not touch), and its input as its output (on a copy, left unchanged: cmp). Its tiling is checked
+# in biaxial_small (item 8).
 set(TILE_SAMPLE /usr/bin/python3 ${CMAKE_SOURCE_DIR}/scripts/tile_sample.py)
 foreach(case "one_tile|at least two tiles|cases/compact_small.h5;${CMAKE_CURRENT_BINARY_DIR}/tile_one.h5;--tiles;1,1"
              "bad_tiles|--tiles '2,x': expected two positive integers|cases/compact_small.h5;${CMAKE_CURRENT_BINARY_DIR}/tile_bad.h5;--tiles;2,x"
@@ -33,7 +35,12 @@ foreach(case "one_tile|at least two tiles|cases/compact_small.h5;${CMAKE_CURRENT
   set_tests_properties(tile_sample_${name} PROPERTIES TIMEOUT 30 LABELS bad_input)
 endforeach()
 add_test(NAME tile_sample_onto_input
-         COMMAND sh -c "cp cases/compact_small.h5 \"$0/tile_self.h5\" && exec \"$1\" \"is the input; write the tiling elsewhere\" /usr/bin/python3 scripts/tile_sample.py \"$0/tile_self.h5\" \"$0/tile_self.h5\" --tiles 2,2"
+         COMMAND sh -c "cp cases/compact_small.h5 \"$0/tile_self.h5\" && \"$1\" \"is the input; write the tiling elsewhere\" /usr/bin/python3 scripts/tile_sample.py \"$0/tile_self.h5\" \"$0/tile_self.h5\" --tiles 2,2 && cmp cases/compact_small.h5 \"$0/tile_self.h5\""
                  ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(tile_sample_onto_input PROPERTIES TIMEOUT 30 LABELS bad_input)
+add_test(NAME tile_sample_box_off
+         COMMAND sh -c "cp cases/compact_small.h5 \"$0/tile_off.h5\" && /usr/bin/python3 -c \"import h5py; b = h5py.File('$0/tile_off.h5', 'r+')['sample/box']; v = b[()]; v[0, 2] += 0.05; b[...] = v\" && exec \"$1\" \"stand 0.05 m off the box's right side\" /usr/bin/python3 scripts/tile_sample.py \"$0/tile_off.h5\" \"$0/tile_off_out.h5\" --tiles 2,2"
+                 ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(tile_sample_box_off PROPERTIES TIMEOUT 30 LABELS bad_input)

@@ -33,12 +33,15 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    step (measured 0.09 % at step 1, 1e-6 after), the kinetic energy per grain stays below the large compactions' rest
    rule 1e-8 (measured 7.9e-12, the tile's own), the solid fraction is the tile's to 1e-8 (measured 1.2e-9), and the
    tiling's box is the tile's 2 x 3 times. Tiles translated without the mirror leave the grains along the seams
-   unsupported (measured: sxx 63 % below p, the energy per grain rising to 3.8e-7 in 10 steps).
+   unsupported (measured: sxx 63 % below p, the energy per grain rising to 3.8e-7 in 10 steps). And tiles (1, 0) and
+   (1, 1) of a copy given spins and orientations are that copy reflected in x, and in x and y (a spin left unreversed
+   fails it).
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
 import concurrent.futures
 import os
+import shutil
 import subprocess
 import sys
 
@@ -181,14 +184,50 @@ def frictionless(k, out, p, q_frictional):
           "mu = 0: residual strength q/p %.4f in (%g, %g), below half the frictional %.4f" % (q, *Q_FRICTIONLESS, q_frictional))
 
 
+def tile_sample(source, target):
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "tile_sample.py"), source, target, "--tiles", "%d,%d" % TILES],
+                       capture_output=True, text=True)
+    check(p.returncode == 0,
+          "tile_sample.py tiles %s %d x %d (exit %d) %s" % (os.path.basename(source), *TILES, p.returncode, p.stderr[-300:]))
+    return p.returncode == 0
+
+
+def mirrored(k, sample):
+    """Tiles (1, 0) and (1, 1) of a tiling are the tile reflected in x, and in x and y: positions, velocities, spins
+    (reversed by one reflection) and orientations (theta -> pi - theta, then -theta). The frictionless compaction leaves
+    no spin, so the tile is a copy of the sample given spins and orientations."""
+    spun, tiling = k.path("spun.h5"), k.path("spun_tiled.h5")
+    shutil.copyfile(sample, spun)
+    with h5py.File(spun, "r+") as f:
+        n = len(f["sample/radius"])
+        f["sample/omega"][...] = np.linspace(-1.0, 2.0, n)
+        f["sample/rot"][...] = np.linspace(-3.0, 3.0, n)
+    if not tile_sample(spun, tiling):
+        return
+    with h5py.File(spun, "r") as f, h5py.File(tiling, "r") as g:
+        x, v, omega, rot = (f["sample"][name][()] for name in ("x", "v", "omega", "rot"))
+        box = f["sample/box"][()].ravel()
+        size = box[2:] - box[:2]
+        for index, flip_y in ((1, False), (TILES[0] + 1, True)):
+            part = slice(index * n, (index + 1) * n)
+            ex = x.copy()
+            ex[:, 0] = box[0] + 2 * size[0] - (x[:, 0] - box[0])
+            if flip_y:
+                ex[:, 1] = box[1] + 2 * size[1] - (x[:, 1] - box[1])
+            want = {"x": ex, "v": v * np.array([-1.0, -1.0 if flip_y else 1.0]), "omega": omega if flip_y else -omega,
+                    "rot": rot + np.pi if flip_y else np.pi - rot}
+            ok = all(np.allclose(g["sample"][name][part], value, rtol=0, atol=1e-12) for name, value in want.items())
+            check(ok and np.abs(v).max() > 0,
+                  "tile %d is the tile reflected in x%s: x, v, omega, rot" % (index, " and y" if flip_y else ""))
+
+
 def tiled(k, sample):
     """The compaction's sample mirrored into TILES, at rest under p from its first step (a sample with no box, a bad
     --tiles and an input as output are refused: tests/biaxial.cmake)."""
     tiled_sample, out = k.path("tiled.h5"), k.path("tiled_run.h5")
-    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "tile_sample.py"), sample, tiled_sample, "--tiles", "%d,%d" % TILES],
-                       capture_output=True, text=True)
-    if not check(p.returncode == 0, "tile_sample.py tiles the sample %d x %d (exit %d) %s" % (*TILES, p.returncode, p.stderr[-300:])):
+    if not tile_sample(sample, tiled_sample):
         return
+    mirrored(k, sample)
     with h5py.File(sample, "r") as f, h5py.File(tiled_sample, "r") as g:
         n, box, tbox = len(f["sample/radius"]), f["sample/box"][()].ravel(), g["sample/box"][()].ravel()
         check(len(g["sample/radius"]) == n * TILES[0] * TILES[1], "the tiling has %d grains" % len(g["sample/radius"]))
