@@ -138,6 +138,9 @@ def write_sample(path, root_attrs, attrs, data, box):
     directory = os.path.dirname(os.path.abspath(path))
     descriptor, temporary = tempfile.mkstemp(prefix=".tile_sample.", suffix=".h5", dir=directory)
     os.close(descriptor)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(temporary, 0o666 & ~umask)  # mkstemp's 0600 would make OUT private, unlike every other file kergs writes
     try:
         with h5py.File(temporary, "w") as handle:
             for key, value in root_attrs.items():
