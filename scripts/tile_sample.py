@@ -11,6 +11,10 @@ a frictionless compaction's sample at rest under p stays at rest under p, seams 
 without a second compaction (docs/biaxial.md, "10^6 disks"). Velocities, spins and orientations are reflected with
 the grains. OUT records the box of the whole tiling, so a test reads it with -box_from_sample.
 
+The contact forces IN records (/sample/contacts, the warm start of the test's first step) are mirrored with their
+tiles: a grain's force on a wall becomes, across a seam, its force on its image, and stays a wall's on the tiling's
+outer sides. The test then starts from the equilibrated force network, not from zero.
+
 What it is not: a random sample of NX x NY times IN's size. Its grain-scale disorder repeats with a period of two
 tiles, and the seams are mirror lines. OUT is written atomically (a temporary file in its directory, renamed); IN is
 never written.
@@ -26,6 +30,10 @@ import numpy as np
 
 FORMAT = "kergs sample 1"
 PER_GRAIN = {"x": 2, "v": 2, "rot": 1, "omega": 1, "radius": 1, "material": 1, "id": 1}  # docs/results.md, "Sample file"
+PER_CONTACT = {"a_id": 1, "kind": 1, "b_id": 1, "force": 2}
+BOX_SIDES = ("left", "bottom", "right", "top")
+MIRROR_X = {"left": "right", "right": "left"}
+MIRROR_Y = {"bottom": "top", "top": "bottom"}
 # A compaction leaves its grains interpenetrating its walls by its solver's tolerance: at most 7.4e-7 m in the shipped
 # samples (cases/compact_5k.h5). Grains may cross the box, and must reach each of its sides, within 1e-3 of the
 # smallest radius (1e-5 m there): a seam the grains do not reach leaves them unsupported.
@@ -70,7 +78,47 @@ def read_sample(path):
             fail(f"{path}: /sample lacks the dataset(s) {', '.join(missing)}")
         data = {name: group[name][()] for name in PER_GRAIN}
         box = np.asarray(group["box"][()], dtype=float)
-        return data, dict(group.attrs), dict(handle.attrs), box
+        return data, dict(group.attrs), dict(handle.attrs), box, read_contacts(path, group)
+
+
+def read_contacts(path, group):
+    """/sample/contacts, or None when the sample records no contact forces."""
+    contacts = group.get("contacts")
+    if contacts is None:
+        return None
+    if not isinstance(contacts, h5py.Group) or "walls" not in contacts.attrs:
+        fail(f"{path}: /sample/contacts is not a group with the attribute walls")
+    missing = [name for name in PER_CONTACT if not isinstance(contacts.get(name), h5py.Dataset)]
+    if missing:
+        fail(f"{path}: /sample/contacts lacks the dataset(s) {', '.join(missing)}")
+    walls = contacts.attrs["walls"]
+    walls = (walls.decode() if isinstance(walls, bytes) else str(walls)).split(",")
+    return {"walls": walls, **{name: contacts[name][()] for name in PER_CONTACT}}
+
+
+def validate_contacts(path, contacts, ids):
+    """Every contact of a grain of the sample with a grain of larger id or a box wall, with a finite force."""
+    m = len(contacts["a_id"])
+    for name, width in PER_CONTACT.items():
+        shape = (m, width) if width > 1 else (m,)
+        if contacts[name].shape != shape:
+            fail(f"{path}: /sample/contacts/{name} has shape {contacts[name].shape}, expected {shape}")
+        if not np.all(np.isfinite(contacts[name])):
+            fail(f"{path}: /sample/contacts/{name} holds NaN or infinite values")
+    sides = []
+    for name in contacts["walls"]:
+        if not name.startswith("box_") or name[4:] not in BOX_SIDES:
+            fail(f"{path}: its contacts name the wall {name!r}, which is not one of the box's: only box walls can be mirrored")
+        sides.append(name[4:])
+    kind, a, b = contacts["kind"], contacts["a_id"], contacts["b_id"]
+    if not np.all((kind == 0) | (kind == 1)):
+        fail(f"{path}: /sample/contacts/kind holds values other than 0 (grain) and 1 (wall)")
+    grain = kind == 0
+    if not (np.all(np.isin(a, ids)) and np.all(np.isin(b[grain], ids)) and np.all(b[grain] > a[grain])):
+        fail(f"{path}: /sample/contacts names grains the sample does not hold, or a pair not by its smaller id first")
+    if not np.all((b[~grain] >= 0) & (b[~grain] < len(sides)) & (b[~grain] == np.round(b[~grain]))):
+        fail(f"{path}: /sample/contacts/b_id names walls outside its attribute walls")
+    return sides
 
 
 def validate(path, data, attrs, box):
@@ -126,14 +174,52 @@ def mirror_tile(data, box, i, j, id_offset):
 def tile(data, box, nx, ny):
     """The mirrored tiling, tile by tile (i fastest), and its box. Ids stay unique: each tile's are shifted past the
     previous tiles'."""
-    stride = int(np.max(data["id"])) + 1
+    stride = id_stride(data)
     tiles = [mirror_tile(data, box, i, j, (j * nx + i) * stride) for j in range(ny) for i in range(nx)]
     out = {name: np.concatenate([t[name] for t in tiles]).astype(data[name].dtype) for name in PER_GRAIN}
     size = box[2:] - box[:2]
     return out, np.concatenate([box[:2], box[:2] + np.array([nx, ny]) * size])
 
 
-def write_sample(path, root_attrs, attrs, data, box):
+def id_stride(data):
+    return int(np.max(data["id"])) + 1
+
+
+def mirror_contacts(contacts, sides, stride, i, j, nx, ny):
+    """Tile (i, j)'s contacts. In the contact frame (n from b to a, t = (-n_y, n_x)) a reflection keeps the normal force
+    and reverses the tangential one. A wall contact on a side of the tiling stays one (the wall of that side); on a seam
+    it becomes the contact of the grain with its image in the next tile, which carries the wall's normal force and,
+    by the mirror symmetry, no tangential force. The seam's contact is written once, by the tile left of or below it."""
+    offset = (j * nx + i) * stride
+    handedness = (-1.0 if i % 2 else 1.0) * (-1.0 if j % 2 else 1.0)
+    wall_index = {side: k for k, side in enumerate(sides)}
+    border = {"left": i == 0, "right": i == nx - 1, "bottom": j == 0, "top": j == ny - 1}
+    neighbour = {"right": stride, "top": nx * stride}  # id offset of the tile across that seam
+    rows = [(a + offset, 0, b + offset, fn, handedness * ft)
+            for a, kind, b, (fn, ft) in zip(contacts["a_id"], contacts["kind"], contacts["b_id"], contacts["force"]) if kind == 0]
+    for a, kind, b, (fn, ft) in zip(contacts["a_id"], contacts["kind"], contacts["b_id"], contacts["force"]):
+        if kind == 0:
+            continue
+        side = sides[int(b)]
+        side = MIRROR_X.get(side, side) if i % 2 else side
+        side = MIRROR_Y.get(side, side) if j % 2 else side
+        if border[side]:
+            rows.append((a + offset, 1, wall_index[side], fn, handedness * ft))
+        elif side in neighbour:
+            rows.append((a + offset, 0, a + offset + neighbour[side], fn, 0.0))
+    table = np.array(rows, dtype=float).reshape(-1, 5)
+    return {"a_id": table[:, 0], "kind": table[:, 1], "b_id": table[:, 2], "force": table[:, 3:5]}
+
+
+def tile_contacts(contacts, sides, data, nx, ny):
+    stride = id_stride(data)
+    tiles = [mirror_contacts(contacts, sides, stride, i, j, nx, ny) for j in range(ny) for i in range(nx)]
+    out = {name: np.concatenate([t[name] for t in tiles]).astype(float) for name in PER_CONTACT}
+    out["walls"] = contacts["walls"]
+    return out
+
+
+def write_sample(path, root_attrs, attrs, data, box, contacts):
     """Into a temporary file of OUT's directory, renamed onto OUT once complete; removed on failure."""
     directory = os.path.dirname(os.path.abspath(path))
     descriptor, temporary = tempfile.mkstemp(prefix=".tile_sample.", suffix=".h5", dir=directory)
@@ -152,6 +238,12 @@ def write_sample(path, root_attrs, attrs, data, box):
             for name, values in data.items():
                 group.create_dataset(name, data=values)
             group.create_dataset("box", data=box.reshape(1, 4))
+            if contacts is not None:
+                forces = group.create_group("contacts")
+                forces.attrs["ncontacts"] = np.asarray(len(contacts["a_id"]), dtype=np.asarray(attrs["ndisks"]).dtype)
+                forces.attrs["walls"] = np.bytes_(",".join(contacts["walls"]))  # fixed length, as PETSc's viewer reads it
+                for name in PER_CONTACT:
+                    forces.create_dataset(name, data=contacts[name])
         os.replace(temporary, path)
     except BaseException:
         os.unlink(temporary)
@@ -175,12 +267,15 @@ def main():
     parser.add_argument("--tiles", required=True, help="NX,NY")
     args = parser.parse_args()
     nx, ny = parse_tiles(args.tiles)
-    data, attrs, root_attrs, box = read_sample(args.input)
+    data, attrs, root_attrs, box, contacts = read_sample(args.input)
     box = validate(args.input, data, attrs, box)
+    sides = validate_contacts(args.input, contacts, data["id"]) if contacts is not None else None
     check_output(args.input, args.output)
     tiled, tiled_box = tile(data, box, nx, ny)
-    write_sample(args.output, root_attrs, attrs, tiled, tiled_box)
-    print(f"tile_sample.py: {args.output}: {len(tiled['radius'])} disks ({nx} x {ny} mirrored tiles of {len(data['radius'])}), box "
+    tiled_contacts = tile_contacts(contacts, sides, data, nx, ny) if contacts is not None else None
+    write_sample(args.output, root_attrs, attrs, tiled, tiled_box, tiled_contacts)
+    forces = f", {len(tiled_contacts['a_id'])} contact forces" if tiled_contacts is not None else ", no contact forces"
+    print(f"tile_sample.py: {args.output}: {len(tiled['radius'])} disks ({nx} x {ny} mirrored tiles of {len(data['radius'])}){forces}, box "
           + ",".join(f"{b:.9g}" for b in tiled_box))
 
 

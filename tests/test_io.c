@@ -509,7 +509,7 @@ static PetscErrorCode WriteSampleWithId(KergsScene scene, const char path[], Pet
       saved        = scene->id[i];
       scene->id[i] = id;
     }
-  PetscCall(KergsSampleWrite(scene, path));
+  PetscCall(KergsSampleWrite(scene, NULL, path));
   for (PetscInt i = 0; i < scene->nowned; i++)
     if (scene->dstart + i == g) scene->id[i] = saved;
   PetscFunctionReturn(0);
@@ -578,7 +578,7 @@ static PetscErrorCode TestSample(KergsScene scene, const char dir[])
   PetscCall(PetscPrintf(comm, "sample file\n"));
   PetscCall(PetscSNPrintf(path, sizeof(path), "%s/sample.h5", dir));
   scene->time = 2.0 / 3.0;
-  PetscCall(KergsSampleWrite(scene, path));
+  PetscCall(KergsSampleWrite(scene, NULL, path));
   PetscCall(PetscSNPrintf(bad, sizeof(bad), "%s.tmp", path));
   PetscCall(FileExists(comm, bad, &exists));
   PetscCall(CheckAll(comm, (PetscBool)!exists, "sample: written atomically (no .tmp left)", exists, 0));

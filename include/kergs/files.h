@@ -67,5 +67,12 @@ PETSC_EXTERN void KergsFileAvoidLongPathAbort(void);
 PETSC_EXTERN PetscErrorCode KergsViewBlocks(PetscViewer, MPI_Comm, const char name[], PetscInt nlocal, PetscInt bs,
                                             const PetscReal *values);
 PETSC_EXTERN PetscErrorCode KergsViewIntegers(PetscViewer, MPI_Comm, const char name[], PetscInt nlocal, const PetscInt *values);
+/* Their readers. Dataset `name` of the viewer's current group (`group` and the file's `path` name it in errors), which
+   must hold nglobal blocks of bs values: *nlocal of them on this rank (the ranks' parts in rank order; PETSC_DECIDE: an
+   even split, *nlocal set), or all of them on every rank, into a new array (PetscFree). Collective. */
+PETSC_EXTERN PetscErrorCode KergsLoadBlocks(PetscViewer, MPI_Comm, const char path[], const char group[], const char name[], PetscInt nglobal,
+                                            PetscInt bs, PetscInt *nlocal, PetscReal **local);
+PETSC_EXTERN PetscErrorCode KergsLoadAllBlocks(PetscViewer, MPI_Comm, const char path[], const char group[], const char name[],
+                                               PetscInt nglobal, PetscInt bs, PetscReal **all);
 
 #endif

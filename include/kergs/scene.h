@@ -100,6 +100,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneReserve(KergsScene, PetscInt n);
 PETSC_EXTERN PetscErrorCode KergsSampleRead(KergsScene, const char path[]);
 /* The box x0,y0,x1,y1 a sample file records (its run's four box walls where they stood), for -box_from_sample. */
 PETSC_EXTERN PetscErrorCode KergsSampleReadBox(MPI_Comm, const char path[], PetscReal box[4]);
+/* The sample file the disks were read from by KergsSampleRead; an empty string when they were not. */
+PETSC_EXTERN PetscErrorCode KergsSceneGetSamplePath(KergsScene, const char **path);
 
 /* Accessors. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetDisks(KergsScene, KergsDisks *);

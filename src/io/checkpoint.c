@@ -300,62 +300,6 @@ static PetscErrorCode CheckFile(MPI_Comm comm, const char path[])
   PetscFunctionReturn(0);
 }
 
-/* Dataset `name` of the current group, nlocal blocks of bs values on this rank (the ranks' parts in rank order; nlocal
-   PETSC_DECIDE: an even split), into a new array (*local, PetscFree; *nlocal set). The whole dataset must hold nglobal
-   blocks. */
-static PetscErrorCode LoadLocal(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal,
-                                PetscInt bs, PetscInt *nlocal, PetscReal **local)
-{
-  Vec                vec;
-  PetscInt           fbs, fN, n;
-  const PetscScalar *a;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscViewerHDF5ReadSizes(v, name, &fbs, &fN));
-  PetscCheck(fN == nglobal * bs, comm, PETSC_ERR_FILE_UNEXPECTED,
-             "Checkpoint file %s: dataset %s/%s holds %" PetscInt_FMT " values, expected %" PetscInt_FMT " x %" PetscInt_FMT, path, group,
-             name, fN, nglobal, bs);
-  n = *nlocal;
-  if (n == PETSC_DECIDE) PetscCall(PetscSplitOwnership(comm, &n, &nglobal));
-  *nlocal = n;
-  PetscCall(PetscMalloc1(n * bs + 1, local));
-  if (nglobal == 0) PetscFunctionReturn(0); /* an empty dataset: nothing to load */
-  PetscCall(VecCreate(comm, &vec));
-  PetscCall(VecSetSizes(vec, n * bs, nglobal * bs));
-  PetscCall(VecSetBlockSize(vec, bs));
-  PetscCall(VecSetType(vec, VECMPI));
-  PetscCall(PetscObjectSetName((PetscObject)vec, name));
-  PetscCall(VecLoad(vec, v));
-  PetscCall(VecGetArrayRead(vec, &a));
-  for (PetscInt i = 0; i < n * bs; i++) (*local)[i] = PetscRealPart(a[i]);
-  PetscCall(VecRestoreArrayRead(vec, &a));
-  PetscCall(VecDestroy(&vec));
-  PetscFunctionReturn(0);
-}
-
-/* The whole dataset on every rank. */
-static PetscErrorCode LoadAll(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal,
-                              PetscInt bs, PetscReal **all)
-{
-  PetscInt    n = PETSC_DECIDE, *counts;
-  PetscReal  *mine;
-  PetscMPIInt size, *rc, *displs, nm;
-
-  PetscFunctionBeginUser;
-  PetscCall(LoadLocal(v, comm, path, group, name, nglobal, bs, &n, &mine));
-  PetscCallMPI(MPI_Comm_size(comm, &size));
-  PetscCall(PetscMalloc3(size, &counts, size, &rc, size, &displs));
-  nm = (PetscMPIInt)(n * bs);
-  PetscCallMPI(MPI_Allgather(&nm, 1, MPI_INT, rc, 1, MPI_INT, comm));
-  displs[0] = 0;
-  for (PetscMPIInt q = 1; q < size; q++) displs[q] = displs[q - 1] + rc[q - 1];
-  PetscCall(PetscMalloc1(nglobal * bs + 1, all));
-  PetscCallMPI(MPI_Allgatherv(mine, nm, MPIU_REAL, *all, rc, displs, MPIU_REAL, comm));
-  PetscCall(PetscFree(mine));
-  PetscCall(PetscFree3(counts, rc, displs));
-  PetscFunctionReturn(0);
-}
-
 /* A root or group attribute the checkpoint must hold, of the given type; its absence names the file and attribute. */
 static PetscErrorCode ReadAttribute(PetscViewer v, const char path[], const char group[], const char name[], PetscDataType type,
                                     void *value)
@@ -426,7 +370,7 @@ static PetscErrorCode ReadHeader(PetscViewer v, MPI_Comm comm, const char path[]
              " are not those of a run",
              path, h->ranks, h->step, h->ndisks, h->nwalls);
   PetscCall(PetscViewerHDF5PushGroup(v, "/ranks"));
-  for (int k = 0; k < RANK_FIELDS; k++) PetscCall(LoadAll(v, comm, path, "/ranks", RankFields[k], h->ranks, 1, &h->rankinfo[k]));
+  for (int k = 0; k < RANK_FIELDS; k++) PetscCall(KergsLoadAllBlocks(v, comm, path, "/ranks", RankFields[k], h->ranks, 1, &h->rankinfo[k]));
   PetscCall(PetscViewerHDF5PopGroup(v));
   h->ncontacts = 0;
   for (PetscInt q = 0; q < h->ranks; q++) h->ncontacts += (PetscInt)h->rankinfo[RANK_NCONTACTS][q];
@@ -446,15 +390,15 @@ static PetscErrorCode RestoreDisks(PetscViewer v, MPI_Comm comm, const char path
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   n = same ? (PetscInt)h->rankinfo[RANK_NOWNED][rank] : PETSC_DECIDE;
   PetscCall(PetscViewerHDF5PushGroup(v, "/disks"));
-  PetscCall(LoadLocal(v, comm, path, "/disks", "id", h->ndisks, 1, &n, &id));
+  PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "id", h->ndisks, 1, &n, &id));
   n2 = n;
-  PetscCall(LoadLocal(v, comm, path, "/disks", "material", h->ndisks, 1, &n2, &mat));
-  PetscCall(LoadLocal(v, comm, path, "/disks", "x", h->ndisks, KERGS_DIM, &n2, &x));
-  PetscCall(LoadLocal(v, comm, path, "/disks", "v", h->ndisks, KERGS_DIM, &n2, &vel));
-  PetscCall(LoadLocal(v, comm, path, "/disks", "rot", h->ndisks, KERGS_NROT, &n2, &rot));
-  PetscCall(LoadLocal(v, comm, path, "/disks", "omega", h->ndisks, KERGS_NROT, &n2, &omega));
-  PetscCall(LoadLocal(v, comm, path, "/disks", "radius", h->ndisks, 1, &n2, &radius));
-  PetscCall(LoadLocal(v, comm, path, "/disks", "xref", h->ndisks, KERGS_DIM, &n2, xref));
+  PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "material", h->ndisks, 1, &n2, &mat));
+  PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "x", h->ndisks, KERGS_DIM, &n2, &x));
+  PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "v", h->ndisks, KERGS_DIM, &n2, &vel));
+  PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "rot", h->ndisks, KERGS_NROT, &n2, &rot));
+  PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "omega", h->ndisks, KERGS_NROT, &n2, &omega));
+  PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "radius", h->ndisks, 1, &n2, &radius));
+  PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "xref", h->ndisks, KERGS_DIM, &n2, xref));
   PetscCall(PetscViewerHDF5PopGroup(v));
   PetscCall(PetscMalloc2(n + 1, &iid, n + 1, &imat));
   for (PetscInt i = 0; i < n; i++) {
@@ -501,7 +445,7 @@ static PetscErrorCode RestoreWalls(PetscViewer v, MPI_Comm comm, const char path
   PetscCall(PetscFree(names));
   PetscCall(PetscFree(mine));
   PetscCall(PetscViewerHDF5PushGroup(v, "/walls"));
-  for (int k = 0; k < 4; k++) PetscCall(LoadAll(v, comm, path, "/walls", fields[k], nwalls, KERGS_DIM, &f[k]));
+  for (int k = 0; k < 4; k++) PetscCall(KergsLoadAllBlocks(v, comm, path, "/walls", fields[k], nwalls, KERGS_DIM, &f[k]));
   PetscCall(PetscViewerHDF5PopGroup(v));
   for (PetscInt w = 0; w < nwalls; w++)
     PetscCall(KergsSceneRestoreWall(sc, w, &f[0][KERGS_DIM * w], &f[1][KERGS_DIM * w], &f[2][KERGS_DIM * w], &f[3][KERGS_DIM * w]));
@@ -563,10 +507,10 @@ static PetscErrorCode LoadContacts(PetscViewer v, MPI_Comm comm, const char path
   for (int k = 0; k < 10; k++) {
     PetscInt n = nlocal;
     if (nlocal == PETSC_DETERMINE) {
-      PetscCall(LoadAll(v, comm, path, "/contacts", names[k], h->ncontacts, bs[k], dst[k]));
+      PetscCall(KergsLoadAllBlocks(v, comm, path, "/contacts", names[k], h->ncontacts, bs[k], dst[k]));
       n = h->ncontacts;
     } else
-      PetscCall(LoadLocal(v, comm, path, "/contacts", names[k], h->ncontacts, bs[k], &n, dst[k]));
+      PetscCall(KergsLoadBlocks(v, comm, path, "/contacts", names[k], h->ncontacts, bs[k], &n, dst[k]));
     cr->n = n;
   }
   PetscCall(PetscViewerHDF5PopGroup(v));
@@ -631,7 +575,7 @@ static PetscErrorCode RestoreExact(PetscViewer v, MPI_Comm comm, const char path
     PetscInt total = 0;
     for (PetscInt q = 0; q < h->ranks; q++) total += (PetscInt)h->rankinfo[RANK_NGHOSTS][q];
     PetscCall(PetscViewerHDF5PushGroup(v, "/disks"));
-    PetscCall(LoadLocal(v, comm, path, "/disks", "ghosts", total, 1, &ng, &g));
+    PetscCall(KergsLoadBlocks(v, comm, path, "/disks", "ghosts", total, 1, &ng, &g));
     PetscCall(PetscViewerHDF5PopGroup(v));
   }
   PetscCall(PetscMalloc1(ng + 1, &gidx));

@@ -1,6 +1,8 @@
 /* kergs files: atomic output files, the checks of a run's paths before any work, free space and failed writes
    (include/kergs/files.h). Rank 0 touches the file system; every rank gets the same outcome. */
 #include <kergs/files.h>
+#include <petscviewerhdf5.h>
+#include <petsclayouthdf5.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -555,3 +557,57 @@ PetscErrorCode KergsViewIntegers(PetscViewer viewer, MPI_Comm comm, const char n
   PetscCall(PetscFree(r));
   PetscFunctionReturn(0);
 }
+
+/* Readers of KergsViewBlocks' datasets (kergs/files.h). */
+PetscErrorCode KergsLoadBlocks(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal, PetscInt bs,
+                               PetscInt *nlocal, PetscReal **local)
+{
+  Vec                vec;
+  PetscInt           fbs, fN, n;
+  const PetscScalar *a;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerHDF5ReadSizes(v, name, &fbs, &fN));
+  PetscCheck(fN == nglobal * bs, comm, PETSC_ERR_FILE_UNEXPECTED,
+             "File %s: dataset %s/%s holds %" PetscInt_FMT " values, expected %" PetscInt_FMT " x %" PetscInt_FMT, path, group,
+             name, fN, nglobal, bs);
+  n = *nlocal;
+  if (n == PETSC_DECIDE) PetscCall(PetscSplitOwnership(comm, &n, &nglobal));
+  *nlocal = n;
+  PetscCall(PetscMalloc1(n * bs + 1, local));
+  if (nglobal == 0) PetscFunctionReturn(0); /* an empty dataset: nothing to load */
+  PetscCall(VecCreate(comm, &vec));
+  PetscCall(VecSetSizes(vec, n * bs, nglobal * bs));
+  PetscCall(VecSetBlockSize(vec, bs));
+  PetscCall(VecSetType(vec, VECMPI));
+  PetscCall(PetscObjectSetName((PetscObject)vec, name));
+  PetscCall(VecLoad(vec, v));
+  PetscCall(VecGetArrayRead(vec, &a));
+  for (PetscInt i = 0; i < n * bs; i++) (*local)[i] = PetscRealPart(a[i]);
+  PetscCall(VecRestoreArrayRead(vec, &a));
+  PetscCall(VecDestroy(&vec));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsLoadAllBlocks(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal,
+                                  PetscInt bs, PetscReal **all)
+{
+  PetscInt    n = PETSC_DECIDE, *counts;
+  PetscReal  *mine;
+  PetscMPIInt size, *rc, *displs, nm;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsLoadBlocks(v, comm, path, group, name, nglobal, bs, &n, &mine));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscMalloc3(size, &counts, size, &rc, size, &displs));
+  nm = (PetscMPIInt)(n * bs);
+  PetscCallMPI(MPI_Allgather(&nm, 1, MPI_INT, rc, 1, MPI_INT, comm));
+  displs[0] = 0;
+  for (PetscMPIInt q = 1; q < size; q++) displs[q] = displs[q - 1] + rc[q - 1];
+  PetscCall(PetscMalloc1(nglobal * bs + 1, all));
+  PetscCallMPI(MPI_Allgatherv(mine, nm, MPIU_REAL, *all, rc, displs, MPIU_REAL, comm));
+  PetscCall(PetscFree(mine));
+  PetscCall(PetscFree3(counts, rc, displs));
+  PetscFunctionReturn(0);
+}
+

@@ -265,6 +265,14 @@ PetscErrorCode KergsSampleRead(KergsScene scene, const char path[])
   if (!ierr) ierr = SampleApply(scene, &s);
   PetscCall(SampleDataFree(&s));
   PetscCall(ierr);
+  PetscCall(PetscStrncpy(scene->sample_path, path, sizeof(scene->sample_path)));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSceneGetSamplePath(KergsScene scene, const char **path)
+{
+  PetscFunctionBeginUser;
+  *path = scene->sample_path;
   PetscFunctionReturn(0);
 }

@@ -20,6 +20,7 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   st->blowup_energy    = 2.0;
   st->divergence_tol   = 0.7; /* r = 0 scores 1 (KergsLawNaturalResidualScaled); a diverging NLGS-Jac 0.78-0.93 */
   st->divergence_steps = 5;
+  st->sample_impulses  = PETSC_TRUE;
   PetscCall(KergsStepperPeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));
   PetscCall(KergsContactsCreate(comm, &st->contacts));
@@ -78,6 +79,10 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                        "", st->rest_energy, &st->rest_energy, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
+  PetscCall(PetscOptionsBool("-sample_impulses",
+                             "With -disks_source file: start the first step from the contact forces the sample records, as a restart "
+                             "would (false: from zero impulses)",
+                             "", st->sample_impulses, &st->sample_impulses, NULL));
   PetscCall(PetscOptionsInt("-fclib_step",
                             "Export in FCLib format the local problem solved in this step, numbered as the step lines (1: the first step; "
                             "-1: none)",
@@ -110,6 +115,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   if (help) PetscFunctionReturn(0);
   PetscCall(KergsProvenanceSetOptions(st->comm)); /* the options as given, before any object adds its own */
   PetscCall(KergsStepperCheckPaths(st));          /* before the run writes anything */
+  if (st->sample_impulses && !st->restart_path[0]) PetscCall(KergsSampleReadImpulses(st->scene, NULL)); /* and the sample's forces */
   if (st->restart_path[0]) PetscCall(KergsStepperRestore(st));
   PetscFunctionReturn(0);
 }
@@ -232,6 +238,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   /* initial partition before the first detection, then checks every -partition_check_every steps, with the
      contacts of the previous step (after its solve): migrates the disks and their contacts when due */
   PetscCall(KergsPartitionUpdate(st->partition, sc, st->contacts, NULL));
+  if (step == 0 && st->sample_impulses && !st->restart_path[0]) PetscCall(KergsSampleReadImpulses(sc, st->contacts));
   PetscCall(PetscTime(&t0));
   PetscCall(KergsContactsDetect(st->contacts, sc));
   if (step == 0) PetscCall(CheckInitialOverlaps(st));
@@ -401,7 +408,7 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   PetscCall(KergsResultsClose(st->results));
   /* the handler stays until KergsStepperDestroy: a signal now (Slurm's warning at the end of a run that has just
      finished) finds the run's work done and changes nothing, instead of ending the process with status 128 + signal */
-  if (st->sample_out[0] && st->status == KERGS_EXIT_DONE) PetscCall(KergsSampleWrite(sc, st->sample_out)); /* a finished packing only */
+  if (st->sample_out[0] && st->status == KERGS_EXIT_DONE) PetscCall(KergsSampleWrite(sc, st->contacts, st->sample_out)); /* a finished packing only */
   if (st->status == KERGS_EXIT_DONE && st->error_on_nonconvergence && st->nonconverged > 0) st->status = KERGS_EXIT_NOT_CONVERGED;
   PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
   PetscCall(KergsSolverGetTolerances(st->solver, NULL, &max_it));

@@ -50,6 +50,8 @@ struct _p_KergsScene {
   PetscReal time;
   /* restart (KergsSceneSetRestoring): the disks come from a checkpoint, not from the disk source options */
   PetscBool restoring;
+  /* the sample file the disks were read from (KergsSampleRead), empty otherwise */
+  char sample_path[PETSC_MAX_PATH_LEN];
 };
 
 /* Shared by the scene's files. */
