@@ -385,6 +385,35 @@ static PetscErrorCode TestPressureWalls(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
+/* -box_affine_start: each grain's velocity plus the box walls' velocities interpolated across the box, the top wall's
+   program read at the scene's start; a box at rest leaves the velocities as given. */
+static PetscErrorCode TestAffineStart(MPI_Comm comm)
+{
+  const char *box = "-box 0,0,4,2 -wall_box_top_program 0,0,-0.5,1,0,-9 -wall_box_right_velocity 0.3,0 "
+                    "-disks_x 1,1.5,3,0.5,2,1 -disks_radius 0.1 -disks_velocity 0,0,0.01,0,0,0";
+  const PetscReal want[3][2] = {
+      {0.25 * 0.3, 0.75 * -0.5},
+      {0.01 + 0.75 * 0.3, 0.25 * -0.5},
+      {0.5 * 0.3, 0.5 * -0.5}
+  };
+  char       opts[512];
+  KergsScene s;
+  Disks      all;
+  PetscBool  ok = PETSC_TRUE;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(opts, sizeof(opts), "%s -box_affine_start", box));
+  PetscCall(SceneGood(comm, opts, &s));
+  if (!s) PetscFunctionReturn(0);
+  PetscCall(DisksGather(s, &all));
+  for (PetscInt i = 0; i < 3; i++)
+    for (PetscInt d = 0; d < 2; d++) ok = (PetscBool)(ok && Close(all.v[2 * i + d], want[i][d], 1e-15));
+  PetscCall(CheckTrue(comm, ok, "affine start: v = own + the box walls' velocities interpolated (x: left 0 to right 0.3, y: 0 to -0.5)"));
+  PetscCall(DisksFree(&all));
+  PetscCall(KergsSceneDestroy(&s));
+  PetscFunctionReturn(0);
+}
+
 /* KergsSceneSetDisks directly, and the kinetic energy. */
 static PetscErrorCode TestSetDisksEnergy(MPI_Comm comm)
 {
@@ -468,6 +497,8 @@ static PetscErrorCode TestErrors(MPI_Comm comm)
       {"-disks_x 0,0 -disks_radius 0.1 -materials 2 -material_density 1,2,3", "-material_density has 3"},
       {"-disks_x 0,0 -disks_radius 0.1 -materials 2 -friction_pairs 0,2,0.1", "-friction_pairs"},
       {"-disks_x 0,0 -disks_radius 0.1 -friction_pairs 0,0", "-friction_pairs has 2"},
+      {"-disks_x 0,0 -disks_radius 0.1 -box_affine_start", "-box_affine_start needs the four walls of -box"},
+      {"-disks_x 0.5,0.5 -disks_radius 0.1 -box 0,0,1,1 -box_open_top -box_affine_start", "-box_affine_start needs the four walls"},
       {"-disks_x 0,0 -disks_radius 0.1 -materials 0", "-materials 0"},
       {"-disks_source foo -disks_x 0,0 -disks_radius 0.1", "foo"},
       {"-disks_source lattice -lattice_n 2 -lattice_radius 0.1", "-lattice_n"},
@@ -521,6 +552,7 @@ int main(int argc, char **argv)
     PetscCall(TestRandom(comm));
     PetscCall(TestWalls(comm));
     PetscCall(TestPressureWalls(comm));
+    PetscCall(TestAffineStart(comm));
     PetscCall(TestSetDisksEnergy(comm));
     PetscCall(TestErrors(comm));
   }

@@ -513,6 +513,7 @@ PetscErrorCode KergsSceneSetFromOptions(KergsScene scene)
   alert = scene->alert;
   PetscCall(KergsSceneDisksSetFromOptions(scene));
   PetscCall(SceneComputeMasses(scene)); /* the densities may have changed since the disks were set */
+  if (walls.affine_start && !scene->restoring) PetscCall(KergsSceneBoxAffineStart(scene));
   if (alert_set) {
     scene->alert      = alert; /* the user's value, even a negative one (then rejected) */
     scene->alert_auto = PETSC_FALSE;

@@ -63,7 +63,7 @@ PETSC_INTERN PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene);
    block by KergsSceneWallsOptions; each wall then has an options block of its own (prefix wall_<name>_), read by
    KergsSceneSetWalls once the scene's block has ended. */
 typedef struct {
-  PetscBool box_set, open_top, box_from_sample;
+  PetscBool box_set, open_top, box_from_sample, affine_start;
   PetscReal box[4]; /* x0,y0,x1,y1 */
   PetscInt  nnames;
   char    **names; /* the names given to -walls */
@@ -74,6 +74,8 @@ PETSC_INTERN PetscErrorCode KergsSceneSetWalls(KergsScene, KergsWallsSpec *);
 /* The walls' part of KergsSceneAdvance; wvold: the walls' velocities before the update (KERGS_DIM per wall). */
 PETSC_INTERN PetscErrorCode KergsSceneAdvanceWalls(KergsScene, const PetscReal wvold[]);
 PETSC_INTERN PetscErrorCode KergsSceneCheckWalls(KergsScene);
+/* -box_affine_start: add to every grain's velocity the homogeneous deformation the box walls' velocities impose. */
+PETSC_INTERN PetscErrorCode KergsSceneBoxAffineStart(KergsScene);
 PETSC_INTERN PetscErrorCode KergsSceneViewWalls(KergsScene, PetscViewer);
 
 /* Neither infinite nor NaN: the checks of the input. */
