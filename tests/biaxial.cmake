@@ -16,6 +16,16 @@ add_test(NAME biaxial_inertial_warning
                  -options_file cases/biaxial_small.opts -wall_box_top_velocity 0,-2 -steps 0 -output_none
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(biaxial_inertial_warning PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
+# On the sample's scale the top wall's speed against sqrt(sigma3 / rho) (I H / d): at 0.5 m/s biaxial_small's I is 0.03,
+# below the first warning, but the wall moves at 0.5 sqrt(sigma3 / rho) over 17 diameters: the second warning.
+add_test(NAME biaxial_sample_speed_warning
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/expect_output.sh
+                 "kergs: warning: wall box_top moves at 0\\.5 sqrt\\(sigma3 / rho\\) \\(= I H / d, the sample 17 mean diameters across\\), above 0\\.3: the sample's own inertia rho v\\^2 = 0\\.25 sigma3 .*whatever I = 0\\.0296"
+                 "kergs: done, exit status 0" --
+                 ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} 2 ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS}
+                 -options_file cases/biaxial_small.opts -wall_box_top_velocity 0,-0.5 -steps 0 -output_none
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(biaxial_sample_speed_warning PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
 
 # scripts/tile_sample.py refuses, before writing anything: fewer than two tiles, an input that is not HDF5, a sample
 # without the box it was compacted in (cases/deposit500.h5, a deposit under gravity), a box its grains do not reach
