@@ -91,9 +91,18 @@ def read_contacts(path, group):
     missing = [name for name in PER_CONTACT if not isinstance(contacts.get(name), h5py.Dataset)]
     if missing:
         fail(f"{path}: /sample/contacts lacks the dataset(s) {', '.join(missing)}")
-    walls = contacts.attrs["walls"]
-    walls = (walls.decode() if isinstance(walls, bytes) else str(walls)).split(",")
-    return {"walls": walls, **{name: contacts[name][()] for name in PER_CONTACT}}
+    walls, count = contacts.attrs["walls"], np.asarray(contacts.attrs.get("ncontacts", -1))
+    if not (isinstance(walls, (bytes, str)) and walls):
+        fail(f"{path}: the attribute walls of /sample/contacts is not a string of wall names")
+    walls = (walls.decode() if isinstance(walls, bytes) else walls).split(",")
+    if len(set(walls)) != len(walls):
+        fail(f"{path}: the attribute walls of /sample/contacts names a wall twice")
+    data = {name: contacts[name][()] for name in PER_CONTACT}
+    if any(data[name].dtype.kind not in "fiu" for name in PER_CONTACT):
+        fail(f"{path}: /sample/contacts holds datasets that are not numbers")
+    if count.shape != () or count.dtype.kind not in "iu" or int(count) != len(data["a_id"]):
+        fail(f"{path}: the attribute ncontacts of /sample/contacts is not one integer equal to its {len(data['a_id'])} rows")
+    return {"walls": walls, **data}
 
 
 def validate_contacts(path, contacts, ids):
@@ -105,19 +114,29 @@ def validate_contacts(path, contacts, ids):
             fail(f"{path}: /sample/contacts/{name} has shape {contacts[name].shape}, expected {shape}")
         if not np.all(np.isfinite(contacts[name])):
             fail(f"{path}: /sample/contacts/{name} holds NaN or infinite values")
-    sides = []
-    for name in contacts["walls"]:
-        if not name.startswith("box_") or name[4:] not in BOX_SIDES:
-            fail(f"{path}: its contacts name the wall {name!r}, which is not one of the box's: only box walls can be mirrored")
-        sides.append(name[4:])
     kind, a, b = contacts["kind"], contacts["a_id"], contacts["b_id"]
     if not np.all((kind == 0) | (kind == 1)):
         fail(f"{path}: /sample/contacts/kind holds values other than 0 (grain) and 1 (wall)")
     grain = kind == 0
     if not (np.all(np.isin(a, ids)) and np.all(np.isin(b[grain], ids)) and np.all(b[grain] > a[grain])):
         fail(f"{path}: /sample/contacts names grains the sample does not hold, or a pair not by its smaller id first")
-    if not np.all((b[~grain] >= 0) & (b[~grain] < len(sides)) & (b[~grain] == np.round(b[~grain]))):
+    if np.any(contacts["force"][:, 0] < 0):
+        fail(f"{path}: /sample/contacts holds a negative normal force (contacts push)")
+    keys = np.column_stack([a, kind, b])
+    if len(np.unique(keys, axis=0)) != len(keys):
+        fail(f"{path}: /sample/contacts gives a pair twice")
+    walls = contacts["walls"]
+    if not np.all((b[~grain] >= 0) & (b[~grain] < len(walls)) & (b[~grain] == np.round(b[~grain]))):
         fail(f"{path}: /sample/contacts/b_id names walls outside its attribute walls")
+    sides = [name[4:] for name in walls]
+    for index in np.unique(b[~grain]).astype(int):
+        if not walls[index].startswith("box_") or sides[index] not in BOX_SIDES:
+            fail(f"{path}: its contacts name the wall {walls[index]!r}, which is not one of the box's: only box walls can be mirrored")
+    # A seam replaces a frictionless wall: a wall contact's tangential force has no mirror image (rounding aside).
+    normal = np.abs(contacts["force"][:, 0]).max(initial=0.0)
+    if np.any(np.abs(contacts["force"][~grain, 1]) > 1e-9 * normal):
+        fail(f"{path}: its grains carry tangential forces on the box walls (a compaction with wall friction): "
+             "a mirror tiling holds them with no tangential force and would not be in equilibrium")
     return sides
 
 

@@ -54,11 +54,18 @@ add_test(NAME tile_sample_box_off
                  ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(tile_sample_box_off PROPERTIES TIMEOUT 30 LABELS bad_input)
+# A sample whose grains carry tangential forces on the walls (wall friction) cannot be mirrored into equilibrium: the
+# seams would hold them without. cases/compact_10k.h5 records its contact forces; one wall contact is given friction.
+add_test(NAME tile_sample_wall_friction
+         COMMAND sh -c "cp cases/compact_10k.h5 \"$0/tile_friction.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; c = h5py.File('$0/tile_friction.h5', 'r+')['sample/contacts']; f = c['force'][()]; f[np.flatnonzero(c['kind'][()] == 1)[0], 1] = 0.01; c['force'][...] = f\" && exec \"$1\" \"carry tangential forces on the box walls\" /usr/bin/python3 scripts/tile_sample.py \"$0/tile_friction.h5\" \"$0/tile_friction_out.h5\" --tiles 2,2"
+                 ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(tile_sample_wall_friction PROPERTIES TIMEOUT 30 LABELS bad_input)
 
 # A sample's contact forces (/sample/contacts, the first step's warm start) are checked before the run writes anything:
 # a NaN force, a contact of a grain the sample does not hold and a pair given twice are refused, naming the file. The
 # forces (rows a_id, kind, b_id, normal force) are added to a copy of cases/compact_small.h5, which records none.
-foreach(case "nan|contact 0 of /sample/contacts is not a contact of a grain with a grain or a named wall with a finite force|(0, 0, 1, float('nan'))"
+foreach(case "nan|contact 0 of /sample/contacts is not a contact of a grain with a grain of larger id or a named wall, with a finite force that pushes|(0, 0, 1, float('nan'))"
              "unknown_grain|1 of its 1 contacts belong to no grain of the sample|(10**6, 0, 10**6 + 1, 1.0)"
              "repeated|1 of its contacts repeat a pair given before|(0, 0, 1, 1.0), (0, 0, 1, 2.0)")
   string(REPLACE "|" ";" parts "${case}")
@@ -73,3 +80,12 @@ foreach(case "nan|contact 0 of /sample/contacts is not a contact of a grain with
            WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
   set_tests_properties(sample_contacts_${name} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
 endforeach()
+# An attribute that is an array where one value is expected crashed PETSc's attribute reader (a segmentation fault with
+# ncontacts as 1,000 integers): the file is now probed before the viewer reads it.
+add_test(NAME sample_contacts_ncontacts_array
+         COMMAND sh -c "cp cases/compact_10k.h5 \"$0/contacts_array.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; g = h5py.File('$0/contacts_array.h5', 'r+')['sample/contacts']; g.attrs['ncontacts'] = np.arange(1000)\" && script=\"$1\" && shift && exec \"$script\" \"Sample file .*contacts_array\\.h5: attribute ncontacts of /sample/contacts is not a single integer\" \"$@\" -sample_input \"$0/contacts_array.h5\" -output \"$0/contacts_array_out.h5\""
+                 ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
+                 ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} 2 ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS}
+                 -options_file cases/biaxial_1m.opts -steps 1
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(sample_contacts_ncontacts_array PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)

@@ -38,7 +38,7 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    fails it). The contact forces the sample records are mirrored with it: every grain of the tiling is in equilibrium
    under them as well as in the tile (largest net force over the tile's, at most 1 + 1e-9: measured 1; the seams'
    forces left out make it 130 times the tile's), and the tiled run starts from them: its first solve takes at most half the sweeps of
-   the same run with -sample_impulses false (measured newton 7 against 23). Given tangential forces, the copy's tiles
+   the same run with -sample_forces false (measured newton 7 against 23). Given tangential forces, the copy's tiles
    (1, 0) and (1, 1) carry them reversed and kept (a reflection reverses the tangent t = (-n_y, n_x)).
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
@@ -221,8 +221,8 @@ def mirrored(k, sample):
         n = len(f["sample/radius"])
         f["sample/omega"][...] = np.linspace(-1.0, 2.0, n)
         f["sample/rot"][...] = np.linspace(-3.0, 3.0, n)
-        force = f["sample/contacts/force"]
-        force[:, 1] = np.linspace(-0.01, 0.02, len(force))
+        force, kind = f["sample/contacts/force"], f["sample/contacts/kind"][()]
+        force[:, 1] = np.where(kind == 0, np.linspace(-0.01, 0.02, len(kind)), 0.0)  # the walls were frictionless
     if not tile_sample(spun, tiling):
         return
     with h5py.File(spun, "r") as f, h5py.File(tiling, "r") as g:
@@ -297,7 +297,7 @@ def tiled(k, sample):
     p = k.run(2, *run, "-output", out, "-sample_output", k.path("tiled_out.h5"), log="tiled.log")
     if not check(p.returncode == 0, "the tiled sample runs %d steps of the compaction on 2 ranks (exit %d)" % (TILED_STEPS, p.returncode)):
         return
-    cold = k.run(2, *run, "-steps", 1, "-sample_impulses", "false", "-output", k.path("tiled_cold.h5"), "-sample_output",
+    cold = k.run(2, *run, "-steps", 1, "-sample_forces", "false", "-output", k.path("tiled_cold.h5"), "-sample_output",
                  k.path("tiled_cold_out.h5"), log="tiled_cold.log")
     s = h5py.File(out, "r")["stats"]
     if check(cold.returncode == 0, "the tiled sample runs from zero impulses (exit %d)" % cold.returncode):

@@ -65,6 +65,6 @@ set_tests_properties(memcheck_confine5_nlgs PROPERTIES FIXTURES_SETUP vg_confine
 set_tests_properties(memcheck_fclib_input_newton PROPERTIES FIXTURES_REQUIRED vg_confine5_export)
 # confine5's sample of the first test read on 2 ranks, its contact forces (walls matched by name) the first step's warm
 # start
-kergs_memcheck(sample_impulses_2 2 kergs_exe -options_file cases/confine5.opts -disks_source file
-               -sample_input ${KERGS_MEMCHECK_DIR}/vg_confine5_sample.h5 -steps 2 -quiet -output ${KERGS_MEMCHECK_DIR}/vg_sample_impulses.h5)
-set_tests_properties(memcheck_sample_impulses_2 PROPERTIES FIXTURES_REQUIRED vg_confine5_export)
+kergs_memcheck(sample_forces_2 2 kergs_exe -options_file cases/confine5.opts -disks_source file
+               -sample_input ${KERGS_MEMCHECK_DIR}/vg_confine5_sample.h5 -steps 2 -quiet -output ${KERGS_MEMCHECK_DIR}/vg_sample_forces.h5)
+set_tests_properties(memcheck_sample_forces_2 PROPERTIES FIXTURES_REQUIRED vg_confine5_export)

@@ -837,6 +837,66 @@ static PetscErrorCode TestFCLib(KergsScene scene, const char dir[])
   PetscFunctionReturn(0);
 }
 
+static PetscBool Close(PetscReal a, PetscReal b, PetscReal tol)
+{
+  return (PetscBool)(PetscAbsReal(a - b) <= tol * PetscMax(PetscAbsReal(a), PetscAbsReal(b)));
+}
+
+/* The contact forces a sample records come back as impulses of the reading scene's time step, each keyed to the same
+   grains, and a wall contact to the wall of the same name whatever the walls' order. Written at dt 2e-3 with walls
+   w0, w1; read at dt 5e-4 with walls w1, w0 (w0 is wall 1 there). */
+static PetscErrorCode TestSampleForces(KergsScene scene, const char dir[])
+{
+  MPI_Comm        comm     = scene->comm;
+  const char     *order[2] = {"w1", "w0"};
+  const PetscReal dt0 = 2e-3, dt1 = 5e-4;
+  char            path[PETSC_MAX_PATH_LEN];
+  KergsContacts   written, read;
+  KergsContact   *c;
+  KergsScene      target;
+  PetscInt        m, total;
+  PetscBool       ok = PETSC_TRUE;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscPrintf(comm, "sample contact forces\n"));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/sample_forces.h5", dir));
+  for (PetscInt w = 0; w < scene->nwalls; w++) PetscCall(PetscSNPrintf(scene->walls[w].name, sizeof(scene->walls[w].name), "w%d", (int)w));
+  scene->dt   = dt0;
+  scene->step = 1; /* a packing a run has stepped: its contacts are written */
+  PetscCall(ContactsBuild(scene, 0, &written));
+  PetscCall(KergsSampleWrite(scene, written, path));
+  PetscCall(ContactsFree(&written));
+  PetscCall(TargetSceneCreate(comm, &target));
+  target->dt     = dt1;
+  target->nwalls = 2;
+  PetscCall(PetscCalloc1(2, &target->walls));
+  for (PetscInt w = 0; w < 2; w++) PetscCall(PetscStrncpy(target->walls[w].name, order[w], sizeof(target->walls[w].name)));
+  PetscCall(KergsSampleRead(target, path));
+  PetscCall(KergsContactsCreate(comm, &read));
+  PetscCall(KergsSampleReadForces(target, read, NULL));
+  PetscCall(KergsContactsGetLocal(read, &m, &c));
+  for (PetscInt k = 0; k < m; k++) {
+    KergsContact want;
+    PetscInt     g = NDISKS - 1; /* the wall contact of disk 0 */
+
+    if (c[k].kind == KERGS_CONTACT_DISK_DISK)
+      for (PetscInt i = 0; i < NDISKS; i++)
+        if (DiskId(i) == target->id[c[k].a]) g = i;
+    ContactOfGlobal(g, 0, &want);
+    ok = (PetscBool)(ok && target->id[c[k].a] == DiskId(want.a) && c[k].b == -1 &&
+                     c[k].idb == (c[k].kind == KERGS_CONTACT_DISK_WALL ? 1 : want.idb) && Close(c[k].r[0], want.r[0] / dt0 * dt1, 1e-14) &&
+                     Close(c[k].r[1], want.r[1] / dt0 * dt1, 1e-14));
+  }
+  PetscCallMPI(MPIU_Allreduce(&m, &total, 1, MPIU_INT, MPI_SUM, comm));
+  PetscCall(
+      CheckAll(comm, (PetscBool)(total == NDISKS), "sample forces: every contact comes back, on the owner of its grain a", total, NDISKS));
+  PetscCall(CheckAll(
+      comm, ok, "sample forces: same keys, the wall matched by name (w0: wall 1 of the reader), impulse = force x the reader's dt", ok, 1));
+  PetscCall(KergsContactsDestroy(&read));
+  PetscCall(KergsSceneDestroy(&target));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   KergsScene scene;
@@ -854,6 +914,7 @@ int main(int argc, char **argv)
   PetscCall(TestFCLib(scene, dir));
   PetscCall(TestResults(scene, dir));
   PetscCall(TestSample(scene, dir));
+  PetscCall(TestSampleForces(scene, dir));
   PetscCall(KergsSceneDestroy(&scene));
   {
     int code = Finish();

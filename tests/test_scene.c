@@ -389,17 +389,13 @@ static PetscErrorCode TestPressureWalls(MPI_Comm comm)
    program read at the scene's start; a box at rest leaves the velocities as given. */
 static PetscErrorCode TestAffineStart(MPI_Comm comm)
 {
-  const char *box = "-box 0,0,4,2 -wall_box_top_program 0,0,-0.5,1,0,-9 -wall_box_right_velocity 0.3,0 "
-                    "-disks_x 1,1.5,3,0.5,2,1 -disks_radius 0.1 -disks_velocity 0,0,0.01,0,0,0";
-  const PetscReal want[3][2] = {
-      {0.25 * 0.3, 0.75 * -0.5},
-      {0.01 + 0.75 * 0.3, 0.25 * -0.5},
-      {0.5 * 0.3, 0.5 * -0.5}
-  };
-  char       opts[512];
-  KergsScene s;
-  Disks      all;
-  PetscBool  ok = PETSC_TRUE;
+  const char     *box        = "-box 0,0,4,2 -wall_box_top_program 0,0,-0.5,1,0,-9 -wall_box_right_velocity 0.3,0 "
+                               "-disks_x 1,1.5,3,0.5,2,1 -disks_radius 0.1 -disks_velocity 0,0,0.01,0,0,0";
+  const PetscReal want[3][2] = {{0.25 * 0.3, 0.75 * -0.5}, {0.01 + 0.75 * 0.3, 0.25 * -0.5}, {0.5 * 0.3, 0.5 * -0.5}};
+  char            opts[512];
+  KergsScene      s;
+  Disks           all;
+  PetscBool       ok = PETSC_TRUE;
 
   PetscFunctionBeginUser;
   PetscCall(PetscSNPrintf(opts, sizeof(opts), "%s -box_affine_start", box));
@@ -499,6 +495,8 @@ static PetscErrorCode TestErrors(MPI_Comm comm)
       {"-disks_x 0,0 -disks_radius 0.1 -friction_pairs 0,0", "-friction_pairs has 2"},
       {"-disks_x 0,0 -disks_radius 0.1 -box_affine_start", "-box_affine_start needs the four walls of -box"},
       {"-disks_x 0.5,0.5 -disks_radius 0.1 -box 0,0,1,1 -box_open_top -box_affine_start", "-box_affine_start needs the four walls"},
+      {"-disks_x 0.5,0.5 -disks_radius 0.1 -box 0,0,1,1 -wall_box_top_velocity 0,nan -box_affine_start",
+       "box wall's velocity is not finite"},
       {"-disks_x 0,0 -disks_radius 0.1 -materials 0", "-materials 0"},
       {"-disks_source foo -disks_x 0,0 -disks_radius 0.1", "foo"},
       {"-disks_source lattice -lattice_n 2 -lattice_radius 0.1", "-lattice_n"},

@@ -70,8 +70,8 @@ PETSC_EXTERN PetscErrorCode KergsViewIntegers(PetscViewer, MPI_Comm, const char 
 /* Their readers. Dataset `name` of the viewer's current group (`group` and the file's `path` name it in errors), which
    must hold nglobal blocks of bs values: *nlocal of them on this rank (the ranks' parts in rank order; PETSC_DECIDE: an
    even split, *nlocal set), or all of them on every rank, into a new array (PetscFree). Collective. */
-PETSC_EXTERN PetscErrorCode KergsLoadBlocks(PetscViewer, MPI_Comm, const char path[], const char group[], const char name[], PetscInt nglobal,
-                                            PetscInt bs, PetscInt *nlocal, PetscReal **local);
+PETSC_EXTERN PetscErrorCode KergsLoadBlocks(PetscViewer, MPI_Comm, const char path[], const char group[], const char name[],
+                                            PetscInt nglobal, PetscInt bs, PetscInt *nlocal, PetscReal **local);
 PETSC_EXTERN PetscErrorCode KergsLoadAllBlocks(PetscViewer, MPI_Comm, const char path[], const char group[], const char name[],
                                                PetscInt nglobal, PetscInt bs, PetscReal **all);
 

@@ -559,8 +559,8 @@ PetscErrorCode KergsViewIntegers(PetscViewer viewer, MPI_Comm comm, const char n
 }
 
 /* Readers of KergsViewBlocks' datasets (kergs/files.h). */
-PetscErrorCode KergsLoadBlocks(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal, PetscInt bs,
-                               PetscInt *nlocal, PetscReal **local)
+PetscErrorCode KergsLoadBlocks(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal,
+                               PetscInt bs, PetscInt *nlocal, PetscReal **local)
 {
   Vec                vec;
   PetscInt           fbs, fN, n;
@@ -569,8 +569,8 @@ PetscErrorCode KergsLoadBlocks(PetscViewer v, MPI_Comm comm, const char path[], 
   PetscFunctionBeginUser;
   PetscCall(PetscViewerHDF5ReadSizes(v, name, &fbs, &fN));
   PetscCheck(fN == nglobal * bs, comm, PETSC_ERR_FILE_UNEXPECTED,
-             "File %s: dataset %s/%s holds %" PetscInt_FMT " values, expected %" PetscInt_FMT " x %" PetscInt_FMT, path, group,
-             name, fN, nglobal, bs);
+             "File %s: dataset %s/%s holds %" PetscInt_FMT " values, expected %" PetscInt_FMT " x %" PetscInt_FMT, path, group, name, fN,
+             nglobal, bs);
   n = *nlocal;
   if (n == PETSC_DECIDE) PetscCall(PetscSplitOwnership(comm, &n, &nglobal));
   *nlocal = n;
@@ -592,14 +592,14 @@ PetscErrorCode KergsLoadBlocks(PetscViewer v, MPI_Comm comm, const char path[], 
 PetscErrorCode KergsLoadAllBlocks(PetscViewer v, MPI_Comm comm, const char path[], const char group[], const char name[], PetscInt nglobal,
                                   PetscInt bs, PetscReal **all)
 {
-  PetscInt    n = PETSC_DECIDE, *counts;
+  PetscInt    n = PETSC_DECIDE;
   PetscReal  *mine;
   PetscMPIInt size, *rc, *displs, nm;
 
   PetscFunctionBeginUser;
   PetscCall(KergsLoadBlocks(v, comm, path, group, name, nglobal, bs, &n, &mine));
   PetscCallMPI(MPI_Comm_size(comm, &size));
-  PetscCall(PetscMalloc3(size, &counts, size, &rc, size, &displs));
+  PetscCall(PetscMalloc2(size, &rc, size, &displs));
   nm = (PetscMPIInt)(n * bs);
   PetscCallMPI(MPI_Allgather(&nm, 1, MPI_INT, rc, 1, MPI_INT, comm));
   displs[0] = 0;
@@ -607,7 +607,6 @@ PetscErrorCode KergsLoadAllBlocks(PetscViewer v, MPI_Comm comm, const char path[
   PetscCall(PetscMalloc1(nglobal * bs + 1, all));
   PetscCallMPI(MPI_Allgatherv(mine, nm, MPIU_REAL, *all, rc, displs, MPIU_REAL, comm));
   PetscCall(PetscFree(mine));
-  PetscCall(PetscFree3(counts, rc, displs));
+  PetscCall(PetscFree2(rc, displs));
   PetscFunctionReturn(0);
 }
-

@@ -10,7 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#define KERGS_SAMPLE_GROUP   "/sample"
+#define KERGS_SAMPLE_GROUP "/sample"
 #define KERGS_CONTACTS_GROUP "/sample/contacts"
 
 /* /sample/box: where the box walls stand, for -box_from_sample (a compaction's free walls end where the sample fits). */
@@ -95,6 +95,7 @@ static PetscErrorCode SampleWriteContacts(PetscViewer viewer, KergsScene scene, 
 PetscErrorCode KergsSampleWrite(KergsScene scene, KergsContacts contacts, const char path[])
 {
   KergsDisks  D;
+  PetscInt    step;
   PetscReal   sctime;
   char        tmp[PETSC_MAX_PATH_LEN];
   PetscViewer viewer;
@@ -104,7 +105,7 @@ PetscErrorCode KergsSampleWrite(KergsScene scene, KergsContacts contacts, const 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetDisks(scene, &D));
   PetscCall(KergsSceneGetComm(scene, &comm));
-  PetscCall(KergsSceneGetStep(scene, NULL, &sctime, NULL));
+  PetscCall(KergsSceneGetStep(scene, &step, &sctime, NULL));
   n  = D.ndisks;
   nl = D.nowned;
   PetscCall(KergsInitializePackage());
@@ -130,7 +131,9 @@ PetscErrorCode KergsSampleWrite(KergsScene scene, KergsContacts contacts, const 
   PetscCall(KergsViewIntegers(viewer, comm, "id", nl, D.id));
   PetscCall(SampleWriteBox(viewer, scene));
   PetscCall(PetscViewerHDF5PopGroup(viewer));
-  if (contacts) PetscCall(SampleWriteContacts(viewer, scene, contacts));
+  /* a run that took no step has no contacts of its own yet: it writes none, rather than an empty list that would read as
+     a packing carrying no force */
+  if (contacts && step > 0) PetscCall(SampleWriteContacts(viewer, scene, contacts));
   PetscCall(PetscViewerDestroy(&viewer));
   PetscCall(KergsFileCommit(comm, tmp, path));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
@@ -161,6 +164,13 @@ static PetscErrorCode MapWalls(PetscViewer viewer, const char path[], KergsScene
   PetscCall(PetscStrToArray(names, ',', &argc, &list));
   PetscCall(PetscMalloc1(argc + 1, map));
   for (int k = 0; k < argc; k++) {
+    for (int j = 0; j < k; j++) {
+      PetscBool same;
+
+      PetscCall(PetscStrcmp(list[j], list[k], &same));
+      PetscCheck(!same, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: the attribute walls of %s names the wall %s twice", path,
+                 KERGS_CONTACTS_GROUP, list[k]);
+    }
     (*map)[k] = -1;
     for (PetscInt w = 0; w < nwalls; w++) {
       PetscBool same;
@@ -183,15 +193,80 @@ static int CompareIdLocal(const void *x, const void *y)
 
 static int CompareKeys(const void *p, const void *q) { return KERGS_COMPARE_KEYS((const KergsContact *)p, (const KergsContact *)q); }
 
-/* The file's contacts of the grains owned here, as key-only contacts (b = -1) carrying the impulse force * dt, sorted
-   by key; a contact with a wall the scene does not have is left out (*nwall counts them), and *nrepeated counts the
-   records of a pair already given. */
-static PetscErrorCode SampleContactsOwned(const char path[], KergsScene scene, PetscInt nfile, const PetscReal *ida, const PetscReal *kind,
-                                          const PetscReal *idb, const PetscReal *force, PetscInt nmap, const PetscInt *map, PetscInt *n,
-                                          KergsContact **c, PetscInt *nwall, PetscInt *nrepeated)
+/* /sample/contacts as read from the file, every record on every rank. */
+typedef struct {
+  PetscInt   n, nwalls, *wall; /* wall[k]: the reading scene's index of the file's wall k, -1 when it has none */
+  PetscReal *ida, *kind, *idb, *force;
+} SampleContacts;
+
+static PetscErrorCode SampleContactsFree(SampleContacts *sc)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(sc->wall));
+  PetscCall(PetscFree(sc->ida));
+  PetscCall(PetscFree(sc->kind));
+  PetscCall(PetscFree(sc->idb));
+  PetscCall(PetscFree(sc->force));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode SampleContactsLoad(PetscViewer viewer, const char path[], KergsScene scene, SampleContacts *sc)
+{
+  MPI_Comm comm;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetComm(scene, &comm));
+  PetscCall(PetscViewerHDF5ReadAttribute(viewer, KERGS_CONTACTS_GROUP, "ncontacts", PETSC_INT, NULL, &sc->n));
+  PetscCheck(sc->n >= 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: %s has %" PetscInt_FMT " contacts", path, KERGS_CONTACTS_GROUP,
+             sc->n);
+  PetscCall(MapWalls(viewer, path, scene, &sc->nwalls, &sc->wall));
+  PetscCall(PetscViewerHDF5PushGroup(viewer, KERGS_CONTACTS_GROUP));
+  PetscCall(KergsLoadAllBlocks(viewer, comm, path, KERGS_CONTACTS_GROUP, "a_id", sc->n, 1, &sc->ida));
+  PetscCall(KergsLoadAllBlocks(viewer, comm, path, KERGS_CONTACTS_GROUP, "kind", sc->n, 1, &sc->kind));
+  PetscCall(KergsLoadAllBlocks(viewer, comm, path, KERGS_CONTACTS_GROUP, "b_id", sc->n, 1, &sc->idb));
+  PetscCall(KergsLoadAllBlocks(viewer, comm, path, KERGS_CONTACTS_GROUP, "force", sc->n, KERGS_MAXCOMP, &sc->force));
+  PetscCall(PetscViewerHDF5PopGroup(viewer));
+  PetscFunctionReturn(0);
+}
+
+static PetscBool IsId(PetscReal v) { return (PetscBool)(v >= 0 && v == PetscFloorReal(v) && v < (PetscReal)PETSC_MAX_INT); }
+
+/* Record k names a grain (a non-negative integer id) with a grain of larger id (the warm start's key) or with a wall of
+   the file's list, by a finite force whose normal part pushes. */
+static PetscBool RecordValid(const SampleContacts *sc, PetscInt k)
+{
+  PetscBool ok = (PetscBool)(IsId(sc->ida[k]) && IsId(sc->idb[k]) &&
+                             ((sc->kind[k] == 0.0 && sc->idb[k] > sc->ida[k]) || (sc->kind[k] == 1.0 && sc->idb[k] < sc->nwalls)));
+
+  for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) ok = (PetscBool)(ok && !PetscIsInfOrNanReal(sc->force[KERGS_MAXCOMP * k + j]));
+  ok = (PetscBool)(ok && sc->force[KERGS_MAXCOMP * k] >= 0); /* contacts push: a normal force is never a pull */
+  return ok;
+}
+
+/* The pairs (grain id, local index) of the owned grains, sorted by id. */
+static PetscErrorCode OwnedIdTable(KergsScene scene, PetscInt **table)
 {
   KergsDisks D;
-  PetscInt  *table; /* pairs (grain id, local index) of the owned grains, sorted by id */
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetDisks(scene, &D));
+  PetscCall(PetscMalloc1(2 * D.nowned + 2, table));
+  for (PetscInt i = 0; i < D.nowned; i++) {
+    (*table)[2 * i]     = D.id[i];
+    (*table)[2 * i + 1] = i;
+  }
+  qsort(*table, (size_t)D.nowned, 2 * sizeof(PetscInt), CompareIdLocal);
+  PetscFunctionReturn(0);
+}
+
+/* The file's contacts of the grains owned here, as key-only contacts (b = -1) carrying the impulse force * dt, sorted
+   by key. count[0]: those kept; count[1]: those with a wall the scene does not have, left out; count[2]: records of a
+   pair given before. Every record is checked (every rank holds them all, so all stop on the same one). */
+static PetscErrorCode SampleContactsOwned(const char path[], KergsScene scene, const SampleContacts *sc, KergsContact **c,
+                                          PetscInt count[3])
+{
+  KergsDisks D;
+  PetscInt  *table, nhit = 0;
   PetscReal  dt;
   MPI_Comm   comm;
 
@@ -199,103 +274,111 @@ static PetscErrorCode SampleContactsOwned(const char path[], KergsScene scene, P
   PetscCall(KergsSceneGetDisks(scene, &D));
   PetscCall(KergsSceneGetComm(scene, &comm));
   PetscCall(KergsSceneGetTimeStep(scene, &dt, NULL));
-  PetscCall(PetscMalloc1(2 * D.nowned + 2, &table));
-  for (PetscInt i = 0; i < D.nowned; i++) {
-    table[2 * i]     = D.id[i];
-    table[2 * i + 1] = i;
-  }
-  qsort(table, (size_t)D.nowned, 2 * sizeof(PetscInt), CompareIdLocal);
-  PetscCall(PetscMalloc1(nfile + 1, c));
-  *n     = 0;
-  *nwall = 0;
-  for (PetscInt k = 0; k < nfile; k++) {
-    const PetscInt  wall = kind[k] != 0.0, key[2] = {(PetscInt)ida[k], 0};
-    const PetscInt *hit;
-    KergsContact   *ck = &(*c)[*n];
+  PetscCall(OwnedIdTable(scene, &table));
+  for (PetscInt k = 0; k < sc->n; k++) {
+    const PetscInt key[2] = {(PetscInt)sc->ida[k], 0};
 
-    PetscCheck(!PetscIsInfOrNanReal(force[KERGS_MAXCOMP * k]) && !PetscIsInfOrNanReal(force[KERGS_MAXCOMP * k + 1]) &&
-                 (kind[k] == 0.0 || kind[k] == 1.0) && ida[k] >= 0 && idb[k] >= 0 && (!wall || idb[k] < nmap),
-               comm, PETSC_ERR_FILE_UNEXPECTED, /* every rank holds every record: all stop here together */
-               "Sample file %s: contact %" PetscInt_FMT " of %s is not a contact of a grain with a grain or a named wall with a finite force",
+    PetscCheck(RecordValid(sc, k), comm, PETSC_ERR_FILE_UNEXPECTED,
+               "Sample file %s: contact %" PetscInt_FMT " of %s is not a contact of a grain with a grain of larger id or a named wall, "
+               "with a finite force that pushes",
                path, k, KERGS_CONTACTS_GROUP);
-    hit = (const PetscInt *)bsearch(key, table, (size_t)D.nowned, 2 * sizeof(PetscInt), CompareIdLocal);
+    nhit += bsearch(key, table, (size_t)D.nowned, 2 * sizeof(PetscInt), CompareIdLocal) != NULL;
+  }
+  PetscCall(PetscMalloc1(nhit + 1, c)); /* this rank's share, not the whole file's */
+  count[0] = count[1] = count[2] = 0;
+  for (PetscInt k = 0; k < sc->n; k++) {
+    const PetscInt  wall = sc->kind[k] != 0.0, key[2] = {(PetscInt)sc->ida[k], 0};
+    const PetscInt *hit = (const PetscInt *)bsearch(key, table, (size_t)D.nowned, 2 * sizeof(PetscInt), CompareIdLocal);
+    KergsContact   *ck  = &(*c)[count[0]];
+
     if (!hit) continue;
-    if (wall && map[(PetscInt)idb[k]] < 0) {
-      (*nwall)++;
+    if (wall && sc->wall[(PetscInt)sc->idb[k]] < 0) {
+      count[1]++;
       continue;
     }
     PetscCall(PetscMemzero(ck, sizeof(*ck)));
     ck->kind = wall ? KERGS_CONTACT_DISK_WALL : KERGS_CONTACT_DISK_DISK;
     ck->a    = hit[1];
     ck->b    = -1;
-    ck->idb  = wall ? map[(PetscInt)idb[k]] : (PetscInt)idb[k];
-    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) ck->r[j] = force[KERGS_MAXCOMP * k + j] * dt;
-    (*n)++;
+    ck->idb  = wall ? sc->wall[(PetscInt)sc->idb[k]] : (PetscInt)sc->idb[k];
+    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) ck->r[j] = sc->force[KERGS_MAXCOMP * k + j] * dt;
+    count[0]++;
   }
-  qsort(*c, (size_t)*n, sizeof(KergsContact), CompareKeys);
-  *nrepeated = 0;
-  for (PetscInt k = 1; k < *n; k++) *nrepeated += KERGS_COMPARE_KEYS(&(*c)[k - 1], &(*c)[k]) == 0;
+  qsort(*c, (size_t)count[0], sizeof(KergsContact), CompareKeys);
+  for (PetscInt k = 1; k < count[0]; k++) count[2] += KERGS_COMPARE_KEYS(&(*c)[k - 1], &(*c)[k]) == 0;
   PetscCall(PetscFree(table));
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsSampleReadImpulses(KergsScene scene, KergsContacts contacts)
+/* Whether the sample file holds /sample/contacts, checked to be what SampleContactsLoad reads before PETSc's viewer
+   reads it (an array where one value was expected crashed the viewer's attribute reader); the viewer opened on the file
+   when it does. */
+static PetscErrorCode SampleContactsOpen(MPI_Comm comm, const char path[], PetscViewer *viewer, PetscBool *has)
 {
-  const char   *path;
-  PetscViewer   viewer;
-  PetscBool     has;
-  PetscInt      nfile = 0, nmap = 0, *map, n = 0, nwall = 0, nrepeated = 0, sums[3], totals[3];
-  PetscReal    *ida, *kind, *idb, *force;
-  KergsContact *c;
-  MPI_Comm      comm;
+  const KergsH5Item items[] = {
+      {KERGS_H5_ATTR_INT, KERGS_CONTACTS_GROUP, "ncontacts", 0, 0}, {KERGS_H5_ATTR_STRING, KERGS_CONTACTS_GROUP, "walls", 0, 0},
+      {KERGS_H5_DATASET, KERGS_CONTACTS_GROUP, "a_id", -1, 1},      {KERGS_H5_DATASET, KERGS_CONTACTS_GROUP, "kind", -1, 1},
+      {KERGS_H5_DATASET, KERGS_CONTACTS_GROUP, "b_id", -1, 1},      {KERGS_H5_DATASET, KERGS_CONTACTS_GROUP, "force", -1, KERGS_MAXCOMP}};
+  PetscBool group, other;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL));
+  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, viewer));
+  PetscCall(PetscViewerHDF5HasGroup(*viewer, KERGS_CONTACTS_GROUP, &group));
+  PetscCall(PetscViewerHDF5HasDataset(*viewer, KERGS_CONTACTS_GROUP, &other));
+  PetscCall(PetscViewerDestroy(viewer));
+  PetscCheck(!other, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: %s is a dataset, not the group of contact forces", path,
+             KERGS_CONTACTS_GROUP);
+  *has = group;
+  if (!group) PetscFunctionReturn(0);
+  PetscCall(KergsH5CheckItems(comm, path, "Sample file", (PetscInt)PETSC_STATIC_ARRAY_LENGTH(items), items));
+  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, viewer));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSampleReadForces(KergsScene scene, KergsContacts contacts, PetscInt *nforces)
+{
+  const char    *path;
+  PetscViewer    viewer;
+  PetscBool      has      = PETSC_FALSE;
+  PetscInt       count[3] = {0, 0, 0}, total[3];
+  SampleContacts sc       = {0};
+  KergsContact  *c        = NULL;
+  MPI_Comm       comm;
+  PetscErrorCode ierr;
+
+  PetscFunctionBeginUser;
+  if (nforces) *nforces = 0;
   PetscCall(KergsSceneGetSamplePath(scene, &path));
   if (!path[0]) PetscFunctionReturn(0);
   PetscCall(KergsSceneGetComm(scene, &comm));
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
-  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL));
-  PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &viewer));
-  PetscCall(PetscViewerHDF5HasGroup(viewer, KERGS_CONTACTS_GROUP, &has));
+  PetscCall(SampleContactsOpen(comm, path, &viewer, &has));
   if (!has) {
     PetscCall(PetscInfo(NULL, "Sample file %s records no contact forces: the first step starts from zero impulses\n", path));
-    PetscCall(PetscViewerDestroy(&viewer));
     PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
     PetscFunctionReturn(0);
   }
-  PetscCall(PetscViewerHDF5HasAttribute(viewer, KERGS_CONTACTS_GROUP, "ncontacts", &has));
-  PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute ncontacts on %s", path, KERGS_CONTACTS_GROUP);
-  PetscCall(PetscViewerHDF5ReadAttribute(viewer, KERGS_CONTACTS_GROUP, "ncontacts", PETSC_INT, NULL, &nfile));
-  PetscCheck(nfile >= 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: %s has %" PetscInt_FMT " contacts", path, KERGS_CONTACTS_GROUP,
-             nfile);
-  PetscCall(MapWalls(viewer, path, scene, &nmap, &map));
-  PetscCall(PetscViewerHDF5PushGroup(viewer, KERGS_CONTACTS_GROUP));
-  PetscCall(KergsLoadAllBlocks(viewer, comm, path, KERGS_CONTACTS_GROUP, "a_id", nfile, 1, &ida));
-  PetscCall(KergsLoadAllBlocks(viewer, comm, path, KERGS_CONTACTS_GROUP, "kind", nfile, 1, &kind));
-  PetscCall(KergsLoadAllBlocks(viewer, comm, path, KERGS_CONTACTS_GROUP, "b_id", nfile, 1, &idb));
-  PetscCall(KergsLoadAllBlocks(viewer, comm, path, KERGS_CONTACTS_GROUP, "force", nfile, KERGS_MAXCOMP, &force));
-  PetscCall(PetscViewerHDF5PopGroup(viewer));
+  ierr = SampleContactsLoad(viewer, path, scene, &sc);
   PetscCall(PetscViewerDestroy(&viewer));
-  PetscCall(SampleContactsOwned(path, scene, nfile, ida, kind, idb, force, nmap, map, &n, &c, &nwall, &nrepeated));
-  sums[0] = n;
-  sums[1] = nwall;
-  sums[2] = nrepeated;
-  PetscCallMPI(MPI_Allreduce(sums, totals, 3, MPIU_INT, MPI_SUM, comm));
-  PetscCheck(totals[2] == 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: %" PetscInt_FMT " of its contacts repeat a pair given before",
-             path, totals[2]);
-  PetscCheck(totals[0] + totals[1] == nfile, comm, PETSC_ERR_FILE_UNEXPECTED,
+  PetscCall(ierr);
+  PetscCall(SampleContactsOwned(path, scene, &sc, &c, count));
+  PetscCall(SampleContactsFree(&sc));
+  PetscCallMPI(MPI_Allreduce(count, total, 3, MPIU_INT, MPI_SUM, comm));
+  PetscCheck(total[2] == 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: %" PetscInt_FMT " of its contacts repeat a pair given before",
+             path, total[2]);
+  PetscCheck(total[0] + total[1] == sc.n, comm, PETSC_ERR_FILE_UNEXPECTED,
              "Sample file %s: %" PetscInt_FMT " of its %" PetscInt_FMT " contacts belong to no grain of the sample", path,
-             nfile - totals[0] - totals[1], nfile);
-  if (contacts && totals[1])
-    PetscCall(PetscInfo(NULL, "Sample file %s: %" PetscInt_FMT " contacts with walls this scene does not have start from zero\n", path, totals[1]));
-  if (contacts) PetscCall(PetscInfo(NULL, "Sample file %s: %" PetscInt_FMT " contact forces as the first step's warm start\n", path, totals[0]));
-  if (contacts) PetscCall(KergsContactsRestore(contacts, n, c));
+             sc.n - total[0] - total[1], sc.n);
+  if (contacts && total[1])
+    PetscCall(PetscPrintf(
+        comm, "kergs: %" PetscInt_FMT " contact forces of sample file %s are with walls this scene does not have: they start from zero\n",
+        total[1], path));
+  if (contacts)
+    PetscCall(PetscInfo(NULL, "Sample file %s: %" PetscInt_FMT " contact forces as the first step's warm start\n", path, total[0]));
+  if (contacts) PetscCall(KergsContactsRestore(contacts, count[0], c));
+  if (nforces) *nforces = total[0];
   PetscCall(PetscFree(c));
-  PetscCall(PetscFree(map));
-  PetscCall(PetscFree(ida));
-  PetscCall(PetscFree(kind));
-  PetscCall(PetscFree(idb));
-  PetscCall(PetscFree(force));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }

@@ -170,10 +170,11 @@ PetscErrorCode KergsSceneGetBox(KergsScene scene, PetscBool *has, PetscReal box[
   PetscFunctionReturn(0);
 }
 
-/* The velocity at the scene's time of the box wall `name` (every box wall exists: the caller checked KergsSceneGetBox). */
+/* The velocity at the scene's time of the box wall `name` (zero when there is none). */
 static PetscErrorCode BoxWallVelocity(KergsScene scene, const char name[], PetscReal v[])
 {
   PetscFunctionBeginUser;
+  for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = 0.0;
   for (PetscInt w = 0; w < scene->nwalls; w++) {
     PetscBool same;
 
@@ -183,10 +184,10 @@ static PetscErrorCode BoxWallVelocity(KergsScene scene, const char name[], Petsc
   PetscFunctionReturn(0);
 }
 
-/* A test that drives the top wall into a sample at rest must set the whole sample moving in its first steps: the wall
-   pushes the column's momentum, rho H v, into it at once. At 10^6 disks (H = 1,000 d, v = 0.93 sqrt(sigma3 / rho)) that
-   took 59 sigma3 at the top wall and left 4.1e-4 m of interpenetration at step 1; started in the homogeneous
-   deformation, 2.0 sigma3 and 6.9e-6 m (docs/biaxial.md). */
+/* Adds to each owned grain's velocity the box walls' normal velocities interpolated linearly across the box: v_x from
+   box_left's to box_right's x-velocity, v_y from box_bottom's to box_top's y-velocity (a free wall's is its current
+   velocity, zero at a start). A top wall driven into a sample at rest otherwise pushes the column's momentum into it in
+   the first steps, which at 10^6 disks is felt as a shock (docs/biaxial.md, "The strain rate"). */
 PetscErrorCode KergsSceneBoxAffineStart(KergsScene scene)
 {
   PetscBool has;
@@ -199,6 +200,10 @@ PetscErrorCode KergsSceneBoxAffineStart(KergsScene scene)
   PetscCall(BoxWallVelocity(scene, "box_right", vr));
   PetscCall(BoxWallVelocity(scene, "box_bottom", vb));
   PetscCall(BoxWallVelocity(scene, "box_top", vt));
+  PetscCheck(KergsSceneFinite(vl[0]) && KergsSceneFinite(vr[0]) && KergsSceneFinite(vb[1]) && KergsSceneFinite(vt[1]), scene->comm,
+             PETSC_ERR_ARG_OUTOFRANGE,
+             "-box_affine_start: a box wall's velocity is not finite (box_left %g, box_right %g, box_bottom %g, box_top %g)", (double)vl[0],
+             (double)vr[0], (double)vb[1], (double)vt[1]);
   for (PetscInt i = 0; i < scene->nowned; i++) {
     const PetscReal sx = (scene->x[KERGS_DIM * i] - box[0]) / (box[2] - box[0]);
     const PetscReal sy = (scene->x[KERGS_DIM * i + 1] - box[1]) / (box[3] - box[1]);
@@ -228,7 +233,7 @@ PetscErrorCode KergsSceneRestoreWall(KergsScene scene, PetscInt w, const PetscRe
 /* ------------------------------------------------------------------------------------------------ */
 /* Options                                                                                          */
 
-/* -box, -box_open_top and -walls, inside the scene's options block. */
+/* -box, -box_from_sample, -box_open_top, -box_affine_start and -walls, inside the scene's options block. */
 PetscErrorCode KergsSceneWallsOptions(PetscOptionItems *PetscOptionsObject, KergsWallsSpec *spec)
 {
   PetscFunctionBeginUser;
@@ -243,8 +248,8 @@ PetscErrorCode KergsSceneWallsOptions(PetscOptionItems *PetscOptionsObject, Kerg
   PetscCall(PetscOptionsBool("-box_open_top", "Omit the top wall of -box", NULL, spec->open_top, &spec->open_top, NULL));
   PetscCall(PetscOptionsBool("-box_affine_start",
                              "Start the grains in the homogeneous deformation the box walls impose: add to each grain's velocity the "
-                             "box walls' velocities interpolated linearly across the box (x between box_left and box_right, y between "
-                             "box_bottom and box_top)",
+                             "box walls' normal velocities interpolated linearly across the box (x between box_left and box_right, y "
+                             "between box_bottom and box_top; a free wall's is zero at the start)",
                              NULL, spec->affine_start, &spec->affine_start, NULL));
   PetscCall(KergsOptionsStringList(PetscOptionsObject, "-walls", "Names of further walls, each set by -wall_<name>_a, _b, _type, ...",
                                    &spec->nnames, &spec->names, NULL));

@@ -71,7 +71,8 @@ static PetscReal ConfiningPressure(PetscInt nwalls, const KergsWall walls[])
 }
 
 /* Before the first step, rank 0 prints one warning per driven wall whose inertial number exceeds 0.1, with the terms
-   of the formula, and one per driven wall faster than 0.3 sqrt(sigma3 / rho). Silent without a pressure wall or without a driven wall moving along its normal. Collective. */
+   of the formula, and one per driven wall faster than 0.3 sqrt(sigma3 / rho). Silent without a pressure wall or without a driven wall
+   moving along its normal. Collective. */
 PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper st)
 {
   const KergsWall *walls;
@@ -99,8 +100,8 @@ PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper st)
                             "kergs: warning: wall %s moves at %.3g sqrt(sigma3 / rho) (= I H / d, the sample %.0f mean diameters across), "
                             "above %g: the sample's own inertia rho v^2 = %.2g sigma3 is felt on its scale, whatever I = %.3g; not a "
                             "quasi-static test (docs/biaxial.md, \"The strain rate\")\n",
-                            walls[w].name, (double)(speed * PetscSqrtReal(rho / sigma3)), (double)(dist / d), (double)KERGS_SAMPLE_SPEED_WARN,
-                            (double)(rho * speed * speed / sigma3), (double)inertial));
+                            walls[w].name, (double)(speed * PetscSqrtReal(rho / sigma3)), (double)(dist / d),
+                            (double)KERGS_SAMPLE_SPEED_WARN, (double)(rho * speed * speed / sigma3), (double)inertial));
     if (!(inertial > KERGS_INERTIAL_WARN)) continue;
     PetscCall(PetscPrintf(st->comm,
                           "kergs: warning: wall %s shears the sample at the inertial number I = eps_dot d sqrt(rho / sigma3) = %.3g, above "

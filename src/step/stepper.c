@@ -20,7 +20,7 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   st->blowup_energy    = 2.0;
   st->divergence_tol   = 0.7; /* r = 0 scores 1 (KergsLawNaturalResidualScaled); a diverging NLGS-Jac 0.78-0.93 */
   st->divergence_steps = 5;
-  st->sample_impulses  = PETSC_TRUE;
+  st->sample_forces    = PETSC_TRUE;
   PetscCall(KergsStepperPeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));
   PetscCall(KergsContactsCreate(comm, &st->contacts));
@@ -79,10 +79,10 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                        "", st->rest_energy, &st->rest_energy, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
-  PetscCall(PetscOptionsBool("-sample_impulses",
+  PetscCall(PetscOptionsBool("-sample_forces",
                              "With -disks_source file: start the first step from the contact forces the sample records, as a restart "
                              "would (false: from zero impulses)",
-                             "", st->sample_impulses, &st->sample_impulses, NULL));
+                             "", st->sample_forces, &st->sample_forces, NULL));
   PetscCall(PetscOptionsInt("-fclib_step",
                             "Export in FCLib format the local problem solved in this step, numbered as the step lines (1: the first step; "
                             "-1: none)",
@@ -115,7 +115,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   if (help) PetscFunctionReturn(0);
   PetscCall(KergsProvenanceSetOptions(st->comm)); /* the options as given, before any object adds its own */
   PetscCall(KergsStepperCheckPaths(st));          /* before the run writes anything */
-  if (st->sample_impulses && !st->restart_path[0]) PetscCall(KergsSampleReadImpulses(st->scene, NULL)); /* and the sample's forces */
+  if (st->sample_forces && !st->restart_path[0]) PetscCall(KergsSampleReadForces(st->scene, NULL, NULL)); /* and the sample's forces */
   if (st->restart_path[0]) PetscCall(KergsStepperRestore(st));
   PetscFunctionReturn(0);
 }
@@ -204,6 +204,30 @@ static PetscErrorCode SaveVelocities(KergsScene sc, PetscReal **vold, PetscReal 
   PetscFunctionReturn(0);
 }
 
+/* After the first detection: every force restored from the sample should have found its contact (a pair within the
+   alert distance, keyed as in the file); those that did not start from zero, which a wrong file would otherwise hide. */
+static PetscErrorCode StepperCheckSampleForces(KergsStepper st)
+{
+  KergsContact *c;
+  PetscInt      m, matched = 0;
+  const char   *path;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsContactsGetLocal(st->contacts, &m, &c));
+  for (PetscInt k = 0; k < m; k++) matched += c[k].persistent ? 1 : 0;
+  PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, &matched, 1, MPIU_INT, MPI_SUM, st->comm));
+  PetscCall(KergsSceneGetSamplePath(st->scene, &path));
+  if (matched < st->sample_nforces)
+    PetscCall(PetscPrintf(st->comm,
+                          "kergs: warning: %" PetscInt_FMT " of the %" PetscInt_FMT
+                          " contact forces of sample file %s match no contact of the "
+                          "first step (their grains are not within the alert distance): they start from zero\n",
+                          st->sample_nforces - matched, st->sample_nforces, path));
+  PetscCall(PetscInfo(NULL, "%" PetscInt_FMT " of the %" PetscInt_FMT " contact forces of sample file %s are the first step's warm start\n",
+                      matched, st->sample_nforces, path));
+  PetscFunctionReturn(0);
+}
+
 /* The automatic alert distance for this step (KergsSceneAdaptAlert) from the fastest closing speed at its start: two
    grains at the fastest grain's speed vmax, or that grain and the fastest wall. */
 static PetscErrorCode StepperAdaptAlert(KergsStepper st, PetscReal vmax)
@@ -238,10 +262,11 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   /* initial partition before the first detection, then checks every -partition_check_every steps, with the
      contacts of the previous step (after its solve): migrates the disks and their contacts when due */
   PetscCall(KergsPartitionUpdate(st->partition, sc, st->contacts, NULL));
-  if (step == 0 && st->sample_impulses && !st->restart_path[0]) PetscCall(KergsSampleReadImpulses(sc, st->contacts));
+  if (step == 0 && st->sample_forces && !st->restart_path[0]) PetscCall(KergsSampleReadForces(sc, st->contacts, &st->sample_nforces));
   PetscCall(PetscTime(&t0));
   PetscCall(KergsContactsDetect(st->contacts, sc));
   if (step == 0) PetscCall(CheckInitialOverlaps(st));
+  if (step == 0 && st->sample_nforces) PetscCall(StepperCheckSampleForces(st));
   PetscCall(PetscTime(&t1));
   /* v^d, then W: unless kept, H is freed before W exists, built again for the update once W is freed, and freed after
      it. W couples the active contacts only, unless the solver works on the whole W (the kernel-regularised types). */
@@ -408,7 +433,8 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   PetscCall(KergsResultsClose(st->results));
   /* the handler stays until KergsStepperDestroy: a signal now (Slurm's warning at the end of a run that has just
      finished) finds the run's work done and changes nothing, instead of ending the process with status 128 + signal */
-  if (st->sample_out[0] && st->status == KERGS_EXIT_DONE) PetscCall(KergsSampleWrite(sc, st->contacts, st->sample_out)); /* a finished packing only */
+  if (st->sample_out[0] && st->status == KERGS_EXIT_DONE)
+    PetscCall(KergsSampleWrite(sc, st->contacts, st->sample_out)); /* a finished packing only */
   if (st->status == KERGS_EXIT_DONE && st->error_on_nonconvergence && st->nonconverged > 0) st->status = KERGS_EXIT_NOT_CONVERGED;
   PetscCall(KergsSceneKineticEnergy(sc, &ek, &vmax));
   PetscCall(KergsSolverGetTolerances(st->solver, NULL, &max_it));

@@ -17,7 +17,8 @@ struct _p_KergsStepper {
   PetscReal      rest_speed;                     /* -stop_at_rest: stop once every disk is slower than this (0: never) */
   PetscReal      rest_energy;                    /* -stop_at_rest_energy: or once the kinetic energy per grain is below this */
   char           sample_out[PETSC_MAX_PATH_LEN]; /* -sample_output */
-  PetscBool      sample_impulses;                /* -sample_impulses: the first step starts from the sample's contact forces */
+  PetscBool      sample_forces;                  /* -sample_forces: the first step starts from the sample's contact forces */
+  PetscInt       sample_nforces;                 /* how many forces it restored (all ranks) */
   PetscInt       fclib_step;                     /* -fclib_step: export this step's problem (-1: none) */
   char           fclib_path[PETSC_MAX_PATH_LEN];
   PetscBool      quiet;         /* -quiet: no per-step summary line */
