@@ -105,15 +105,19 @@ def read_contacts(path, group):
     return {"walls": walls, **data}
 
 
+def check_rows(path, group, data, widths, n):
+    """Each dataset of `widths` holds n rows of its width, all finite."""
+    for name, width in widths.items():
+        shape = (n, width) if width > 1 else (n,)
+        if data[name].shape != shape:
+            fail(f"{path}: {group}/{name} has shape {data[name].shape}, expected {shape}")
+        if not np.all(np.isfinite(data[name])):
+            fail(f"{path}: {group}/{name} holds NaN or infinite values")
+
+
 def validate_contacts(path, contacts, ids):
     """Every contact of a grain of the sample with a grain of larger id or a box wall, with a finite force."""
-    m = len(contacts["a_id"])
-    for name, width in PER_CONTACT.items():
-        shape = (m, width) if width > 1 else (m,)
-        if contacts[name].shape != shape:
-            fail(f"{path}: /sample/contacts/{name} has shape {contacts[name].shape}, expected {shape}")
-        if not np.all(np.isfinite(contacts[name])):
-            fail(f"{path}: /sample/contacts/{name} holds NaN or infinite values")
+    check_rows(path, "/sample/contacts", contacts, PER_CONTACT, len(contacts["a_id"]))
     kind, a, b = contacts["kind"], contacts["a_id"], contacts["b_id"]
     if not np.all((kind == 0) | (kind == 1)):
         fail(f"{path}: /sample/contacts/kind holds values other than 0 (grain) and 1 (wall)")
@@ -145,12 +149,7 @@ def validate(path, data, attrs, box):
     n = len(data["radius"]) if data["radius"].ndim == 1 else 0
     if n == 0:
         fail(f"{path}: /sample/radius is empty or not a list of radii")
-    for name, width in PER_GRAIN.items():
-        shape = (n, width) if width > 1 else (n,)
-        if data[name].shape != shape:
-            fail(f"{path}: /sample/{name} has shape {data[name].shape}, expected {shape}")
-        if not np.all(np.isfinite(data[name])):
-            fail(f"{path}: /sample/{name} holds NaN or infinite values")
+    check_rows(path, "/sample", data, PER_GRAIN, n)
     if "ndisks" not in attrs or int(np.asarray(attrs["ndisks"]).ravel()[0]) != n:
         fail(f"{path}: the attribute ndisks does not match the {n} rows of /sample/radius")
     if len(np.unique(data["id"])) != n:
