@@ -100,6 +100,15 @@ PETSC_EXTERN PetscErrorCode KergsSceneReserve(KergsScene, PetscInt n);
 PETSC_EXTERN PetscErrorCode KergsSampleRead(KergsScene, const char path[]);
 /* The box x0,y0,x1,y1 a sample file records (its run's four box walls where they stood), for -box_from_sample. */
 PETSC_EXTERN PetscErrorCode KergsSampleReadBox(MPI_Comm, const char path[], PetscReal box[4]);
+/* For readers that name grains by id (checkpoints, samples): the ids of the first n local disks (owned first, then
+   ghosts) with their local indices, sorted by id (PetscFree), and the local index of an id in it, or -1. */
+typedef struct {
+  PetscInt id, local;
+} KergsGrainIndex;
+PETSC_EXTERN PetscErrorCode KergsSceneGetGrainIndex(KergsScene, PetscInt n, KergsGrainIndex **table);
+PETSC_EXTERN PetscInt       KergsGrainIndexFind(const KergsGrainIndex table[], PetscInt n, PetscInt id);
+/* The walls' names joined by commas, in wall order (PetscFree): how files record which walls a run had. */
+PETSC_EXTERN PetscErrorCode KergsSceneGetWallNames(KergsScene, char **joined);
 /* The sample file the disks were read from by KergsSampleRead; an empty string when they were not. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetSamplePath(KergsScene, const char **path);
 

@@ -126,15 +126,6 @@ static void ProbeDataset(hid_t file, const KergsH5Item *it, PetscInt rows, char 
   (void)H5Dclose(set);
 }
 
-static void ProbeGroup(hid_t file, const KergsH5Item *it, char msg[], size_t len)
-{
-  H5O_info_t info;
-  PetscBool  ok = (PetscBool)(H5Lexists(file, it->object, H5P_DEFAULT) > 0 &&
-                             H5Oget_info_by_name(file, it->object, &info, H5P_DEFAULT) >= 0 && info.type == H5O_TYPE_GROUP);
-
-  if (!ok) (void)PetscSNPrintf(msg, len, "%s is not a group", it->object);
-}
-
 PetscErrorCode KergsH5CheckItems(MPI_Comm comm, const char path[], const char what[], PetscInt n, const KergsH5Item items[])
 {
   char        msg[PETSC_MAX_PATH_LEN + 256] = "", why[PETSC_MAX_PATH_LEN + 128] = "";
@@ -151,9 +142,7 @@ PetscErrorCode KergsH5CheckItems(MPI_Comm comm, const char path[], const char wh
     file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     if (file < 0) PetscCall(PetscSNPrintf(why, sizeof(why), "cannot be opened as HDF5"));
     for (PetscInt k = 0; file >= 0 && k < n && !why[0]; k++) {
-      if (items[k].kind == KERGS_H5_GROUP)
-        ProbeGroup(file, &items[k], why, sizeof(why));
-      else if (items[k].kind == KERGS_H5_DATASET)
+      if (items[k].kind == KERGS_H5_DATASET)
         ProbeDataset(file, &items[k], items[k].rows < 0 ? (PetscInt)last : items[k].rows, why, sizeof(why));
       else
         ProbeAttribute(file, &items[k], &last, why, sizeof(why));

@@ -114,7 +114,6 @@ static PetscErrorCode WriteWalls(PetscViewer v, MPI_Comm comm, KergsScene sc)
   PetscReal       *f[4];
   const char      *names[4] = {"a", "b", "v", "disp"};
   char            *joined;
-  size_t           len = 1;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetWalls(sc, &nwalls, &walls));
@@ -130,12 +129,7 @@ static PetscErrorCode WriteWalls(PetscViewer v, MPI_Comm comm, KergsScene sc)
     }
   PetscCall(PetscViewerHDF5PushGroup(v, "/walls"));
   for (int k = 0; k < 4; k++) PetscCall(KergsViewBlocks(v, comm, names[k], n, KERGS_DIM, f[k]));
-  for (PetscInt w = 0; w < nwalls; w++) len += strlen(walls[w].name) + 1;
-  PetscCall(PetscCalloc1(len, &joined));
-  for (PetscInt w = 0; w < nwalls; w++) {
-    if (w) strcat(joined, ",");
-    strcat(joined, walls[w].name);
-  }
+  PetscCall(KergsSceneGetWallNames(sc, &joined));
   PetscCall(WriteInt(v, NULL, "nwalls", nwalls));
   PetscCall(PetscViewerHDF5WriteAttribute(v, NULL, "names", PETSC_STRING, joined));
   PetscCall(PetscViewerHDF5PopGroup(v));
@@ -426,18 +420,12 @@ static PetscErrorCode RestoreWalls(PetscViewer v, MPI_Comm comm, const char path
   char            *names, *mine;
   PetscReal       *f[4];
   const char      *fields[4] = {"a", "b", "v", "disp"};
-  size_t           len       = 1;
   PetscBool        same;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetWalls(sc, &nwalls, &walls));
   PetscCall(PetscViewerHDF5ReadAttribute(v, "/walls", "names", PETSC_STRING, NULL, &names));
-  for (PetscInt w = 0; w < nwalls; w++) len += strlen(walls[w].name) + 1;
-  PetscCall(PetscCalloc1(len, &mine));
-  for (PetscInt w = 0; w < nwalls; w++) {
-    if (w) strcat(mine, ",");
-    strcat(mine, walls[w].name);
-  }
+  PetscCall(KergsSceneGetWallNames(sc, &mine));
   PetscCall(PetscStrcmp(names, mine, &same));
   PetscCheck(same && nwalls == h->nwalls, comm, PETSC_ERR_FILE_UNEXPECTED,
              "Checkpoint file %s holds the walls %s; the options of this run give %s: a restart keeps the walls of its run", path,
@@ -450,43 +438,6 @@ static PetscErrorCode RestoreWalls(PetscViewer v, MPI_Comm comm, const char path
   for (PetscInt w = 0; w < nwalls; w++)
     PetscCall(KergsSceneRestoreWall(sc, w, &f[0][KERGS_DIM * w], &f[1][KERGS_DIM * w], &f[2][KERGS_DIM * w], &f[3][KERGS_DIM * w]));
   for (int k = 0; k < 4; k++) PetscCall(PetscFree(f[k]));
-  PetscFunctionReturn(0);
-}
-
-/* Local index of each grain id held here (owned and ghosts): a sorted table. */
-typedef struct {
-  PetscInt id, local;
-} IdIndex;
-
-static int CompareIdIndex(const void *x, const void *y)
-{
-  const IdIndex *p = (const IdIndex *)x, *q = (const IdIndex *)y;
-  return p->id < q->id ? -1 : (p->id > q->id ? 1 : 0);
-}
-
-static PetscInt FindId(const IdIndex *t, PetscInt n, PetscInt id)
-{
-  PetscInt lo = 0, hi = n - 1;
-  while (lo <= hi) {
-    PetscInt mid = (lo + hi) / 2;
-    if (t[mid].id == id) return t[mid].local;
-    if (t[mid].id < id)
-      lo = mid + 1;
-    else
-      hi = mid - 1;
-  }
-  return -1;
-}
-
-static PetscErrorCode IdTable(KergsScene sc, PetscInt n, IdIndex **t)
-{
-  KergsDisks D;
-
-  PetscFunctionBeginUser;
-  PetscCall(KergsSceneGetDisks(sc, &D));
-  PetscCall(PetscMalloc1(n + 1, t));
-  for (PetscInt i = 0; i < n; i++) (*t)[i] = (IdIndex){D.id[i], i};
-  qsort(*t, (size_t)n, sizeof(IdIndex), CompareIdIndex);
   PetscFunctionReturn(0);
 }
 
@@ -559,13 +510,13 @@ static void ContactOf(const ContactRecords *cr, PetscInt k, PetscInt a, PetscInt
 static PetscErrorCode RestoreExact(PetscViewer v, MPI_Comm comm, const char path[], const Header *h, const PetscReal *xref, KergsScene sc,
                                    KergsContacts ct)
 {
-  KergsDisks     D;
-  PetscMPIInt    rank;
-  PetscInt       ng, nc, *gidx, nwalls;
-  PetscReal     *g;
-  ContactRecords cr = {0};
-  IdIndex       *table;
-  KergsContact  *c;
+  KergsDisks       D;
+  PetscMPIInt      rank;
+  PetscInt         ng, nc, *gidx, nwalls;
+  PetscReal       *g;
+  ContactRecords   cr = {0};
+  KergsGrainIndex *table;
+  KergsContact    *c;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
@@ -586,11 +537,11 @@ static PetscErrorCode RestoreExact(PetscViewer v, MPI_Comm comm, const char path
   PetscCall(LoadContacts(v, comm, path, h, nc, &cr));
   PetscCall(KergsSceneGetDisks(sc, &D));
   PetscCall(KergsSceneGetWalls(sc, &nwalls, NULL));
-  PetscCall(IdTable(sc, D.nlocal, &table));
+  PetscCall(KergsSceneGetGrainIndex(sc, D.nlocal, &table));
   PetscCall(PetscMalloc1(nc + 1, &c));
   for (PetscInt k = 0; k < nc; k++) {
-    const PetscInt ida = (PetscInt)cr.ida[k], idb = (PetscInt)cr.idb[k], a = FindId(table, D.nlocal, ida);
-    const PetscInt b = cr.kind[k] != 0 ? idb : FindId(table, D.nlocal, idb);
+    const PetscInt ida = (PetscInt)cr.ida[k], idb = (PetscInt)cr.idb[k], a = KergsGrainIndexFind(table, D.nlocal, ida);
+    const PetscInt b = cr.kind[k] != 0 ? idb : KergsGrainIndexFind(table, D.nlocal, idb);
     PetscCheck(a >= 0 && a < D.nowned && b >= 0 && (cr.kind[k] != 0 ? b < nwalls : b < D.nlocal), PETSC_COMM_SELF,
                PETSC_ERR_FILE_UNEXPECTED,
                "Checkpoint file %s: contact of grain %" PetscInt_FMT " with %s %" PetscInt_FMT " is not on rank %d's disks", path, ida,
@@ -611,11 +562,11 @@ static int CompareContactKeys(const void *p, const void *q) { return KERGS_COMPA
 static PetscErrorCode RestoreRepartitioned(PetscViewer v, MPI_Comm comm, const char path[], const Header *h, KergsScene sc,
                                            KergsContacts ct, KergsPartition p)
 {
-  KergsDisks     D;
-  ContactRecords cr = {0};
-  IdIndex       *table;
-  KergsContact  *c;
-  PetscInt       nc = 0;
+  KergsDisks       D;
+  ContactRecords   cr = {0};
+  KergsGrainIndex *table;
+  KergsContact    *c;
+  PetscInt         nc = 0;
 
   PetscFunctionBeginUser;
   PetscCall(KergsContactsRestore(ct, 0, NULL));
@@ -624,10 +575,10 @@ static PetscErrorCode RestoreRepartitioned(PetscViewer v, MPI_Comm comm, const c
   PetscCall(KergsPartitionUpdate(p, sc, ct, NULL)); /* the initial partition of a new run: no contacts yet */
   PetscCall(LoadContacts(v, comm, path, h, PETSC_DETERMINE, &cr));
   PetscCall(KergsSceneGetDisks(sc, &D));
-  PetscCall(IdTable(sc, D.nowned, &table));
+  PetscCall(KergsSceneGetGrainIndex(sc, D.nowned, &table));
   PetscCall(PetscMalloc1(cr.n + 1, &c));
   for (PetscInt k = 0; k < cr.n; k++) {
-    const PetscInt a = FindId(table, D.nowned, (PetscInt)cr.ida[k]);
+    const PetscInt a = KergsGrainIndexFind(table, D.nowned, (PetscInt)cr.ida[k]);
     if (a >= 0) ContactOf(&cr, k, a, -1, PETSC_TRUE, &c[nc++]);
   }
   qsort(c, (size_t)nc, sizeof(KergsContact), CompareContactKeys);

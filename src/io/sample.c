@@ -30,24 +30,6 @@ static PetscErrorCode SampleWriteBox(PetscViewer viewer, KergsScene scene)
   PetscFunctionReturn(0);
 }
 
-/* The walls' names joined by commas, in wall order: the contacts name their wall by its index in this list. */
-static PetscErrorCode JoinWallNames(KergsScene scene, char **joined)
-{
-  PetscInt         nwalls;
-  const KergsWall *walls;
-  size_t           len = 1;
-
-  PetscFunctionBeginUser;
-  PetscCall(KergsSceneGetWalls(scene, &nwalls, &walls));
-  for (PetscInt w = 0; w < nwalls; w++) len += strlen(walls[w].name) + 1;
-  PetscCall(PetscCalloc1(len, joined));
-  for (PetscInt w = 0; w < nwalls; w++) {
-    if (w) PetscCall(PetscStrlcat(*joined, ",", len));
-    PetscCall(PetscStrlcat(*joined, walls[w].name, len));
-  }
-  PetscFunctionReturn(0);
-}
-
 /* /sample/contacts: every contact that carries a force at the end of the run, keyed as the warm start keys them (grain
    id of a, kind, grain id or wall index of b), with its force r / dt in the contact frame, so that a run of another
    time step reads the same forces. */
@@ -78,7 +60,7 @@ static PetscErrorCode SampleWriteContacts(PetscViewer viewer, KergsScene scene, 
     k++;
   }
   PetscCallMPI(MPI_Allreduce(&k, &total, 1, MPIU_INT, MPI_SUM, comm));
-  PetscCall(JoinWallNames(scene, &walls));
+  PetscCall(KergsSceneGetWallNames(scene, &walls)); /* a wall contact's b_id indexes this list */
   PetscCall(PetscViewerHDF5PushGroup(viewer, KERGS_CONTACTS_GROUP));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "ncontacts", PETSC_INT, &total));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "walls", PETSC_STRING, walls));
@@ -147,20 +129,12 @@ static PetscErrorCode MapWalls(PetscViewer viewer, const char path[], KergsScene
   const KergsWall *walls;
   char            *names = NULL, **list;
   int              argc;
-  PetscBool        has;
-  PetscErrorCode   ierr;
   MPI_Comm         comm;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetWalls(scene, &nwalls, &walls));
   PetscCall(KergsSceneGetComm(scene, &comm));
-  PetscCall(PetscViewerHDF5HasAttribute(viewer, KERGS_CONTACTS_GROUP, "walls", &has));
-  PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute walls on %s", path, KERGS_CONTACTS_GROUP);
-  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-  ierr = PetscViewerHDF5ReadAttribute(viewer, KERGS_CONTACTS_GROUP, "walls", PETSC_STRING, NULL, &names);
-  PetscCall(PetscPopErrorHandler());
-  PetscCheck(!ierr, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: the attribute walls of %s is not a fixed-length string of wall names",
-             path, KERGS_CONTACTS_GROUP);
+  PetscCall(PetscViewerHDF5ReadAttribute(viewer, KERGS_CONTACTS_GROUP, "walls", PETSC_STRING, NULL, &names)); /* probed: one string */
   PetscCall(PetscStrToArray(names, ',', &argc, &list));
   PetscCall(PetscMalloc1(argc + 1, map));
   for (int k = 0; k < argc; k++) {
@@ -183,12 +157,6 @@ static PetscErrorCode MapWalls(PetscViewer viewer, const char path[], KergsScene
   PetscCall(PetscStrToArrayDestroy(argc, list));
   PetscCall(PetscFree(names));
   PetscFunctionReturn(0);
-}
-
-static int CompareIdLocal(const void *x, const void *y)
-{
-  const PetscInt *p = (const PetscInt *)x, *q = (const PetscInt *)y;
-  return p[0] < q[0] ? -1 : (p[0] > q[0] ? 1 : 0);
 }
 
 static int CompareKeys(const void *p, const void *q) { return KERGS_COMPARE_KEYS((const KergsContact *)p, (const KergsContact *)q); }
@@ -243,62 +211,44 @@ static PetscBool RecordValid(const SampleContacts *sc, PetscInt k)
   return ok;
 }
 
-/* The pairs (grain id, local index) of the owned grains, sorted by id. */
-static PetscErrorCode OwnedIdTable(KergsScene scene, PetscInt **table)
-{
-  KergsDisks D;
-
-  PetscFunctionBeginUser;
-  PetscCall(KergsSceneGetDisks(scene, &D));
-  PetscCall(PetscMalloc1(2 * D.nowned + 2, table));
-  for (PetscInt i = 0; i < D.nowned; i++) {
-    (*table)[2 * i]     = D.id[i];
-    (*table)[2 * i + 1] = i;
-  }
-  qsort(*table, (size_t)D.nowned, 2 * sizeof(PetscInt), CompareIdLocal);
-  PetscFunctionReturn(0);
-}
-
 /* The file's contacts of the grains owned here, as key-only contacts (b = -1) carrying the impulse force * dt, sorted
    by key. count[0]: those kept; count[1]: those with a wall the scene does not have, left out; count[2]: records of a
    pair given before. Every record is checked (every rank holds them all, so all stop on the same one). */
 static PetscErrorCode SampleContactsOwned(const char path[], KergsScene scene, const SampleContacts *sc, KergsContact **c,
                                           PetscInt count[3])
 {
-  KergsDisks D;
-  PetscInt  *table, nhit = 0;
-  PetscReal  dt;
-  MPI_Comm   comm;
+  KergsDisks       D;
+  KergsGrainIndex *table;
+  PetscInt         nhit = 0;
+  PetscReal        dt;
+  MPI_Comm         comm;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetDisks(scene, &D));
   PetscCall(KergsSceneGetComm(scene, &comm));
   PetscCall(KergsSceneGetTimeStep(scene, &dt, NULL));
-  PetscCall(OwnedIdTable(scene, &table));
+  PetscCall(KergsSceneGetGrainIndex(scene, D.nowned, &table));
   for (PetscInt k = 0; k < sc->n; k++) {
-    const PetscInt key[2] = {(PetscInt)sc->ida[k], 0};
-
     PetscCheck(RecordValid(sc, k), comm, PETSC_ERR_FILE_UNEXPECTED,
                "Sample file %s: contact %" PetscInt_FMT " of %s is not a contact of a grain with a grain of larger id or a named wall, "
                "with a finite force that pushes",
                path, k, KERGS_CONTACTS_GROUP);
-    nhit += bsearch(key, table, (size_t)D.nowned, 2 * sizeof(PetscInt), CompareIdLocal) != NULL;
+    nhit += KergsGrainIndexFind(table, D.nowned, (PetscInt)sc->ida[k]) >= 0;
   }
   PetscCall(PetscMalloc1(nhit + 1, c)); /* this rank's share, not the whole file's */
   count[0] = count[1] = count[2] = 0;
   for (PetscInt k = 0; k < sc->n; k++) {
-    const PetscInt  wall = sc->kind[k] != 0.0, key[2] = {(PetscInt)sc->ida[k], 0};
-    const PetscInt *hit = (const PetscInt *)bsearch(key, table, (size_t)D.nowned, 2 * sizeof(PetscInt), CompareIdLocal);
-    KergsContact   *ck  = &(*c)[count[0]];
+    const PetscInt wall = sc->kind[k] != 0.0, a = KergsGrainIndexFind(table, D.nowned, (PetscInt)sc->ida[k]);
+    KergsContact  *ck = &(*c)[count[0]];
 
-    if (!hit) continue;
+    if (a < 0) continue;
     if (wall && sc->wall[(PetscInt)sc->idb[k]] < 0) {
       count[1]++;
       continue;
     }
     PetscCall(PetscMemzero(ck, sizeof(*ck)));
     ck->kind = wall ? KERGS_CONTACT_DISK_WALL : KERGS_CONTACT_DISK_DISK;
-    ck->a    = hit[1];
+    ck->a    = a;
     ck->b    = -1;
     ck->idb  = wall ? sc->wall[(PetscInt)sc->idb[k]] : (PetscInt)sc->idb[k];
     for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) ck->r[j] = sc->force[KERGS_MAXCOMP * k + j] * dt;

@@ -3,6 +3,7 @@
    src/scene/disks.c (list, lattice, random) and src/scene/sample_read.c (sample file); the walls, their options and
    motion from src/scene/walls.c; the distributed state from src/scene/ghosts.c. */
 #include <kergs/private/sceneimpl.h>
+#include <stdlib.h>
 #include <petscviewer.h>
 
 const char *const KergsGapRules[] = {"paper", "lmgc90", "predictive", "KergsGapRule", "KERGS_GAP_", NULL};
@@ -376,6 +377,28 @@ PetscErrorCode KergsSceneAdaptAlert(KergsScene scene, PetscReal closing_speed)
      otherwise made every pair potential (tests/test_regularised.c: 200 s instead of 1 s) */
   if (scene->alert_auto) scene->alert = PetscMin(20.0 * scene->alert_floor, PetscMax(scene->alert_floor, 2.0 * closing_speed * scene->dt));
   PetscFunctionReturn(0);
+}
+
+static int CompareGrainIndex(const void *x, const void *y)
+{
+  const KergsGrainIndex *p = (const KergsGrainIndex *)x, *q = (const KergsGrainIndex *)y;
+  return p->id < q->id ? -1 : (p->id > q->id ? 1 : 0);
+}
+
+PetscErrorCode KergsSceneGetGrainIndex(KergsScene scene, PetscInt n, KergsGrainIndex **table)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(n + 1, table));
+  for (PetscInt i = 0; i < n; i++) (*table)[i] = (KergsGrainIndex){scene->id[i], i};
+  qsort(*table, (size_t)n, sizeof(KergsGrainIndex), CompareGrainIndex);
+  PetscFunctionReturn(0);
+}
+
+PetscInt KergsGrainIndexFind(const KergsGrainIndex table[], PetscInt n, PetscInt id)
+{
+  const KergsGrainIndex key = {id, -1}, *hit = (const KergsGrainIndex *)bsearch(&key, table, (size_t)n, sizeof(key), CompareGrainIndex);
+
+  return hit ? hit->local : -1;
 }
 
 /* Whether the alert distance is automatic, and its floor then. */

@@ -170,6 +170,20 @@ PetscErrorCode KergsSceneGetBox(KergsScene scene, PetscBool *has, PetscReal box[
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsSceneGetWallNames(KergsScene scene, char **joined)
+{
+  size_t len = 1;
+
+  PetscFunctionBeginUser;
+  for (PetscInt w = 0; w < scene->nwalls; w++) len += strlen(scene->walls[w].name) + 1;
+  PetscCall(PetscCalloc1(len, joined));
+  for (PetscInt w = 0; w < scene->nwalls; w++) {
+    if (w) PetscCall(PetscStrlcat(*joined, ",", len));
+    PetscCall(PetscStrlcat(*joined, scene->walls[w].name, len));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* The velocity at the scene's time of the box wall `name` (zero when there is none). */
 static PetscErrorCode BoxWallVelocity(KergsScene scene, const char name[], PetscReal v[])
 {

@@ -26,12 +26,12 @@ PETSC_INTERN PetscBool KergsH5HasFormat(hid_t file, const char format[]);
    Collective. */
 PETSC_INTERN PetscErrorCode KergsH5CheckFile(MPI_Comm, const char path[], const char what[], const char format[], const char kind[]);
 
-/* One item a reader expects in a file: a group, an attribute of an object (a single integer, or a single fixed-length
+/* One item a reader expects in a file: an attribute of an object (a single integer, or a single fixed-length
    string, as PETSc's viewer reads them), or a numeric dataset of rows x width values ((rows) when width is 1). */
-typedef enum { KERGS_H5_GROUP, KERGS_H5_ATTR_INT, KERGS_H5_ATTR_STRING, KERGS_H5_DATASET } KergsH5ItemKind;
+typedef enum { KERGS_H5_ATTR_INT, KERGS_H5_ATTR_STRING, KERGS_H5_DATASET } KergsH5ItemKind;
 typedef struct {
   KergsH5ItemKind kind;
-  const char     *object, *name; /* the group, or the object holding the attribute, or the group holding the dataset */
+  const char     *object, *name; /* the object holding the attribute, or the group holding the dataset */
   PetscInt        rows, width;   /* a dataset's expected shape; rows -1: the value of the integer attribute checked last */
 } KergsH5Item;
 /* Rank 0 checks the n items in order; the first that is missing or of another kind, class or shape raises
