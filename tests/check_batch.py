@@ -9,7 +9,7 @@ TEST is one of:
             first 4 rows bit for bit, the end within the solver's tolerance; a pressure-controlled wall over a closed box's
             moving height, 10 + 10 steps against 20 bit for bit; the radius-ratio-100 pile, whose automatic alert
             distance grows with the grains' speed, 120 + 120 steps against 240 bit for bit
-  signals   SIGTERM and SIGINT sent to the ranks, SIGUSR1 to mpiexec (which forwards it): exit status 4, the results file
+  signals   SIGTERM and SIGINT sent to the ranks, SIGUSR1 to mpiexec (which forwards it) and to both at once: exit status 4, the results file
             complete under its final name, the checkpoint of the last step; a restart continues the same file
   kill      SIGKILL: the .tmp left is readable and holds every flushed row and snapshot; a restart from the last
             checkpoint continues it into one run's file
@@ -213,6 +213,7 @@ def test_signals(k):
                   f"run (steps {want}; the stop's own snapshot dropped)")
     test_signals_early(k)
     test_signals_ctrl_c(k)
+    test_signals_usr1_twice(k)
     test_signals_recipe(k)
 
 
@@ -280,6 +281,31 @@ def test_signals_ctrl_c(k):
         attrs, ok = {}, False
     check(started and rc == 4 and ok and attrs.get("end", b"").startswith(b"stopped by SIG") and not os.path.exists(out + ".tmp"),
           f"SIGINT then SIGTERM to the ranks (Ctrl-C relayed by mpiexec): stopped cleanly with status 4, results complete, checkpoint "
+          f"written (got {rc}, {attrs.get('end')})")
+
+
+def test_signals_usr1_twice(k):
+    """A scheduler's warning that reaches the ranks directly and again through mpiexec (a job script that forwards it):
+    the second SIGUSR1 is the same request and must not kill the ranks before their checkpoint."""
+    out = k.path("usr1twice.h5")
+    p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log="usr1twice.log")
+    started = wait_for_steps(log, 5, p)
+    for pid in ranks_of(p):
+        os.kill(pid, signal.SIGUSR1)
+    os.kill(p.pid, signal.SIGUSR1)
+    try:
+        rc = p.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        rc = None
+    try:
+        _, attrs, _ = stats(out)
+        with h5py.File(k.path("usr1twice.checkpoint.h5"), "r") as c:
+            ok = int(c.attrs["step"]) >= 5
+    except (OSError, KeyError):
+        attrs, ok = {}, False
+    check(started and rc == 4 and ok and attrs.get("end") == b"stopped by SIGUSR1" and not os.path.exists(out + ".tmp"),
+          f"SIGUSR1 to the ranks and to mpiexec (delivered twice): stopped cleanly with status 4, results complete, checkpoint "
           f"written (got {rc}, {attrs.get('end')})")
 
 

@@ -41,7 +41,7 @@ kergs_bad_input(output_on_included_options_file "is the input -options_file case
 
 # tests/check_batch.py drives the kergs executable through mpiexec and reads the files with h5py (Debian's python3):
 # restart (bit for bit on 2 ranks, 2 -> 1 and 1 -> 2 to the solver's tolerance), signals (SIGTERM, SIGINT to the ranks,
-# SIGUSR1 to mpiexec), kill (SIGKILL leaves a readable .tmp), paths (outputs replacing inputs or each other refused, a
+# SIGUSR1 to mpiexec, and to both: delivered twice), kill (SIGKILL leaves a readable .tmp), paths (outputs replacing inputs or each other refused, a
 # 300-character path), enospc (a full tmpfs; skipped when none can be mounted), fclib (-fclib_step numbering),
 # statuses (exit statuses of a blow-up and of -error_on_nonconvergence, progress lines).
 foreach(t restart signals kill paths enospc fclib statuses)

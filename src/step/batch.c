@@ -109,13 +109,15 @@ static struct sigaction      Saved[NCAUGHT];
 static volatile sig_atomic_t Received  = 0;
 static PetscBool             Installed = PETSC_FALSE;
 
-/* The first signal asks for a clean stop after the step; a second one of the same kind is not caught any more and
-   ends the process at once (as without kergs's handler). A signal of another kind after the first is ignored: it is
-   the same request relayed (a terminal's Ctrl-C sends SIGINT to mpiexec and the ranks, and mpiexec then sends the
-   ranks SIGTERM, which used to kill them and leave only .tmp files). Only async-signal-safe calls. */
+/* The first signal asks for a clean stop after the step; a second SIGTERM or SIGINT is not caught any more and ends
+   the process at once (as without kergs's handler). A signal of another kind after the first is ignored: it is the
+   same request relayed (a terminal's Ctrl-C sends SIGINT to mpiexec and the ranks, and mpiexec then sends the ranks
+   SIGTERM, which used to kill them and leave only .tmp files). So is a second SIGUSR1: a batch system's warning that
+   reaches the ranks both directly and through mpiexec (a job script that forwards it) arrives twice, and killed the
+   ranks before their checkpoint. Only async-signal-safe calls. */
 static void OnSignal(int sig)
 {
-  if (Received == sig) {
+  if (Received == sig && sig != SIGUSR1) {
     (void)signal(sig, SIG_DFL);
     (void)raise(sig);
     return;
