@@ -1,0 +1,181 @@
+#!/usr/bin/python3
+"""Two exact methods for the 2D frictional contact problem, prototyped on kergs's FCLib exports before any C is
+written, and not kept (docs/solver.md, "Prototypes measured and not kept"). Both are judged by kergs's own natural
+residual (scripts/siconos_solve.py's, recomputed from r).
+
+  proto_fixed_points.py desaxce PROBLEM.fclib.h5 [--outer 40] [--theta 1.0]
+  proto_fixed_points.py fb-lcp  PROBLEM.fclib.h5 [--max-it 200]
+
+desaxce: the De Saxce fixed point of Acary, Cadoux, Lemarechal and Malick (2011). With the shift s = mu |u_t| fixed, the
+problem is a convex QP: r in the Coulomb cone K (in 2D the cone of its two edges e+- = (1, +-mu), so r = a e+ + b e-
+with a, b >= 0), and u + s e_n in the dual cone, complementary to r. In the edge coordinates z = (a, b) it is the
+monotone LCP 0 <= z _|_ E^T W E z + E^T (q + s e_n) >= 0, solved here by Mehrotra's predictor-corrector interior point.
+Its velocities u = W E z are unique even where W's kernel leaves r undetermined (unlike the Tresca fixed point's
+thresholds mu r_n), and at a fixed point s = mu |u_t| the pair (r, u) solves Coulomb's problem. --theta relaxes the
+update s <- (1 - theta) s + theta mu |u_t|.
+
+fb-lcp: the 2D law as the linear complementarity problem of Stewart and Trinkle in (r_n, beta+, beta-, lambda) per
+contact (r_t = beta+ - beta-, lambda the sliding speed), every pair scaled to impulse units by rho = 1 / W_nn, solved
+by a semismooth Newton method on the Fischer-Burmeister function with an Armijo search on its C^1 merit (De Luca,
+Facchinei and Kanzow 1996), and a gradient step where the Newton direction does not descend.
+
+Each prints one line per outer iteration (desaxce) or per 10 Newton steps (fb-lcp) and a last JSON line.
+"""
+import argparse
+import json
+import math
+import os
+import sys
+import time
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from siconos_solve import InputError, natural_residual, read_problem  # noqa: E402
+
+
+def block_diagonal(blocks):
+    """A sparse block-diagonal matrix from an array of k x l blocks."""
+    return sp.block_diag([sp.csr_matrix(b) for b in blocks], format="csr")
+
+
+def interior_point_lcp(M, b, z0=None, tol=1e-14, max_it=200):
+    """Mehrotra's predictor-corrector on the monotone LCP 0 <= z _|_ w = M z + b >= 0. Returns z, iterations, ok."""
+    n = b.size
+    scale = max(float(np.abs(b).max()), 1e-300)
+    z = np.ones(n) if z0 is None else np.maximum(z0, 1e-3 * max(float(z0.max()), 1e-12))
+    w = np.maximum(M @ z + b, 0) + scale
+    for it in range(max_it):
+        f1 = w - M @ z - b
+        gap = z @ w / n
+        if np.linalg.norm(f1, np.inf) <= tol * scale and gap <= tol * scale * max(float(z.max()), 1e-300):
+            return z, it, True
+        lu = spla.splu((M + sp.diags(w / z)).tocsc(), permc_spec="COLAMD")
+
+        def direction(target):
+            f2 = z * w - target
+            dz = lu.solve(f1 - f2 / z)
+            return dz, (-f2 - w * dz) / z
+
+        def longest(dz, dw):
+            step = 1.0
+            for v, d in ((z, dz), (w, dw)):
+                neg = d < 0
+                if np.any(neg):
+                    step = min(step, float(np.min(-v[neg] / d[neg])))
+            return step
+
+        dza, dwa = direction(np.zeros(n))
+        step = longest(dza, dwa)
+        centring = ((z + step * dza) @ (w + step * dwa) / n / gap) ** 3 if gap > 0 else 0.0
+        dz, dw = direction(centring * gap - dza * dwa)
+        step = min(1.0, 0.995 * longest(dz, dw))
+        z, w = z + step * dz, w + step * dw
+    return z, max_it, False
+
+
+def desaxce(prob, outer, theta):
+    W, q, mu = prob["W"].tocsr(), prob["q"], prob["mu"]
+    E = block_diagonal([[[1.0, 1.0], [m, -m]] for m in mu])
+    M = (E.T @ W @ E).tocsr()
+    u = q.copy()
+    s = mu * np.abs(u[1::2])
+    z, history, ipm = None, [], 0
+    for k in range(outer):
+        shifted = q.copy()
+        shifted[0::2] += s
+        z, its, ok = interior_point_lcp(M, E.T @ shifted, z0=z)
+        ipm += its
+        r = E @ z
+        u = W @ r + q
+        target = mu * np.abs(u[1::2])
+        res = natural_residual(prob, r)[0]
+        change = float(np.linalg.norm(target - s) / max(np.linalg.norm(target), 1e-300))
+        history.append(res)
+        print(f"outer {k + 1}: {its} interior-point iterations{'' if ok else ' (not converged)'}, natural residual {res:.3e}, "
+              f"|mu |u_t| - s| / |mu |u_t|| {change:.2e}", flush=True)
+        if res < 1e-10:
+            break
+        s = (1 - theta) * s + theta * target
+    return {"method": "desaxce", "outer": len(history), "interior_point_iterations": ipm, "residual": history[-1],
+            "residual_best": min(history)}
+
+
+def fischer_burmeister(a, b):
+    return np.hypot(a, b) - a - b
+
+
+def stewart_trinkle(W, q, mu):
+    """M x + c with x = (r_n, beta+, beta-, lambda') per contact, lambda' = lambda / rho, rows in impulse units (rho = 1 / W_nn);
+    r = T x."""
+    rho = 1.0 / W.diagonal()[0::2]
+    T = block_diagonal([[[1, 0, 0, 0], [0, 1, -1, 0]] for _ in mu])
+    S = block_diagonal([[[p, 0], [0, p], [0, -p], [0, 0]] for p in rho])
+    G = block_diagonal([[[0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 1], [m, -1, -1, 0]] for m in mu])
+    return (S @ W @ T + G).tocsr(), S @ q, T
+
+
+def fb_lcp(prob, max_it):
+    M, c, T = stewart_trinkle(prob["W"].tocsr(), prob["q"], prob["mu"])
+    x = np.zeros(c.size)
+    res = 1.0
+    for it in range(max_it + 1):
+        F = M @ x + c
+        phi = fischer_burmeister(x, F)
+        merit = 0.5 * phi @ phi
+        res = natural_residual(prob, T @ np.maximum(x, 0))[0]
+        if it % 10 == 0:
+            print(f"Newton step {it}: natural residual {res:.3e}, |Phi| {math.sqrt(2 * merit):.3e}", flush=True)
+        if res < 1e-10 or it == max_it:
+            break
+        norm = np.hypot(x, F)
+        kink = norm < 1e-300
+        norm[kink] = 1.0
+        da = np.where(kink, 1 / math.sqrt(2) - 1, x / norm - 1)
+        db = np.where(kink, 1 / math.sqrt(2) - 1, F / norm - 1)
+        H = (sp.diags(da) + sp.diags(db) @ M).tocsc()
+        grad = H.T @ phi
+        try:
+            d = spla.splu((H + 1e-10 * sp.identity(c.size)).tocsc()).solve(-phi)
+            if not np.all(np.isfinite(d)) or grad @ d > -1e-12 * np.linalg.norm(d) ** 2.1:
+                d = -grad
+        except RuntimeError:
+            d = -grad
+        t = 1.0
+        for _ in range(60):
+            trial = x + t * d
+            p = fischer_burmeister(trial, M @ trial + c)
+            if 0.5 * p @ p <= merit + 1e-4 * t * (grad @ d):
+                break
+            t *= 0.5
+        x = trial
+    return {"method": "fb-lcp", "newton_steps": it, "residual": res}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("method", choices=("desaxce", "fb-lcp"))
+    ap.add_argument("problem")
+    ap.add_argument("--outer", type=int, default=40, help="desaxce: outer iterations (default 40)")
+    ap.add_argument("--theta", type=float, default=1.0, help="desaxce: relaxation of the shift's update, in (0, 1] (default 1)")
+    ap.add_argument("--max-it", type=int, default=200, help="fb-lcp: Newton steps (default 200)")
+    a = ap.parse_args(argv)
+    if not (0 < a.theta <= 1) or a.outer < 1 or a.max_it < 1:
+        print("proto_fixed_points.py: --theta must lie in (0, 1], --outer and --max-it be positive", file=sys.stderr)
+        return 2
+    try:
+        prob = read_problem(a.problem)
+    except InputError as err:
+        print(f"proto_fixed_points.py: {err}", file=sys.stderr)
+        return 2
+    t0 = time.time()
+    out = desaxce(prob, a.outer, a.theta) if a.method == "desaxce" else fb_lcp(prob, a.max_it)
+    out.update({"problem": a.problem, "contacts": prob["nc"], "seconds": round(time.time() - t0, 2)})
+    print(json.dumps(out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
