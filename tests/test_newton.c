@@ -313,28 +313,42 @@ static PetscErrorCode TestSmoothingRaise(void)
   PetscFunctionReturn(0);
 }
 
-/* Whether the solver's view (ASCII only: written to a scratch file, read back) says that J is stored in W's AMD order
-   (PresortContacts in newton_linear.c). */
-static PetscErrorCode ViewSaysPresorted(KergsSolver solver, PetscBool *presorted)
+/* Whether the solver's view (ASCII only: written to a scratch file by the ranks of comm, read back by its first rank)
+   contains `phrase`. */
+static PetscErrorCode ViewSays(MPI_Comm comm, KergsSolver solver, const char *phrase, PetscBool *says)
 {
   PetscViewer viewer;
-  char        path[PETSC_MAX_PATH_LEN], text[8192] = "", *found;
-  FILE       *fp;
-  size_t      len;
+  char        path[PETSC_MAX_PATH_LEN], text[16384] = "", *found = NULL;
+  int         pid = (int)getpid();
+  PetscMPIInt rank;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscSNPrintf(path, sizeof(path), "/tmp/kergs-test-newton-view-%d.txt", (int)getpid()));
-  PetscCall(PetscViewerASCIIOpen(PETSC_COMM_SELF, path, &viewer));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Bcast(&pid, 1, MPI_INT, 0, comm));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "/tmp/kergs-test-newton-view-%d.txt", pid));
+  PetscCall(PetscViewerASCIIOpen(comm, path, &viewer));
   PetscCall(KergsSolverView(solver, viewer));
   PetscCall(PetscViewerDestroy(&viewer));
-  fp = fopen(path, "r");
-  PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "cannot read back %s", path);
-  len       = fread(text, 1, sizeof(text) - 1, fp);
-  text[len] = 0;
-  fclose(fp);
-  remove(path);
-  PetscCall(PetscStrstr(text, "AMD order", &found));
-  *presorted = (PetscBool)(found != NULL);
+  if (rank == 0) {
+    FILE  *fp = fopen(path, "r");
+    size_t len;
+    PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "cannot read back %s", path);
+    len       = fread(text, 1, sizeof(text) - 1, fp);
+    text[len] = 0;
+    fclose(fp);
+    remove(path);
+    PetscCall(PetscStrstr(text, phrase, &found));
+  }
+  *says = (PetscBool)(found != NULL);
+  PetscCallMPI(MPI_Bcast(says, 1, MPIU_BOOL, 0, comm));
+  PetscFunctionReturn(0);
+}
+
+/* Whether the view says that J is stored in W's AMD order (PresortContacts in newton_linear.c). */
+static PetscErrorCode ViewSaysPresorted(KergsSolver solver, PetscBool *presorted)
+{
+  PetscFunctionBeginUser;
+  PetscCall(ViewSays(PETSC_COMM_SELF, solver, "J stored in W's AMD order", presorted));
   PetscFunctionReturn(0);
 }
 
@@ -401,6 +415,44 @@ static PetscErrorCode TestRanks(const char *linear, const char *what)
   PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-8 * scale), label, diff / scale, 1e-8));
   PetscCall(KergsStepperDestroy(&all));
   PetscCall(KergsStepperDestroy(&one));
+  PetscFunctionReturn(0);
+}
+
+/* Several ranks, additive Schwarz (J above -solver_newton_redundant_max 0 rows): each subdomain is copied into its AMD
+   order and factored there (newton_subdomain.c), unless an ordering is chosen for the subdomains by option. confine500's
+   first 2 steps with friction both ways: the views say which applies, and the factors being the same, so are the GMRES
+   iterations, the Newton steps and the velocities (a wrong copy or permutation changes the preconditioner and the
+   GMRES iterations at once). */
+static PetscErrorCode TestSortedSubdomains(void)
+{
+  KergsStepper st[2];
+  PetscInt     maxits[2], nconv[2];
+  PetscReal    maxres[2], linear[2] = {0, 0}, l, diff, scale;
+  PetscBool    sorted[2];
+  char         opts[PETSC_MAX_PATH_LEN];
+
+  PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < 2; k++) {
+    PetscCall(PetscSNPrintf(
+        opts, sizeof(opts),
+        "-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_newton_redundant_max 0 %s",
+        k == 0 ? "" : "-solver_sub_pc_factor_mat_ordering_type amd"));
+    PetscCall(RunSteps(opts, 2, &st[k], &maxits[k], &maxres[k], &nconv[k]));
+    PetscCall(ViewSays(PETSC_COMM_WORLD, st[k]->solver, "subdomain copied into its AMD order", &sorted[k]));
+    for (PetscInt s = 0; s < 2; s++) {
+      PetscCall(StatAt(st[k]->results, "linear_iterations", s, &l));
+      linear[k] += l;
+    }
+  }
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(sorted[0] && !sorted[1]),
+                     "additive Schwarz: the view says the subdomains were copied into their AMD order (not with an ordering option)",
+                     sorted[0], 1));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(nconv[0] == 2 && nconv[1] == 2 && maxits[0] == maxits[1]),
+                     "... confine500's 2 steps converge both ways, in the same Newton steps", maxits[0], maxits[1]));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(linear[0] == linear[1]), "... the same GMRES iterations", linear[0], linear[1]));
+  PetscCall(VelocityDifference(st[0], st[1], &diff, &scale));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-10 * scale), "... the same velocities (relative)", diff / scale, 1e-10));
+  for (PetscInt k = 0; k < 2; k++) PetscCall(KergsStepperDestroy(&st[k]));
   PetscFunctionReturn(0);
 }
 
@@ -509,6 +561,7 @@ int main(int argc, char **argv)
     PetscCall(TestRanks("", "J gathered on every rank"));
     PetscCall(TestRanks("-solver_newton_redundant_max 0", "GMRES with additive Schwarz"));
     PetscCall(TestRecovery());
+    PetscCall(TestSortedSubdomains());
   }
   {
     int code = Finish();

@@ -800,7 +800,7 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
     PetscCall(KergsKernelSetActiveOnly(nt->kernel, PETSC_TRUE));
   }
   PetscCall(KSPSetFromOptions(nt->kprox));
-  PetscCall(NewtonPresortApplies(s, nt, &nt->presort));
+  PetscCall(NewtonChoosePresorting(s, nt));
   if (nt->presort) { /* J arrives in W's AMD order (PresortContacts, newton_linear.c) */
     PC pc;
     PetscCall(KSPGetPC(nt->ksp, &pc));
@@ -836,6 +836,11 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
         viewer, "After %" PetscInt_FMT " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
         nt->second_window, (double)nt->second_rho));
   if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
+  if (nt->sorted_subdomains)
+    PetscCall(PetscViewerASCIIPrintf(viewer,
+                                     "Additive Schwarz (above %" PetscInt_FMT
+                                     " rows of J): each subdomain copied into its AMD order and factored in that order\n",
+                                     nt->redundant_max));
   PetscCall(KSPView(nt->ksp, viewer));
   PetscFunctionReturn(0);
 }

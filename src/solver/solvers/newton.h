@@ -21,7 +21,7 @@ typedef struct {
   /* one rank, kergs's LU: J is stored with its block rows and columns in W's AMD order, factored in that (natural)
      order (PresortContacts) */
   PetscInt  *order;   /* J's block row i is contact order[i]; NULL: J in the contacts' order */
-  PetscBool  presort; /* decided once the linear solver's options are read (PresortApplies) */
+  PetscBool  presort; /* decided once the linear solver's options are read (NewtonChoosePresorting) */
   Mat        Wsorted; /* W in that order: J's template */
   Vec        Fs, ds;  /* -F and d in that order */
   Vec        F, d, Wd, rtry, utry, Ftry;
@@ -59,6 +59,8 @@ typedef struct {
   PetscInt   reuse_its;            /* -solver_newton_reuse_its: GMRES iterations on a stale factorization (0: never); with
                                       additive Schwarz, twice the changed contacts up to which its set-up is kept */
   PetscBool configure_subs;        /* the subdomain solvers of ksp's additive Schwarz are still to be chosen */
+  PetscBool sorted_subdomains;     /* their LU in the subdomain's AMD order (newton_subdomain.c), unless an option
+                                      chooses the subdomain solvers or the preconditioner (NewtonChoosePresorting) */
   PetscBool smoothing;             /* -solver_newton_smoothing: smoothing Newton first (SolveSmoothed) */
   PetscReal smooth_kappa;          /* -solver_newton_smoothing_kappa: its Jacobian's regularisation / natural residual */
   PetscReal smooth_eps;            /* -solver_newton_smoothing_eps: its first eps / largest |rho v^d_n| */
@@ -79,9 +81,11 @@ typedef struct {
 
 /* newton_linear.c */
 PETSC_INTERN PetscErrorCode NewtonCreateLinearSolver(KergsSolver, Newton *);
-PETSC_INTERN PetscErrorCode NewtonPresortApplies(KergsSolver, Newton *, PetscBool *);
+PETSC_INTERN PetscErrorCode NewtonChoosePresorting(KergsSolver, Newton *);
 PETSC_INTERN PetscErrorCode NewtonSetUpJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc);
 PETSC_INTERN PetscErrorCode NewtonAssembleJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma);
 PETSC_INTERN PetscErrorCode NewtonSolveDirection(Newton *, PetscInt n, PetscInt nc, PetscBool *solved);
+/* newton_subdomain.c */
+PETSC_INTERN PetscErrorCode NewtonSubdomainSetSortedLU(PC);
 
 #endif

@@ -225,8 +225,12 @@ static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
   for (PetscInt b = 0; b < nblocks; b++) {
     PetscCall(KSPSetType(sub[b], KSPPREONLY));
     PetscCall(KSPGetPC(sub[b], &subpc));
-    PetscCall(PCSetType(subpc, PCLU));
-    PetscCall(PCFactorSetMatOrderingType(subpc, MATORDERINGAMD));
+    if (nt->sorted_subdomains)
+      PetscCall(NewtonSubdomainSetSortedLU(subpc)); /* LU with AMD, in the natural-ordering kernel */
+    else {
+      PetscCall(PCSetType(subpc, PCLU));
+      PetscCall(PCFactorSetMatOrderingType(subpc, MATORDERINGAMD));
+    }
     PetscCall(KSPSetFromOptions(sub[b]));
   }
   PetscFunctionReturn(0);
@@ -238,23 +242,35 @@ static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
    is permuted once per step (its pattern, hence the ordering, is the step's), and -F and d once per Newton step. Same
    factors, same iterates up to rounding; PETSc's kernel for a permuted 2 x 2-block matrix copies and zeroes every
    block through a library call, its natural-ordering kernel does not: 12.3 ms per factorization of pressure20k's J
-   instead of 15.1. */
-PetscErrorCode NewtonPresortApplies(KergsSolver s, Newton *nt, PetscBool *applies)
+   instead of 15.1. On several ranks the subdomains of kergs's additive Schwarz get the same treatment
+   (newton_subdomain.c) unless -solver_pc_type or an option for their solvers (-solver_sub_ksp_type, -solver_sub_pc_type,
+   -solver_sub_pc_factor_mat_ordering_type, -solver_sub_pc_factor_mat_solver_type) was given. */
+PetscErrorCode NewtonChoosePresorting(KergsSolver s, Newton *nt)
 {
-  PetscMPIInt   size;
-  PC            pc;
-  KSPType       ktype;
-  PCType        ptype;
-  MatSolverType stype;
-  const char   *prefix;
-  PetscBool     preonly, lu, petsc, chosen;
+  static const char *const subs[] = {"-sub_ksp_type", "-sub_pc_type", "-sub_pc_factor_mat_ordering_type", "-sub_pc_factor_mat_solver_type"};
+  PetscMPIInt              size;
+  PC                       pc;
+  KSPType                  ktype;
+  PCType                   ptype;
+  MatSolverType            stype;
+  const char              *prefix;
+  PetscBool                preonly, lu, petsc, chosen;
 
   PetscFunctionBeginUser;
-  *applies = PETSC_FALSE;
+  nt->presort = nt->sorted_subdomains = PETSC_FALSE;
+  if (nt->user_pc) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
   PetscCall(KSPGetOptionsPrefix(nt->ksp, &prefix));
+  if (size > 1) {
+    nt->sorted_subdomains = PETSC_TRUE;
+    for (size_t k = 0; k < sizeof(subs) / sizeof(subs[0]); k++) {
+      PetscCall(PetscOptionsHasName(NULL, prefix, subs[k], &chosen));
+      if (chosen) nt->sorted_subdomains = PETSC_FALSE;
+    }
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscOptionsHasName(NULL, prefix, "-pc_factor_mat_ordering_type", &chosen));
-  if (size > 1 || nt->user_pc || chosen || nt->prox == NEWTON_PROX_KERNEL) PetscFunctionReturn(0); /* J_P's MatMult uses J */
+  if (chosen || nt->prox == NEWTON_PROX_KERNEL) PetscFunctionReturn(0); /* J_P's MatMult uses J */
   PetscCall(KSPGetType(nt->ksp, &ktype));
   PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(PCGetType(pc, &ptype));
@@ -262,7 +278,7 @@ PetscErrorCode NewtonPresortApplies(KergsSolver s, Newton *nt, PetscBool *applie
   PetscCall(PetscStrcmp(ktype, KSPPREONLY, &preonly));
   PetscCall(PetscStrcmp(ptype, PCLU, &lu));
   PetscCall(PetscStrcmp(stype, MATSOLVERPETSC, &petsc));
-  *applies = (PetscBool)(preonly && lu && petsc);
+  nt->presort = (PetscBool)(preonly && lu && petsc);
   PetscFunctionReturn(0);
 }
 
