@@ -110,7 +110,8 @@ def fischer_burmeister(a, b):
 def stewart_trinkle(W, q, mu):
     """M x + c with x = (r_n, beta+, beta-, lambda') per contact, lambda' = lambda / rho, rows in impulse units (rho = 1 / W_nn);
     r = T x."""
-    rho = 1.0 / W.diagonal()[0::2]
+    wnn = W.diagonal()[0::2]
+    rho = np.where(wnn > 0, 1.0 / np.where(wnn > 0, wnn, 1.0), 1.0)  # as the natural residual's rho
     T = block_diagonal([[[1, 0, 0, 0], [0, 1, -1, 0]] for _ in mu])
     S = block_diagonal([[[p, 0], [0, p], [0, -p], [0, 0]] for p in rho])
     G = block_diagonal([[[0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 1], [m, -1, -1, 0]] for m in mu])
@@ -144,7 +145,7 @@ def fb_lcp(prob, max_it):
         except RuntimeError:
             d = -grad
         t = 1.0
-        for _ in range(60):
+        for _ in range(60):  # after 60 halvings the smallest step is taken, as kergs's newton does
             trial = x + t * d
             p = fischer_burmeister(trial, M @ trial + c)
             if 0.5 * p @ p <= merit + 1e-4 * t * (grad @ d):
@@ -169,6 +170,9 @@ def main(argv=None):
         prob = read_problem(a.problem)
     except InputError as err:
         print(f"proto_fixed_points.py: {err}", file=sys.stderr)
+        return 2
+    if prob["nc"] == 0:
+        print(f"proto_fixed_points.py: {a.problem} has no contacts: nothing to solve", file=sys.stderr)
         return 2
     t0 = time.time()
     out = desaxce(prob, a.outer, a.theta) if a.method == "desaxce" else fb_lcp(prob, a.max_it)

@@ -419,36 +419,52 @@ static PetscErrorCode TestRanks(const char *linear, const char *what)
 }
 
 /* Several ranks, additive Schwarz (J above -solver_newton_redundant_max 0 rows): each subdomain is copied into its AMD
-   order and factored there (newton_subdomain.c), unless an ordering is chosen for the subdomains by option. confine500's
-   first 2 steps with friction both ways: the views say which applies, and the factors being the same, so are the GMRES
-   iterations, the Newton steps and the velocities (a wrong copy or permutation changes the preconditioner and the
-   GMRES iterations at once). */
-static PetscErrorCode TestSortedSubdomains(void)
+   order and factored there (newton_subdomain.c), unless an ordering is chosen for the subdomains by option. `scene`'s
+   `nsteps` both ways: the views say which applies (the sorted LU's name appears in the subdomain solver's view), and
+   the factors being the same (measured: bitwise), so are the GMRES iterations, the Newton steps and the velocities (a
+   wrong copy or permutation changes the preconditioner and the GMRES iterations at once). confine500 with friction
+   has 2 x 2-block (BAIJ) subdomains; frictionless confine5, one component per contact (AIJ), whose rows of one pattern
+   MatGetRowIJ merges when asked to compress them (a crash before the sorted LU read AIJ rows uncompressed). */
+static PetscErrorCode TestSortedSubdomains(const char *scene, PetscInt nsteps, const char *what)
 {
   KergsStepper st[2];
   PetscInt     maxits[2], nconv[2];
   PetscReal    maxres[2], linear[2] = {0, 0}, l, diff, scale;
   PetscBool    sorted[2];
-  char         opts[PETSC_MAX_PATH_LEN];
+  char         opts[PETSC_MAX_PATH_LEN], label[256];
 
   PetscFunctionBeginUser;
   for (PetscInt k = 0; k < 2; k++) {
-    PetscCall(PetscSNPrintf(
-        opts, sizeof(opts),
-        "-options_file cases/confine500.opts -steps 2 -solver_type newton -solver_tol 1e-10 -solver_newton_redundant_max 0 %s",
-        k == 0 ? "" : "-solver_sub_pc_factor_mat_ordering_type amd"));
-    PetscCall(RunSteps(opts, 2, &st[k], &maxits[k], &maxres[k], &nconv[k]));
-    PetscCall(ViewSays(PETSC_COMM_WORLD, st[k]->solver, "subdomain copied into its AMD order", &sorted[k]));
-    for (PetscInt s = 0; s < 2; s++) {
+    PetscCall(PetscSNPrintf(opts, sizeof(opts),
+                            "%s -steps %" PetscInt_FMT " -solver_type newton -solver_tol 1e-10 -solver_newton_redundant_max 0", scene,
+                            nsteps));
+    PetscCall(MakeStepper(opts, &st[k]));
+    /* read by the subdomain solvers at the first Newton solve, after the stepper's options were checked */
+    if (k == 1) PetscCall(PetscOptionsSetValue(NULL, "-solver_sub_pc_factor_mat_ordering_type", "amd"));
+    maxits[k] = nconv[k] = 0;
+    maxres[k]            = 0;
+    for (PetscInt s = 0; s < nsteps; s++) {
+      PetscReal its, res, conv;
+      PetscCall(KergsStepperStep(st[k]));
+      PetscCall(StatAt(st[k]->results, "iterations", s, &its));
+      PetscCall(StatAt(st[k]->results, "residual", s, &res));
+      PetscCall(StatAt(st[k]->results, "converged", s, &conv));
+      maxits[k] = PetscMax(maxits[k], (PetscInt)its);
+      maxres[k] = PetscMax(maxres[k], res);
+      nconv[k] += conv > 0.5;
+    }
+    PetscCall(ViewSays(PETSC_COMM_WORLD, st[k]->solver, "the subdomain copied into that order", &sorted[k]));
+    if (k == 1) PetscCall(PetscOptionsClearValue(NULL, "-solver_sub_pc_factor_mat_ordering_type"));
+    for (PetscInt s = 0; s < nsteps; s++) {
       PetscCall(StatAt(st[k]->results, "linear_iterations", s, &l));
       linear[k] += l;
     }
   }
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(sorted[0] && !sorted[1]),
-                     "additive Schwarz: the view says the subdomains were copied into their AMD order (not with an ordering option)",
-                     sorted[0], 1));
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(nconv[0] == 2 && nconv[1] == 2 && maxits[0] == maxits[1]),
-                     "... confine500's 2 steps converge both ways, in the same Newton steps", maxits[0], maxits[1]));
+  PetscCall(PetscSNPrintf(label, sizeof(label), "%s, additive Schwarz: the subdomain solver is the sorted LU (not with an ordering option)",
+                          what));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(sorted[0] && !sorted[1]), label, sorted[0], 1));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(nconv[0] == nsteps && nconv[1] == nsteps && maxits[0] == maxits[1]),
+                     "... every step converges both ways, in the same Newton steps", maxits[0], maxits[1]));
   PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(linear[0] == linear[1]), "... the same GMRES iterations", linear[0], linear[1]));
   PetscCall(VelocityDifference(st[0], st[1], &diff, &scale));
   PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-10 * scale), "... the same velocities (relative)", diff / scale, 1e-10));
@@ -561,7 +577,8 @@ int main(int argc, char **argv)
     PetscCall(TestRanks("", "J gathered on every rank"));
     PetscCall(TestRanks("-solver_newton_redundant_max 0", "GMRES with additive Schwarz"));
     PetscCall(TestRecovery());
-    PetscCall(TestSortedSubdomains());
+    PetscCall(TestSortedSubdomains("-options_file cases/confine500.opts", 2, "confine500 with friction"));
+    PetscCall(TestSortedSubdomains("-options_file cases/confine5.opts -friction 0", 3, "frictionless confine5"));
   }
   {
     int code = Finish();

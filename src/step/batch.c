@@ -106,22 +106,26 @@ PetscErrorCode KergsStepperCheckPaths(KergsStepper st)
 static const int Caught[] = {SIGTERM, SIGINT, SIGUSR1};
 #define NCAUGHT ((int)(sizeof(Caught) / sizeof(Caught[0])))
 static struct sigaction      Saved[NCAUGHT];
-static volatile sig_atomic_t Received  = 0;
+static volatile sig_atomic_t Received  = 0; /* the first signal, the stop request */
+static volatile sig_atomic_t Seen      = 0; /* every kind received since, one bit per kind */
 static PetscBool             Installed = PETSC_FALSE;
 
-/* The first signal asks for a clean stop after the step; a second SIGTERM or SIGINT is not caught any more and ends
-   the process at once (as without kergs's handler). A signal of another kind after the first is ignored: it is the
+/* The first signal asks for a clean stop after the step. The first signal of each other kind is ignored: it is the
    same request relayed (a terminal's Ctrl-C sends SIGINT to mpiexec and the ranks, and mpiexec then sends the ranks
-   SIGTERM, which used to kill them and leave only .tmp files). So is a second SIGUSR1: a batch system's warning that
+   SIGTERM, which used to kill them and leave only .tmp files). A second SIGTERM or SIGINT, whatever came first, ends
+   the process at once, as without kergs's handler. A second SIGUSR1 is ignored too: a batch system's warning that
    reaches the ranks both directly and through mpiexec (a job script that forwards it) arrives twice, and killed the
    ranks before their checkpoint. Only async-signal-safe calls. */
 static void OnSignal(int sig)
 {
-  if (Received == sig && sig != SIGUSR1) {
+  const int bit = sig == SIGTERM ? 1 : sig == SIGINT ? 2 : 4;
+
+  if ((Seen & bit) && sig != SIGUSR1) {
     (void)signal(sig, SIG_DFL);
     (void)raise(sig);
     return;
   }
+  Seen |= bit;
   if (!Received) Received = sig;
 }
 
@@ -135,7 +139,7 @@ int KergsStepperCatchStopSignals(PetscBool on)
     Installed = PETSC_FALSE;
     return 0;
   }
-  if (!Installed) Received = 0;
+  if (!Installed) Received = Seen = 0;
   for (int k = 0; k < NCAUGHT; k++) {
     struct sigaction sa, cur;
     if (!sigaction(Caught[k], NULL, &cur) && cur.sa_handler == OnSignal) continue; /* still ours */

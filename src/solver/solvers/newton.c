@@ -801,6 +801,7 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   }
   PetscCall(KSPSetFromOptions(nt->kprox));
   PetscCall(NewtonChoosePresorting(s, nt));
+  PetscCall(NewtonChooseSortedSubdomains(nt));
   if (nt->presort) { /* J arrives in W's AMD order (PresortContacts, newton_linear.c) */
     PC pc;
     PetscCall(KSPGetPC(nt->ksp, &pc));

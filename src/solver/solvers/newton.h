@@ -60,7 +60,7 @@ typedef struct {
                                       additive Schwarz, twice the changed contacts up to which its set-up is kept */
   PetscBool configure_subs;        /* the subdomain solvers of ksp's additive Schwarz are still to be chosen */
   PetscBool sorted_subdomains;     /* their LU in the subdomain's AMD order (newton_subdomain.c), unless an option
-                                      chooses the subdomain solvers or the preconditioner (NewtonChoosePresorting) */
+                                      chooses the subdomain solvers or the preconditioner (NewtonChooseSortedSubdomains) */
   PetscBool smoothing;             /* -solver_newton_smoothing: smoothing Newton first (SolveSmoothed) */
   PetscReal smooth_kappa;          /* -solver_newton_smoothing_kappa: its Jacobian's regularisation / natural residual */
   PetscReal smooth_eps;            /* -solver_newton_smoothing_eps: its first eps / largest |rho v^d_n| */
@@ -82,10 +82,12 @@ typedef struct {
 /* newton_linear.c */
 PETSC_INTERN PetscErrorCode NewtonCreateLinearSolver(KergsSolver, Newton *);
 PETSC_INTERN PetscErrorCode NewtonChoosePresorting(KergsSolver, Newton *);
+PETSC_INTERN PetscErrorCode NewtonChooseSortedSubdomains(Newton *);
 PETSC_INTERN PetscErrorCode NewtonSetUpJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc);
 PETSC_INTERN PetscErrorCode NewtonAssembleJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma);
 PETSC_INTERN PetscErrorCode NewtonSolveDirection(Newton *, PetscInt n, PetscInt nc, PetscBool *solved);
 /* newton_subdomain.c */
 PETSC_INTERN PetscErrorCode NewtonSubdomainSetSortedLU(PC);
+PETSC_INTERN PetscErrorCode NewtonSubdomainReleaseSortedLU(PC);
 
 #endif

@@ -219,6 +219,7 @@ static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
   PetscFunctionBeginUser;
   if (!nt->configure_subs) PetscFunctionReturn(0);
   nt->configure_subs = PETSC_FALSE;
+  PetscCall(NewtonChooseSortedSubdomains(nt)); /* again: an option of the subdomain solvers may be read only now */
   PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(KSPSetUp(nt->ksp));
   PetscCall(PCASMGetSubKSP(pc, &nblocks, NULL, &sub));
@@ -242,35 +243,23 @@ static PetscErrorCode ConfigureSubdomainSolvers(Newton *nt)
    is permuted once per step (its pattern, hence the ordering, is the step's), and -F and d once per Newton step. Same
    factors, same iterates up to rounding; PETSc's kernel for a permuted 2 x 2-block matrix copies and zeroes every
    block through a library call, its natural-ordering kernel does not: 12.3 ms per factorization of pressure20k's J
-   instead of 15.1. On several ranks the subdomains of kergs's additive Schwarz get the same treatment
-   (newton_subdomain.c) unless -solver_pc_type or an option for their solvers (-solver_sub_ksp_type, -solver_sub_pc_type,
-   -solver_sub_pc_factor_mat_ordering_type, -solver_sub_pc_factor_mat_solver_type) was given. */
+   instead of 15.1. */
 PetscErrorCode NewtonChoosePresorting(KergsSolver s, Newton *nt)
 {
-  static const char *const subs[] = {"-sub_ksp_type", "-sub_pc_type", "-sub_pc_factor_mat_ordering_type", "-sub_pc_factor_mat_solver_type"};
-  PetscMPIInt              size;
-  PC                       pc;
-  KSPType                  ktype;
-  PCType                   ptype;
-  MatSolverType            stype;
-  const char              *prefix;
-  PetscBool                preonly, lu, petsc, chosen;
+  PetscMPIInt   size;
+  PC            pc;
+  KSPType       ktype;
+  PCType        ptype;
+  MatSolverType stype;
+  const char   *prefix;
+  PetscBool     preonly, lu, petsc, chosen;
 
   PetscFunctionBeginUser;
-  nt->presort = nt->sorted_subdomains = PETSC_FALSE;
-  if (nt->user_pc) PetscFunctionReturn(0);
+  nt->presort = PETSC_FALSE;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
   PetscCall(KSPGetOptionsPrefix(nt->ksp, &prefix));
-  if (size > 1) {
-    nt->sorted_subdomains = PETSC_TRUE;
-    for (size_t k = 0; k < sizeof(subs) / sizeof(subs[0]); k++) {
-      PetscCall(PetscOptionsHasName(NULL, prefix, subs[k], &chosen));
-      if (chosen) nt->sorted_subdomains = PETSC_FALSE;
-    }
-    PetscFunctionReturn(0);
-  }
   PetscCall(PetscOptionsHasName(NULL, prefix, "-pc_factor_mat_ordering_type", &chosen));
-  if (chosen || nt->prox == NEWTON_PROX_KERNEL) PetscFunctionReturn(0); /* J_P's MatMult uses J */
+  if (size > 1 || nt->user_pc || chosen || nt->prox == NEWTON_PROX_KERNEL) PetscFunctionReturn(0); /* J_P's MatMult uses J */
   PetscCall(KSPGetType(nt->ksp, &ktype));
   PetscCall(KSPGetPC(nt->ksp, &pc));
   PetscCall(PCGetType(pc, &ptype));
@@ -279,6 +268,31 @@ PetscErrorCode NewtonChoosePresorting(KergsSolver s, Newton *nt)
   PetscCall(PetscStrcmp(ptype, PCLU, &lu));
   PetscCall(PetscStrcmp(stype, MATSOLVERPETSC, &petsc));
   nt->presort = (PetscBool)(preonly && lu && petsc);
+  PetscFunctionReturn(0);
+}
+
+/* On several ranks the subdomains of kergs's additive Schwarz are factored the same way (newton_subdomain.c), unless
+   -solver_pc_type, any option of the subdomain solvers (-solver_sub_*) or -solver_pc_asm_sub_mat_type was given: the
+   user then chooses them, as before. Decided when the options are read, and again each step when the subdomain
+   solvers are chosen (ConfigureSubdomainSolvers). */
+PetscErrorCode NewtonChooseSortedSubdomains(Newton *nt)
+{
+  PetscMPIInt size;
+  const char *prefix;
+  char       *all, sub[256], mattype[256], *found, *found_type;
+
+  PetscFunctionBeginUser;
+  nt->sorted_subdomains = PETSC_FALSE;
+  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)nt->ksp), &size));
+  if (size == 1 || nt->user_pc) PetscFunctionReturn(0);
+  PetscCall(KSPGetOptionsPrefix(nt->ksp, &prefix));
+  PetscCall(PetscSNPrintf(sub, sizeof(sub), "-%ssub_", prefix ? prefix : ""));
+  PetscCall(PetscSNPrintf(mattype, sizeof(mattype), "-%spc_asm_sub_mat_type", prefix ? prefix : ""));
+  PetscCall(PetscOptionsGetAll(NULL, &all));
+  PetscCall(PetscStrstr(all, sub, &found));
+  PetscCall(PetscStrstr(all, mattype, &found_type));
+  nt->sorted_subdomains = (PetscBool)(!found && !found_type);
+  PetscCall(PetscFree(all));
   PetscFunctionReturn(0);
 }
 
@@ -306,6 +320,29 @@ static PetscErrorCode PresortContacts(Newton *nt, PetscInt n, PetscInt nc)
   PetscFunctionReturn(0);
 }
 
+/* The last step's subdomain factors, before the KSP is reset for this step's J: KSPReset leaves them to the sorted
+   LU (PCSHELL has no reset in PETSc 3.18), which would keep them through the step's detection and assembly. */
+static PetscErrorCode ReleaseSubdomainFactors(Newton *nt)
+{
+  PC        pc;
+  KSP      *sub;
+  PetscInt  nblocks;
+  PetscBool schwarz;
+
+  PetscFunctionBeginUser;
+  if (!nt->sorted_subdomains || !nt->factored) PetscFunctionReturn(0);
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCASM, &schwarz));
+  if (!schwarz) PetscFunctionReturn(0);
+  PetscCall(PCASMGetSubKSP(pc, &nblocks, NULL, &sub));
+  for (PetscInt b = 0; b < nblocks; b++) {
+    PC subpc;
+    PetscCall(KSPGetPC(sub[b], &subpc));
+    PetscCall(NewtonSubdomainReleaseSortedLU(subpc));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* The step's Jacobian and linear solver: W presorted (one rank, PresortContacts), J created on its pattern, the
    position of every diagonal block, and the KSP reset to J's sizes, then chosen for them (ChooseLinearSolver). */
 PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc)
@@ -313,6 +350,7 @@ PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscI
   Mat Ad, Ao;
 
   PetscFunctionBeginUser;
+  PetscCall(ReleaseSubdomainFactors(nt));
   PetscCall(PresortContacts(nt, n, nc));
   PetscCall(MatDuplicate(nt->order ? nt->Wsorted : nt->Wfull, MAT_COPY_VALUES, &nt->J));
   if (nt->order) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
