@@ -2,33 +2,21 @@
 """scripts/proto_fixed_points.py on a problem both methods solve: confine5's step 3 (5 contacts, friction), exported
 by kergs. The De Saxce fixed point must reach 1e-9 and the Fischer-Burmeister Newton 1e-10 on kergs's natural
 residual, each reporting it in its JSON line; a missing file is refused with status 2."""
-import argparse
 import json
 import os
 import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from checks import ROOT, Kergs, check, failures
+
 SCRIPT = os.path.join(ROOT, "scripts", "proto_fixed_points.py")
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what, flush=True)
-    if not ok:
-        failures.append(what)
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--kergs", required=True)
-    ap.add_argument("--dir", required=True)
-    a = ap.parse_args()
-    os.makedirs(a.dir, exist_ok=True)
-    problem = os.path.join(a.dir, "confine5_step3.fclib.h5")
-    p = subprocess.run([a.kergs, "-options_file", "cases/confine5.opts", "-steps", "3", "-solver_type", "newton", "-output",
-                        os.path.join(a.dir, "confine5.h5"), "-fclib_step", "3", "-fclib_output", problem, "-quiet"],
-                       cwd=ROOT, capture_output=True, text=True)
+    k = Kergs.from_command_line(__doc__)
+    problem = k.path("confine5_step3.fclib.h5")
+    p = k.run(1, "-options_file", "cases/confine5.opts", "-steps", 3, "-solver_type", "newton", "-output", k.path("confine5.h5"),
+              "-fclib_step", 3, "-fclib_output", problem, "-quiet")
     check(p.returncode == 0 and os.path.exists(problem), "kergs exports confine5's step 3")
     for method, extra, tol in (("desaxce", ["--outer", "60"], 1e-9), ("fb-lcp", ["--max-it", "50"], 1e-10)):
         p = subprocess.run(["/usr/bin/python3", SCRIPT, method, problem] + extra, capture_output=True, text=True)
@@ -38,7 +26,7 @@ def main():
             out = {}
         check(p.returncode == 0 and out.get("method") == method and out.get("contacts") == 5 and out.get("residual", 1) <= tol,
               f"{method}: natural residual {out.get('residual')} <= {tol:g} on 5 contacts")
-    p = subprocess.run(["/usr/bin/python3", SCRIPT, "desaxce", os.path.join(a.dir, "missing.h5")], capture_output=True, text=True)
+    p = subprocess.run(["/usr/bin/python3", SCRIPT, "desaxce", k.path("missing.h5")], capture_output=True, text=True)
     check(p.returncode == 2 and "no such file" in p.stderr, "a missing problem file: status 2, named")
     return 1 if failures else 0
 

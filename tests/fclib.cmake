@@ -23,6 +23,7 @@ set_tests_properties(profiles_quick PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PR
 # step 3 to kergs's natural residual, and a missing file is refused
 add_test(NAME proto_fixed_points
          COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_proto_fixed_points.py --kergs $<TARGET_FILE:kergs_exe>
+                 --mpiexec ${MPIEXEC_EXECUTABLE}
                  --dir ${CMAKE_CURRENT_BINARY_DIR}/proto_fixed_points
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(proto_fixed_points PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 1 TIMEOUT 120 LABELS fclib)
