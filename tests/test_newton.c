@@ -441,18 +441,7 @@ static PetscErrorCode TestSortedSubdomains(const char *scene, PetscInt nsteps, c
     PetscCall(MakeStepper(opts, &st[k]));
     /* read by the subdomain solvers at the first Newton solve, after the stepper's options were checked */
     if (k == 1) PetscCall(PetscOptionsSetValue(NULL, "-solver_sub_pc_factor_mat_ordering_type", "amd"));
-    maxits[k] = nconv[k] = 0;
-    maxres[k]            = 0;
-    for (PetscInt s = 0; s < nsteps; s++) {
-      PetscReal its, res, conv;
-      PetscCall(KergsStepperStep(st[k]));
-      PetscCall(StatAt(st[k]->results, "iterations", s, &its));
-      PetscCall(StatAt(st[k]->results, "residual", s, &res));
-      PetscCall(StatAt(st[k]->results, "converged", s, &conv));
-      maxits[k] = PetscMax(maxits[k], (PetscInt)its);
-      maxres[k] = PetscMax(maxres[k], res);
-      nconv[k] += conv > 0.5;
-    }
+    PetscCall(StepAndSummarize(st[k], nsteps, &maxits[k], &maxres[k], &nconv[k]));
     PetscCall(ViewSays(PETSC_COMM_WORLD, st[k]->solver, "the subdomain copied into that order", &sorted[k]));
     if (k == 1) PetscCall(PetscOptionsClearValue(NULL, "-solver_sub_pc_factor_mat_ordering_type"));
     for (PetscInt s = 0; s < nsteps; s++) {

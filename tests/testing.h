@@ -106,16 +106,13 @@ static inline PetscErrorCode StatAt(KergsResults res, const char *name, PetscInt
   PetscFunctionReturn(0);
 }
 
-/* Run nsteps of a scene; the largest iteration count (sweeps, Newton steps, outer iterations) and the largest natural
-   residual over the steps, and how many steps converged. The stepper is kept in *keep when asked, else destroyed. */
-static inline PetscErrorCode RunSteps(const char *opts, PetscInt nsteps, KergsStepper *keep, PetscInt *maxits, PetscReal *maxres,
-                                      PetscInt *nconverged)
+/* Run nsteps of a stepper from its first step; the largest iteration count (sweeps, Newton steps, outer iterations) and
+   the largest natural residual over the steps, and how many steps converged. */
+static inline PetscErrorCode StepAndSummarize(KergsStepper st, PetscInt nsteps, PetscInt *maxits, PetscReal *maxres, PetscInt *nconverged)
 {
-  KergsStepper st;
-  PetscReal    its, res, conv;
+  PetscReal its, res, conv;
 
   PetscFunctionBeginUser;
-  PetscCall(MakeStepper(opts, &st));
   *maxits = *nconverged = 0;
   *maxres               = 0;
   for (PetscInt s = 0; s < nsteps; s++) {
@@ -127,6 +124,20 @@ static inline PetscErrorCode RunSteps(const char *opts, PetscInt nsteps, KergsSt
     *maxres = PetscMax(*maxres, res);
     *nconverged += conv > 0.5;
   }
+  PetscFunctionReturn(0);
+}
+
+/* StepAndSummarize on a new stepper of a scene. The stepper is kept in *keep when asked, else destroyed. */
+static inline PetscErrorCode RunSteps(const char *opts, PetscInt nsteps, KergsStepper *keep, PetscInt *maxits, PetscReal *maxres,
+                                      PetscInt *nconverged)
+{
+  KergsStepper st;
+
+  PetscFunctionBeginUser;
+  *maxits = *nconverged = 0; /* set before anything can fail: gcc cannot see StepAndSummarize set them */
+  *maxres               = 0;
+  PetscCall(MakeStepper(opts, &st));
+  PetscCall(StepAndSummarize(st, nsteps, maxits, maxres, nconverged));
   if (keep)
     *keep = st;
   else
