@@ -263,41 +263,14 @@ def test_signals_early(k):
     check(os.path.exists(out) and os.path.exists(k.path("early.checkpoint.h5")), "SIGUSR1 at start: results and checkpoint of step 0")
 
 
-def test_signals_ctrl_c(k):
-    """Ctrl-C in a terminal: SIGINT reaches mpiexec and the ranks (one process group), then mpiexec relays SIGTERM to the
-    ranks (and SIGKILL one second later, which kergs cannot prevent: docs/running.md). The relayed signal, of another kind,
-    must not kill them: here SIGINT then SIGTERM go to the ranks directly, and the run must stop as on SIGINT alone."""
-    out = k.path("ctrlc.h5")
-    p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log="ctrlc.log")
+def stop_by_signals(k, name, send):
+    """A paper500 run on 2 ranks, stopped by send(mpiexec process, ranks' pids) after 5 steps: whether it started, its exit
+    status (None if it had not ended within 60 s), its results' attributes, and whether its checkpoint is of step 5 or
+    later."""
+    out = k.path(f"{name}.h5")
+    p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log=f"{name}.log")
     started = wait_for_steps(log, 5, p)
-    ranks = ranks_of(p)
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        for pid in ranks:
-            os.kill(pid, sig)
-    rc = p.wait(timeout=60)
-    try:
-        _, attrs, _ = stats(out)
-        with h5py.File(k.path("ctrlc.checkpoint.h5"), "r") as c:
-            ok = int(c.attrs["step"]) >= 5
-    except (OSError, KeyError):
-        attrs, ok = {}, False
-    check(started and rc == 4 and ok and attrs.get("end", b"").startswith(b"stopped by SIG") and not os.path.exists(out + ".tmp"),
-          f"SIGINT then SIGTERM to the ranks (Ctrl-C relayed by mpiexec): stopped cleanly with status 4, results complete, checkpoint "
-          f"written (got {rc}, {attrs.get('end')})")
-
-
-def test_signals_usr1_twice(k):
-    """A scheduler's warning that reaches the ranks directly and again through mpiexec (a job script that forwards it):
-    the second SIGUSR1 is the same request and must not kill the ranks before their checkpoint."""
-    out = k.path("usr1twice.h5")
-    p, log = k.start(2, *PAPER500, "-steps", 100000, "-output", out, log="usr1twice.log")
-    started = wait_for_steps(log, 5, p)
-    ranks = ranks_of(p)
-    for _ in range(2):  # twice to the ranks directly (the second arrives before the step ends), then through mpiexec
-        for pid in ranks:
-            os.kill(pid, signal.SIGUSR1)
-        time.sleep(0.05)
-    os.kill(p.pid, signal.SIGUSR1)
+    send(p, ranks_of(p))
     try:
         rc = p.wait(timeout=60)
     except subprocess.TimeoutExpired:
@@ -305,11 +278,42 @@ def test_signals_usr1_twice(k):
         rc = None
     try:
         _, attrs, _ = stats(out)
-        with h5py.File(k.path("usr1twice.checkpoint.h5"), "r") as c:
+        with h5py.File(k.path(f"{name}.checkpoint.h5"), "r") as c:
             ok = int(c.attrs["step"]) >= 5
     except (OSError, KeyError):
         attrs, ok = {}, False
-    check(started and rc == 4 and ok and attrs.get("end") == b"stopped by SIGUSR1" and not os.path.exists(out + ".tmp"),
+    return started and ok and not os.path.exists(out + ".tmp"), rc, attrs
+
+
+def test_signals_ctrl_c(k):
+    """Ctrl-C in a terminal: SIGINT reaches mpiexec and the ranks (one process group), then mpiexec relays SIGTERM to the
+    ranks (and SIGKILL one second later, which kergs cannot prevent: docs/running.md). The relayed signal, of another kind,
+    must not kill them: here SIGINT then SIGTERM go to the ranks directly, and the run must stop as on SIGINT alone."""
+
+    def send(_, ranks):
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            for pid in ranks:
+                os.kill(pid, sig)
+
+    ok, rc, attrs = stop_by_signals(k, "ctrlc", send)
+    check(ok and rc == 4 and attrs.get("end", b"").startswith(b"stopped by SIG"),
+          f"SIGINT then SIGTERM to the ranks (Ctrl-C relayed by mpiexec): stopped cleanly with status 4, results complete, checkpoint "
+          f"written (got {rc}, {attrs.get('end')})")
+
+
+def test_signals_usr1_twice(k):
+    """A scheduler's warning that reaches the ranks directly and again through mpiexec (a job script that forwards it):
+    the second SIGUSR1 is the same request and must not kill the ranks before their checkpoint."""
+
+    def send(mpiexec, ranks):
+        for _ in range(2):  # twice to the ranks directly (the second arrives before the step ends), then through mpiexec
+            for pid in ranks:
+                os.kill(pid, signal.SIGUSR1)
+            time.sleep(0.05)
+        os.kill(mpiexec.pid, signal.SIGUSR1)
+
+    ok, rc, attrs = stop_by_signals(k, "usr1twice", send)
+    check(ok and rc == 4 and attrs.get("end") == b"stopped by SIGUSR1",
           f"SIGUSR1 to the ranks and to mpiexec (delivered twice): stopped cleanly with status 4, results complete, checkpoint "
           f"written (got {rc}, {attrs.get('end')})")
 
