@@ -17,7 +17,9 @@ strains (every 0.05 %) and finite, LAMMPS's mean overlap at sigma3 after its iso
 its target (k_n = sigma3 / level), the lateral walls' stress is sigma3 within 5 % in both codes (the mean over the
 curve after its first point: pressure times the current wall length), and LAMMPS's q/p agrees with kergs's within
 0.08 at every point from 0.1 % axial strain (measured: 0.05 at most; the first point, 0.05 % of strain, is the soft
-contacts' elastic mobilisation, 0.24 against 0.46), the figure biaxial.png is written.
+contacts' elastic mobilisation, 0.24 against 0.46), the figure biaxial.png is written; and, without a run, the
+friction read from the biaxial cases, the macroscopic results read from curves of known peak, critical state and
+dilatancy, and the band arithmetic of --band on two results files written here.
 
   check_dem_compare.py --kergs build/kergs --dir WORKDIR [--scene pressure|biaxial]
 Exit status 0 when every check holds, 1 otherwise."""
@@ -28,6 +30,7 @@ import os
 import subprocess
 import sys
 import time
+import types
 
 from checks import check, failures
 
@@ -98,7 +101,64 @@ SXX_TOL = 0.05
 QP_TOL, QP_FROM = 0.08, 0.001
 
 
+def load_script():
+    """scripts/dem_compare as a module (it has no .py suffix), for the checks of its reading functions."""
+    import importlib.machinery
+    import importlib.util
+    loader = importlib.machinery.SourceFileLoader("dem_compare", os.path.join(ROOT, "scripts", "dem_compare"))
+    spec = importlib.util.spec_from_loader("dem_compare", loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+def check_biaxial_reading(a):
+    """Without a run: the friction read from a case (kergs's rule: -friction, then -friction_pairs), the macroscopic
+    results read from curves of known peak, critical state and dilatancy, and the band arithmetic on two results files
+    written here."""
+    import h5py
+    import numpy as np
+    dc = load_script()
+    for case, want in (("biaxial_small.opts", (0.5, 0.5)), ("biaxial_5k.opts", (0.5, 0.0))):
+        path = os.path.join(ROOT, "cases", case)
+        got = dc.case_friction(dc.case_options(path), path)
+        check(got == want, f"{case}: friction between disks and against the walls {got}, expected {want}")
+    grid = types.SimpleNamespace(strain=0.10, strain_step=0.0025)
+    e = np.array(dc.strain_grid(grid))
+    # q/p up to 0.5 at 2 %, down to 0.3 from 5 %: the peak is the largest mean of two neighbouring 0.25 % points
+    q = np.where(e <= 0.02, 0.5 * e / 0.02, np.where(e >= 0.05, 0.3, 0.5 - 0.2 * (e - 0.02) / 0.03))
+    ev = np.where(e <= 0.03, -0.5 * e, -0.015 - 0.1 * (e - 0.03))  # s = -0.5 up to 3 %: sin psi = 0.5 / 2.5
+    curves = {"q_over_p": list(q), "strain_volumetric": list(ev), "solid_fraction": list(0.8 + 0 * e), "Z": list(3 + 0 * e)}
+    m = dc.macroscopic(curves, grid)
+    want = {"peak_q": 0.5 - 0.1 * 0.0025 / 0.03, "critical_q": 0.3, "dilatancy": math.degrees(math.asin(0.2)), "solid_fraction": 0.8,
+            "Z": 3.0}
+    check(all(abs(m[k] - want[k]) < 1e-9 for k in want), f"macroscopic results of known curves {m}, expected {want}")
+    files = []
+    for i, shift in enumerate((0.0, 0.02)):
+        path = os.path.join(a.dir, f"band{i}.h5")
+        with h5py.File(path, "w") as f:
+            st = f.create_group("stats")
+            n = 400
+            eps = np.linspace(0.1 / n, 0.1, n)
+            st["strain_axial"] = eps
+            st["wall_sxx"] = np.ones(n)
+            st["wall_syy"] = (1 + 0.4 + shift) / (1 - 0.4 - shift) * np.ones(n)  # q/p 0.4 + shift
+            for k, v in (("strain_volumetric", -0.1 * eps), ("solid_fraction", 0.8 + shift + 0 * eps), ("Z", 3 + 0 * eps),
+                         ("q_over_p", 0 * eps)):
+                st[k] = v
+        files.append(path)
+    grid.band = files
+    run = {"code": "kergs", "setting": "test", "seconds_per_percent": 1.0, **curves}
+    s = dc.band_summary(grid, [run])
+    b, r = s["band"], s["runs"][0]
+    check(abs(b["critical_q"]["mean"] - 0.41) < 1e-9 and abs(b["critical_q"]["band"] - 0.02) < 1e-9,
+          f"band of the critical q/p: mean 0.41, band 0.02 ({b['critical_q']})")
+    check(abs(r["errors_in_bands"]["critical_q"] - 5.5) < 1e-9 and "critical_q" not in r["within"] and "Z" in r["within"],
+          f"a critical q/p of 0.3 lies 5.5 bands from 0.41; Z within a zero band ({r['errors_in_bands']}, {r['within']})")
+
+
 def check_biaxial(a):
+    check_biaxial_reading(a)
     kergs, lmp = run_and_read(a, "biaxial", "dem_compare_biaxial.jsonl", "biaxial.png", "curves", BIAXIAL_FIELDS[:6], None, ())
     for r in kergs + lmp:
         curves = [r.get(k, []) for k in BIAXIAL_FIELDS[6:]]
