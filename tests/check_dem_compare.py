@@ -118,17 +118,31 @@ def check_biaxial_reading(a):
     written here."""
     import h5py
     import numpy as np
+    os.makedirs(a.dir, exist_ok=True)
     dc = load_script()
     for case, want in (("biaxial_small.opts", (0.5, 0.5)), ("biaxial_5k.opts", (0.5, 0.0))):
         path = os.path.join(ROOT, "cases", case)
         got = dc.case_friction(dc.case_options(path), path)
         check(got == want, f"{case}: friction between disks and against the walls {got}, expected {want}")
+        x, rad = np.array([[0.1, 0.1], [0.3, 0.1]]), np.array([0.1, 0.1])
+        ns = types.SimpleNamespace(mu=got[0], mu_wall=got[1])
+        text = dc.lammps_biaxial_input(ns, x, rad, (0.0, 0.0, 0.4, 0.2), 1e3, 1.0, 1e-5, 10, 10, 1, 0.01,
+                                       os.path.join(a.dir, "friction"), 1.0)
+        pair = [l for l in text.splitlines() if l.startswith("pair_style")]
+        walls = [l for l in text.splitlines() if "wall/gran/region" in l]
+        check(len(pair) == 1 and float(pair[0].split()[-2]) == got[0] and len(walls) == 4
+              and all(float(l.split()[-5]) == got[1] for l in walls),
+              f"{case}: LAMMPS's pair friction {got[0]} and wall friction {got[1]} ({pair}, {walls[:1]})")
     grid = types.SimpleNamespace(strain=0.10, strain_step=0.0025)
     e = np.array(dc.strain_grid(grid))
-    # q/p up to 0.5 at 2 %, down to 0.3 from 5 %: the peak is the largest mean of two neighbouring 0.25 % points
-    q = np.where(e <= 0.02, 0.5 * e / 0.02, np.where(e >= 0.05, 0.3, 0.5 - 0.2 * (e - 0.02) / 0.03))
-    ev = np.where(e <= 0.03, -0.5 * e, -0.015 - 0.1 * (e - 0.03))  # s = -0.5 up to 3 %: sin psi = 0.5 / 2.5
-    curves = {"q_over_p": list(q), "strain_volumetric": list(ev), "solid_fraction": list(0.8 + 0 * e), "Z": list(3 + 0 * e)}
+    # q/p up to 0.5 at 2 %, down to 0.3 at 5 %, 0.28 from 5 to 6 % and 0.3 beyond: the peak is the largest mean of two
+    # neighbouring 0.25 % points, the critical state the mean beyond 6 % (the last 40 %), not beyond 5 %
+    q = np.where(e <= 0.02, 0.5 * e / 0.02, np.where(e > 0.06, 0.3, np.where(e >= 0.05, 0.28, 0.5 - 0.2 * (e - 0.02) / 0.03)))
+    # eps_v falls with slope -0.5 over one 0.5 % window (2 to 2.5 %), -0.1 elsewhere: sin psi = 0.5 / 2.5 there, and a
+    # wider window would dilute it
+    ev = -0.1 * e - 0.4 * np.clip(e - 0.02, 0, 0.005)
+    late = lambda v_late, v_mid, v_early: list(np.where(e > 0.06, v_late, np.where(e >= 0.05, v_mid, v_early)))
+    curves = {"q_over_p": list(q), "strain_volumetric": list(ev), "solid_fraction": late(0.8, 0.79, 0.78), "Z": late(3.0, 2.5, 2.0)}
     m = dc.macroscopic(curves, grid)
     want = {"peak_q": 0.5 - 0.1 * 0.0025 / 0.03, "critical_q": 0.3, "dilatancy": math.degrees(math.asin(0.2)), "solid_fraction": 0.8,
             "Z": 3.0}
@@ -147,7 +161,7 @@ def check_biaxial_reading(a):
                          ("q_over_p", 0 * eps)):
                 st[k] = v
         files.append(path)
-    grid.band = files
+    grid.band, grid.band_curves = files, [dc.kergs_curves(grid, path)[1] for path in files]
     run = {"code": "kergs", "setting": "test", "seconds_per_percent": 1.0, **curves}
     s = dc.band_summary(grid, [run])
     b, r = s["band"], s["runs"][0]
