@@ -844,7 +844,8 @@ static PetscBool Close(PetscReal a, PetscReal b, PetscReal tol)
 
 /* The contact forces a sample records come back as impulses of the reading scene's time step, each keyed to the same
    grains, and a wall contact to the wall of the same name whatever the walls' order. Written at dt 2e-3 with walls
-   w0, w1; read at dt 5e-4 with walls w1, w0 (w0 is wall 1 there). */
+   w0, w1; read at dt 5e-4 with walls w1, w0 (w0 is wall 1 there). The contact of disks 1 and 2 is written with
+   r_n = -1e-21, zero to rounding as newton leaves some: it carries no force, so it is left out, and the file reads. */
 static PetscErrorCode TestSampleForces(KergsScene scene, const char dir[])
 {
   MPI_Comm        comm     = scene->comm;
@@ -864,6 +865,9 @@ static PetscErrorCode TestSampleForces(KergsScene scene, const char dir[])
   scene->dt   = dt0;
   scene->step = 1; /* a packing a run has stepped: its contacts are written */
   PetscCall(ContactsBuild(scene, 0, &written));
+  PetscCall(KergsContactsGetLocal(written, &m, &c));
+  for (PetscInt k = 0; k < m; k++)
+    if (c[k].kind == KERGS_CONTACT_DISK_DISK && c[k].a + scene->dstart == 1) c[k].r[0] = -1e-21, c[k].r[1] = 0.0;
   PetscCall(KergsSampleWrite(scene, written, path));
   PetscCall(ContactsFree(&written));
   PetscCall(TargetSceneCreate(comm, &target));
@@ -883,13 +887,14 @@ static PetscErrorCode TestSampleForces(KergsScene scene, const char dir[])
       for (PetscInt i = 0; i < NDISKS; i++)
         if (DiskId(i) == target->id[c[k].a]) g = i;
     ContactOfGlobal(g, 0, &want);
-    ok = (PetscBool)(ok && target->id[c[k].a] == DiskId(want.a) && c[k].b == -1 &&
+    ok = (PetscBool)(ok && g != 1 && target->id[c[k].a] == DiskId(want.a) && c[k].b == -1 &&
                      c[k].idb == (c[k].kind == KERGS_CONTACT_DISK_WALL ? 1 : want.idb) && Close(c[k].r[0], want.r[0] / dt0 * dt1, 1e-14) &&
                      Close(c[k].r[1], want.r[1] / dt0 * dt1, 1e-14));
   }
   PetscCallMPI(MPIU_Allreduce(&m, &total, 1, MPIU_INT, MPI_SUM, comm));
   PetscCall(
-      CheckAll(comm, (PetscBool)(total == NDISKS), "sample forces: every contact comes back, on the owner of its grain a", total, NDISKS));
+      CheckAll(comm, (PetscBool)(total == NDISKS - 1), "sample forces: every contact with r_n > 0 comes back, on the owner of its grain a",
+               total, NDISKS - 1));
   PetscCall(CheckAll(
       comm, ok, "sample forces: same keys, the wall matched by name (w0: wall 1 of the reader), impulse = force x the reader's dt", ok, 1));
   PetscCall(KergsContactsDestroy(&read));

@@ -32,7 +32,8 @@ static PetscErrorCode SampleWriteBox(PetscViewer viewer, KergsScene scene)
 
 /* /sample/contacts: every contact that carries a force at the end of the run, keyed as the warm start keys them (grain
    id of a, kind, grain id or wall index of b), with its force r / dt in the contact frame, so that a run of another
-   time step reads the same forces. */
+   time step reads the same forces. A contact carries a force when its normal impulse is positive (Coulomb bounds the
+   tangential one by mu r_n): newton leaves some r_n at -1e-20, zero to rounding, which the reader would refuse. */
 static PetscErrorCode SampleWriteContacts(PetscViewer viewer, KergsScene scene, KergsContacts contacts)
 {
   KergsDisks    D;
@@ -49,10 +50,7 @@ static PetscErrorCode SampleWriteContacts(PetscViewer viewer, KergsScene scene, 
   PetscCall(KergsContactsGetLocal(contacts, &m, &c));
   PetscCall(PetscMalloc4(m + 1, &ida, m + 1, &kind, m + 1, &idb, KERGS_MAXCOMP * m + 1, &force));
   for (PetscInt i = 0; i < m; i++) {
-    PetscBool loaded = PETSC_FALSE;
-
-    for (PetscInt j = 0; j < KERGS_MAXCOMP; j++) loaded = (PetscBool)(loaded || c[i].r[j] != 0.0);
-    if (!loaded) continue;
+    if (!(c[i].r[0] > 0.0)) continue;
     ida[k]  = D.id[c[i].a];
     kind[k] = c[i].kind == KERGS_CONTACT_DISK_WALL ? 1 : 0;
     idb[k]  = c[i].idb;
