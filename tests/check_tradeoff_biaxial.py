@@ -5,6 +5,8 @@ Every run row holds the macroscopic results (finite peak and critical q/p, the s
 within 0.01 of its 0.8167, Z above 3); the settings are applied (the paper's capped NLGS never sweeps more than 150
 times, the uncapped one does on some step); the reference ran on 1 and 2 ranks and their band is rounding-small (q/p
 within 0.02); every setting has a comparison row with an error and a band for each result; the JSON file is complete.
+A run killed after a checkpoint (its first 4 steps, no exit status) is continued by --reuse from that checkpoint, to
+the uninterrupted run's statistics bit for bit, and the runs that ended are kept as they are.
 
   check_tradeoff_biaxial.py --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
@@ -15,10 +17,45 @@ import os
 import subprocess
 import sys
 
+import h5py
+import numpy as np
+
 from checks import check, failures
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PHI_SAMPLE, PHI_TOL = 0.8167, 0.01
+
+
+def results_stats(path):
+    """A results file's statistics but the timings and the memory, which no two runs share."""
+    with h5py.File(path, "r") as f:
+        return {k: f["stats"][k][()] for k in f["stats"] if not (k.endswith("_seconds") or "memory" in k or k == "imbalance")}
+
+
+def check_continue(a):
+    """The uncapped NLGS run killed after a checkpoint of step 4: tradeoff_biaxial --reuse continues it from there."""
+    runs = os.path.join(a.dir, "runs")
+    out, kept = os.path.join(runs, "nlgs_quad_1e-4.h5"), os.path.join(runs, "nlgs_paper_150.h5")
+    whole, kept_time = results_stats(out), os.path.getmtime(kept)
+    cmd = open(out + ".cmd").read().split()
+    p = subprocess.run(cmd + ["-steps", "4", "-checkpoint_every", "4", "-checkpoint_path", os.path.join(runs, "nlgs_quad_1e-4.checkpoint.h5")],
+                       cwd=ROOT, capture_output=True, text=True)
+    os.remove(out + ".cmd.exit")  # killed: no status recorded
+    check(p.returncode == 0 and len(results_stats(out)["step"]) == 4, "a run of the first 4 steps and its checkpoint (exit %d)" % p.returncode)
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "tradeoff_biaxial"), "--quick", "--reuse", "--kergs", a.kergs, "--out", a.dir],
+                       cwd=ROOT, capture_output=True, text=True)
+    if not check(p.returncode == 0, "tradeoff_biaxial --quick --reuse runs (exit %d) %s" % (p.returncode, p.stderr[-500:])):
+        return
+    row = [json.loads(x) for x in open(os.path.join(a.dir, "tradeoff_biaxial.jsonl")) if '"run": "nlgs_quad_1e-4"' in x][0]
+    with h5py.File(out, "r") as f:
+        restart_step = f.attrs.get("restart_step")
+    check(row.get("continued_from_step") == 4 and restart_step == 4,
+          "the killed run continued from its checkpoint: row %s, results file's restart_step %s" % (row.get("continued_from_step"), restart_step))
+    again = results_stats(out)
+    same = sorted(again) == sorted(whole) and all(np.array_equal(again[k], whole[k], equal_nan=True) for k in whole)
+    check(same, "its statistics are the uninterrupted run's, bit for bit: %s differ" %
+          [k for k in whole if k not in again or not np.array_equal(again[k], whole[k], equal_nan=True)])
+    check(os.path.getmtime(kept) == kept_time, "a run that ended is kept, not run again")
 
 
 def main():
@@ -44,6 +81,7 @@ def main():
     check(band < 0.02, "the reference's band on peak q/p over 1 and 2 ranks is %.2g, below 0.02" % band)
     check(sorted(comps) == ["newton_1e-8", "nlgs_paper_150", "nlgs_quad_1e-4"] and
           all("critical_q_error" in c and "phi_end_band" in c for c in comps.values()), "a comparison row per setting: %s" % sorted(comps))
+    check_continue(a)
     print("%d failure(s)" % len(failures))
     return 1 if failures else 0
 
