@@ -696,6 +696,23 @@ static PetscErrorCode CheckGeometryOption(const char name[], const char value[])
   PetscFunctionReturn(0);
 }
 
+/* PETSc's own monitors start in PetscInitialize, from the command line, and PetscFinalize reports them, failing on one
+   that never started: a restart of a run made with -log_view, -memory_view or -malloc_view ended with status 1 after
+   its checkpoint (measured). One that the checkpoint brings is started as it enters the database. */
+static PetscErrorCode StartPetscMonitor(const char name[])
+{
+  PetscBool is;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscStrcmp(name, "-log_view", &is));
+  if (is) PetscCall(PetscLogDefaultBegin());
+  PetscCall(PetscStrcmp(name, "-memory_view", &is));
+  if (is) PetscCall(PetscMemorySetGetMaximumUsage());
+  PetscCall(PetscStrcmp(name, "-malloc_view", &is));
+  if (is) PetscCall(PetscMallocViewSet(0));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode InsertOptions(const char text[])
 {
   char  *copy, *save = NULL, *tok, name[256] = "", value[4096] = "";
@@ -710,7 +727,10 @@ static PetscErrorCode InsertOptions(const char text[])
         PetscCall(PetscStrcmp(name, "-restart", &skip));
         PetscCall(PetscOptionsHasName(NULL, NULL, name, &set));
         if (!skip && set) PetscCall(CheckGeometryOption(name, value));
-        if (!skip && !set) PetscCall(PetscOptionsSetValue(NULL, name, value[0] ? value : NULL)); /* the command line wins */
+        if (!skip && !set) {
+          PetscCall(PetscOptionsSetValue(NULL, name, value[0] ? value : NULL)); /* the command line wins */
+          PetscCall(StartPetscMonitor(name));
+        }
       }
       if (!tok) break;
       PetscCall(PetscStrncpy(name, tok, sizeof(name)));
