@@ -137,16 +137,17 @@ def test_restart(k):
 
 def test_restart_monitors(k):
     """PETSc's monitors that start in PetscInitialize (-log_view, -memory_view, -malloc_view), given to the first run
-    only: the restart, which takes its options from the checkpoint, reports them too and ends with status 0 (it used to
-    end with status 1 in PetscFinalize, after its checkpoint)."""
+    only: the restart, which takes its options from the checkpoint, reports the first two, says the third is not
+    applied, and ends with status 0 (it used to end with status 1 in PetscFinalize, after its checkpoint)."""
     monitors = ["-log_view", "-memory_view", "-malloc_view"]
     p1 = k.run(1, *PAPER500, "-quiet", "-steps", 2, "-output", k.path("M.h5"), "-checkpoint_every", 2, *monitors, log="M1.log")
     p2 = k.run(1, "-restart", k.path("M.checkpoint.h5"), "-steps", 4, log="M2.log")
     out = p2.stdout + p2.stderr
     check(p1.returncode == 0 and p2.returncode == 0 and "PETSC ERROR" not in out,
           f"restart, PETSc's monitors from the checkpoint: exit {p1.returncode}, then {p2.returncode}")
-    check("Performance Summary" in out and "Summary of Memory Usage" in out,
-          "restart, PETSc's monitors from the checkpoint: the restart prints -log_view's and -memory_view's summaries")
+    check("Performance Summary" in out and "Summary of Memory Usage" in out and "-malloc_view of the checkpointed run is not applied" in out,
+          "restart, PETSc's monitors from the checkpoint: the restart prints -log_view's and -memory_view's summaries, and says "
+          "that -malloc_view (PETSc's tracing malloc, installed at start only) is not applied")
 
 
 def test_restart_pressure(k):

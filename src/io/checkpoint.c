@@ -698,18 +698,25 @@ static PetscErrorCode CheckGeometryOption(const char name[], const char value[])
 
 /* PETSc's own monitors start in PetscInitialize, from the command line, and PetscFinalize reports them, failing on one
    that never started: a restart of a run made with -log_view, -memory_view or -malloc_view ended with status 1 after
-   its checkpoint (measured). One that the checkpoint brings is started as it enters the database. */
-static PetscErrorCode StartPetscMonitor(const char name[])
+   its checkpoint (measured). -log_view and -memory_view that the checkpoint brings are started as they enter the
+   database. -malloc_view needs PETSc's tracing malloc, which only PetscInitialize can install (started later it
+   reports 0 bytes): it is left out, with a line saying so. */
+static PetscErrorCode InsertCheckpointOption(const char name[], const char value[])
 {
   PetscBool is;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscStrncmp(name, "-malloc_view", 12, &is));
+  if (is) {
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "kergs: %s of the checkpointed run is not applied: PETSc takes it from the command line only\n",
+                          name));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(PetscOptionsSetValue(NULL, name, value));
   PetscCall(PetscStrcmp(name, "-log_view", &is));
   if (is) PetscCall(PetscLogDefaultBegin());
   PetscCall(PetscStrcmp(name, "-memory_view", &is));
   if (is) PetscCall(PetscMemorySetGetMaximumUsage());
-  PetscCall(PetscStrcmp(name, "-malloc_view", &is));
-  if (is) PetscCall(PetscMallocViewSet(0));
   PetscFunctionReturn(0);
 }
 
@@ -727,10 +734,7 @@ static PetscErrorCode InsertOptions(const char text[])
         PetscCall(PetscStrcmp(name, "-restart", &skip));
         PetscCall(PetscOptionsHasName(NULL, NULL, name, &set));
         if (!skip && set) PetscCall(CheckGeometryOption(name, value));
-        if (!skip && !set) {
-          PetscCall(PetscOptionsSetValue(NULL, name, value[0] ? value : NULL)); /* the command line wins */
-          PetscCall(StartPetscMonitor(name));
-        }
+        if (!skip && !set) PetscCall(InsertCheckpointOption(name, value[0] ? value : NULL)); /* the command line wins */
       }
       if (!tok) break;
       PetscCall(PetscStrncpy(name, tok, sizeof(name)));
