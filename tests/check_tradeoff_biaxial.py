@@ -32,6 +32,36 @@ def results_stats(path):
         return {k: f["stats"][k][()] for k in f["stats"] if not (k.endswith("_seconds") or "memory" in k or k == "imbalance")}
 
 
+def check_stop_forwarded(a):
+    """A stop request to the script reaches a run under way as SIGUSR1 (here a process that exits 4 on it, as kergs
+    does after its checkpoint), and no run starts after it."""
+    import importlib.machinery
+    import importlib.util
+    import threading
+    import time
+    loader = importlib.machinery.SourceFileLoader("tradeoff_biaxial", os.path.join(ROOT, "scripts", "tradeoff_biaxial"))
+    spec = importlib.util.spec_from_loader("tradeoff_biaxial", loader)
+    tb = importlib.util.module_from_spec(spec)
+    loader.exec_module(tb)
+    procs = tb.Processes()
+    waiting = [sys.executable, "-c", "import signal, sys, time\nsignal.signal(signal.SIGUSR1, lambda *a: sys.exit(4))\n"
+               "open(sys.argv[1], 'w').close()\ntime.sleep(60)", os.path.join(a.dir, "stop_probe")]
+    ready = waiting[-1]
+    if os.path.exists(ready):
+        os.remove(ready)
+    result = {}
+    worker = threading.Thread(target=lambda: result.update(code=procs.run(waiting)[0]))
+    t0 = time.time()
+    worker.start()
+    while not os.path.exists(ready) and time.time() - t0 < 30:
+        time.sleep(0.05)
+    procs.stop(None, None)
+    worker.join(60)
+    os.remove(ready)
+    check(result.get("code") == 4 and time.time() - t0 < 30 and procs.run(["true"])[0] is None,
+          "a stop request reaches the run under way as SIGUSR1 (exit %s) and no run starts after it" % result.get("code"))
+
+
 def check_continue(a):
     """The uncapped NLGS run killed after a checkpoint of step 4: tradeoff_biaxial --reuse continues it from there."""
     runs = os.path.join(a.dir, "runs")
@@ -82,6 +112,7 @@ def main():
     check(sorted(comps) == ["newton_1e-8", "nlgs_paper_150", "nlgs_quad_1e-4"] and
           all("critical_q_error" in c and "phi_end_band" in c for c in comps.values()), "a comparison row per setting: %s" % sorted(comps))
     check_continue(a)
+    check_stop_forwarded(a)
     print("%d failure(s)" % len(failures))
     return 1 if failures else 0
 
