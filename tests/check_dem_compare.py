@@ -133,6 +133,16 @@ def check_biaxial_reading(a):
         check(len(pair) == 1 and float(pair[0].split()[-2]) == got[0] and len(walls) == 4
               and all(float(l.split()[-5]) == got[1] for l in walls),
               f"{case}: LAMMPS's pair friction {got[0]} and wall friction {got[1]} ({pair}, {walls[:1]})")
+    small = os.path.join(ROOT, "cases", "biaxial_small.opts")
+    segment = os.path.join(a.dir, "segment_platens.opts")
+    with open(segment, "w") as f:
+        f.write("".join(l for l in open(small) if not l.startswith("-wall_box_bottom_infinite")))
+    try:
+        dc.check_case(dc.case_options(segment), segment)
+        refused = ""
+    except SystemExit as e:
+        refused = str(e)
+    check("the bottom wall is a segment" in refused, f"a case whose bottom platen is a segment is refused: {refused or 'accepted'}")
     grid = types.SimpleNamespace(strain=0.10, strain_step=0.0025)
     e = np.array(dc.strain_grid(grid))
     # q/p up to 0.5 at 2 %, down to 0.3 at 5 %, 0.28 from 5 to 6 % and 0.3 beyond: the peak is the largest mean of two
