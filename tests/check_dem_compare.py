@@ -125,9 +125,17 @@ def check_biaxial_reading(a):
         got = dc.case_friction(dc.case_options(path), path)
         check(got == want, f"{case}: friction between disks and against the walls {got}, expected {want}")
         x, rad = np.array([[0.1, 0.1], [0.3, 0.1]]), np.array([0.1, 0.1])
-        ns = types.SimpleNamespace(mu=got[0], mu_wall=got[1])
+        ns = types.SimpleNamespace(mu=got[0], mu_wall=got[1], lammps_damping=0.0)
         text = dc.lammps_biaxial_input(ns, x, rad, (0.0, 0.0, 0.4, 0.2), 1e3, 1.0, 1e-5, 10, 10, 1, 0.01,
                                        os.path.join(a.dir, "friction"), 1.0)
+        ns.lammps_damping = 5.0
+        damped = dc.lammps_biaxial_input(ns, x, rad, (0.0, 0.0, 0.4, 0.2), 1e3, 1.0, 1e-5, 10, 10, 1, 0.01,
+                                         os.path.join(a.dir, "damped"), 1.0).splitlines()
+        drag = [l for l in damped if l.startswith("fix drag disks viscous")]
+        shear = damped.index("reset_timestep 0")
+        check("fix drag" not in text and len(drag) == 1 and abs(float(drag[0].split()[-1]) - 5.0 * math.pi * 0.01) < 1e-12
+              and damped.index("unfix wdamp") < damped.index(drag[0]) < shear, f"{case}: --lammps-damping 5 drags the disks (mean mass pi 0.01 kg/m) "
+              f"from the shear on, and 0 does not: {drag}")
         pair = [l for l in text.splitlines() if l.startswith("pair_style")]
         walls = [l for l in text.splitlines() if "wall/gran/region" in l]
         check(len(pair) == 1 and float(pair[0].split()[-2]) == got[0] and len(walls) == 4
