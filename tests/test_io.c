@@ -892,9 +892,8 @@ static PetscErrorCode TestSampleForces(KergsScene scene, const char dir[])
                      Close(c[k].r[1], want.r[1] / dt0 * dt1, 1e-14));
   }
   PetscCallMPI(MPIU_Allreduce(&m, &total, 1, MPIU_INT, MPI_SUM, comm));
-  PetscCall(
-      CheckAll(comm, (PetscBool)(total == NDISKS - 1), "sample forces: every contact with r_n > 0 comes back, on the owner of its grain a",
-               total, NDISKS - 1));
+  PetscCall(CheckAll(comm, (PetscBool)(total == NDISKS - 1),
+                     "sample forces: every contact with r_n > 0 comes back, on the owner of its grain a", total, NDISKS - 1));
   PetscCall(CheckAll(
       comm, ok, "sample forces: same keys, the wall matched by name (w0: wall 1 of the reader), impulse = force x the reader's dt", ok, 1));
   PetscCall(KergsContactsDestroy(&read));
