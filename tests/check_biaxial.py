@@ -8,7 +8,8 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    the walls' pressure p in both directions to 1 % (measured 0.2 %), and the sample records its box (/sample/box, where
    the free walls stopped) as its grains' hull to 1e-5 (measured 1e-10), which biaxial_small takes by -box_from_sample;
 2. friction and density: the same options on 120 grains in a 0.46 m box (NLGS to quad 1e-4), compacted at mu = 0 and
-   at mu = 0.5, both to rest: the frictionless packing ends denser by more than 0.01 (measured 0.8070 against 0.7842,
+   at mu = 0.5, both to rest (the case's speed, or 1e-8 J/m per grain: at mu = 0.5 a rattler can go on bouncing at 6 mm/s
+   under NLGS's 1,000-sweep cap, above the case's 5 mm/s): the frictionless packing ends denser by more than 0.01 (measured 0.8070 against 0.7842,
    a gap of 0.023; 0.808 against 0.787 with newton);
 3. biaxial: q/p, 0 at the end of the isotropic compaction (below 0.05, measured 0.015), stays above 0.2 over the run
    (measured 0.30 to 0.40), and strain_axial equals the top wall's travel (from the snapshots' walls) over the initial
@@ -320,7 +321,8 @@ def main():
     with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:  # one rank a run, two runs at a time
         compact = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", "-output", out, "-sample_output", sample,
                               log="compact.log")
-        smalls = {mu: pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", mu, "-output", small[mu],
+        smalls = {mu: pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", mu, "-stop_at_rest_energy", REST_PER_GRAIN,
+                                  "-output", small[mu],
                                   "-sample_output", k.path("small_%g.sample.h5" % mu), log="small_%g.log" % mu) for mu in (0.5, 0)}
         by_energy = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-stop_at_rest", 0, "-stop_at_rest_energy",
                                 REST_ENERGY, "-output", k.path("small_energy.h5"), "-sample_output", k.path("small_energy.sample.h5"),

@@ -9,6 +9,6 @@ kergs_test(NAME scene_help SOURCE test_scene.c NPROCS 1
            EXPECT_OUTPUT -scene_name -gravity -dt -steps -theta -gap_rule -alert -materials -material_density -friction
                        -friction_pairs -box -box_open_top -walls -wall_box_bottom_a -wall_box_left_force -wall_piston_a
                        -wall_piston_b -wall_piston_type -wall_piston_infinite -wall_piston_material -wall_piston_velocity
-                       -wall_piston_program -wall_piston_mass -wall_piston_force -wall_piston_pressure -disks_source -disks_material -disks_x
+                       -wall_piston_program -wall_piston_mass -wall_piston_force -wall_piston_pressure -wall_piston_guided -disks_source -disks_material -disks_x
                        -disks_radius -disks_velocity -lattice_type -lattice_n -lattice_radius -lattice_origin -lattice_spacing
                        -random_n -random_box -random_radius -random_seed -sample_input "Scene unnamed: 1 disks")

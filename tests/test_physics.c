@@ -1,7 +1,7 @@
 /* Physics with known answers, through the whole engine (scene -> detect -> operators -> NLGS -> update).
    Runs on 1 and 2 ranks; every check is global. */
 static const char help[] =
-    "kergs physics tests: column, slopes, wedged pair, momentum balance, adjoint of H, non-convergence, pressure wall.\n";
+    "kergs physics tests: column, slopes, wedged pair, momentum balance, adjoint of H, non-convergence, pressure wall, guided wall.\n";
 
 #include "testing.h"
 
@@ -571,6 +571,50 @@ static PetscErrorCode TestPressureWall(void)
   PetscFunctionReturn(0);
 }
 
+/* A guided wall (the default under a pressure) moves along its normal only. Under gravity g one disk of mass m slides
+   down between box_left (fixed) and box_right (pressure p over the box's height 1, so a normal force p), both with
+   friction mu: each wall holds it up by mu p, so v_y = -k dt (g - 2 mu p / m) after k steps, and box_right stays on
+   its guide (v_y and its vertical displacement exactly zero). A wall free to slide along itself (-guided false) is
+   dragged down: with box_right's mass 1e-3, mu p / M = 60 m/s^2 > g, it follows the disk and the disk falls faster. */
+static PetscErrorCode RunGuidedWall(const char *guided, PetscReal *vdisk, PetscReal *vwall, PetscReal *ywall)
+{
+  char         opts[1024];
+  KergsStepper st;
+  PetscReal    v = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(opts, sizeof(opts),
+                          "-gravity 0,-10 -friction 0.3 -dt 1e-3 -material_density 1 -disks_source lattice -lattice_type square "
+                          "-lattice_n 1,1 -lattice_radius 0.1 -lattice_origin 0.1,0.5 -box 0,0,0.2,1 -wall_box_right_type free "
+                          "-wall_box_right_mass 1e-3 -wall_box_right_pressure 0.2 -alert 0.01 -solver_tol 1e-13 -solver_max_it 20000 %s",
+                          guided));
+  PetscCall(MakeStepper(opts, &st));
+  for (PetscInt s = 0; s < 20; s++) PetscCall(KergsStepperStep(st));
+  if (st->scene->nowned) v = st->scene->v[1];
+  PetscCall(MPIU_Allreduce(&v, vdisk, 1, MPIU_REAL, MPIU_SUM, PETSC_COMM_WORLD));
+  *vwall = st->scene->walls[1].v[1];
+  *ywall = st->scene->walls[1].disp[1];
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode TestGuidedWall(void)
+{
+  const PetscReal m = PETSC_PI * 0.01, expect = -20 * 1e-3 * (10 - 2 * 0.3 * 0.2 / m);
+  PetscReal       vdisk, vwall, ywall;
+
+  PetscFunctionBeginUser;
+  PetscCall(RunGuidedWall("", &vdisk, &vwall, &ywall));
+  PetscCall(
+      Check((PetscBool)(PetscAbsReal(vdisk / expect - 1) < 1e-8), "guided wall: the disk slides down at g - 2 mu p / m", vdisk, expect));
+  PetscCall(Check((PetscBool)(vwall == 0 && ywall == 0), "guided wall: box_right stays on its guide (v_y, displacement)",
+                  PetscMax(PetscAbsReal(vwall), PetscAbsReal(ywall)), 0));
+  PetscCall(RunGuidedWall("-wall_box_right_guided false", &vdisk, &vwall, &ywall));
+  PetscCall(Check((PetscBool)(vwall < -0.1 && vdisk < expect * 1.05), "unguided wall: friction drags box_right down, the disk falls faster",
+                  vwall, vdisk));
+  PetscFunctionReturn(0);
+}
+
 int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
@@ -586,6 +630,7 @@ int main(int argc, char **argv)
   PetscCall(TestInfeasibleRow());
   PetscCall(TestConvergedResidual());
   PetscCall(TestPressureWall());
+  PetscCall(TestGuidedWall());
   {
     int code = Finish();
     PetscCall(PetscFinalize());

@@ -364,6 +364,8 @@ static PetscErrorCode TestPressureWalls(MPI_Comm comm)
                       "pressure: box_top pushed inward by 3 x 2"));
   PetscCall(CheckTrue(comm, (PetscBool)(Close(s->walls[4].force[0], -8.0, 1e-14) && Close(s->walls[4].force[1], 6.0, 1e-14)),
                       "pressure: the oblique wall pushed along its normal (-0.8, 0.6) by 2 x 5"));
+  PetscCall(CheckTrue(comm, (PetscBool)(s->walls[1].guided && s->walls[2].guided && s->walls[4].guided && !s->walls[0].guided),
+                      "pressure: a pressure wall is guided along its normal by default"));
   {
     const PetscReal a[2] = {2, 0.4}, b[2] = {0, 0.4}, v[2] = {0, 0}, disp[2] = {0, -0.6};
     PetscCall(KergsSceneRestoreWall(s, 2, a, b, v, disp)); /* box_top lowered to y = 0.4 */
@@ -481,6 +483,11 @@ static PetscErrorCode TestErrors(MPI_Comm comm)
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_pressure 5 -wall_w_force 1,0",
        "-wall_w_pressure or -wall_w_force, not both"},
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_pressure 5", "Free wall w: mass"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_guided", "Wall w is driven: -wall_w_guided"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_guided -wall_w_force 1,1",
+       "its force (1., 1.) has a component 1. along the wall"},
+      {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_pressure 5 -wall_w_velocity 1,0",
+       "its velocity (1., 0.) has a component 1. along the wall"},
       {"-walls w,w -wall_w_a 0,0 -wall_w_b 1,0", "used twice"},
       {"-walls w -wall_w_a 0,0,1 -wall_w_b 1,0", "-wall_w_a"},
       {"-disks_x 0,0 -disks_radius 0.1 -disks_material 1", "Grain 0 has material 1"},

@@ -38,8 +38,10 @@ typedef struct {
   PetscInt  nprog;
   PetscReal prog_t[KERGS_MAX_PROGRAM];
   PetscReal prog_v[KERGS_MAX_PROGRAM][KERGS_DIM];
-  /* free wall: translational mass and applied force */
+  /* free wall: translational mass and applied force; a guided one moves along its normal only (its velocity and
+     force have no component along the wall, and the contacts push it along n only: H_f sees n n^T of its DOFs) */
   PetscReal mass, force[KERGS_DIM];
+  PetscBool guided;
   /* pressure-controlled free wall: force = pressure x loaded length along n, set again after every move of the walls.
      The loaded length is the separation of the two walls perpendicular to this one that face each other across it,
      span[0] facing along a->b and span[1] against it; without exactly one of each (span -1), the wall's own |b - a|. */
@@ -90,6 +92,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneFriction(KergsScene, PetscInt mat_a, Petsc
 /* Driven wall: its program's velocity at time t (zero before the first piece or without program).
    Free wall: its current velocity wall->v. */
 PETSC_EXTERN PetscErrorCode KergsWallVelocityAt(const KergsWall *, PetscReal t, PetscReal v[]);
+/* The wall's unit normal n, towards the disks' side (the left normal of a->b). */
+PETSC_EXTERN void KergsWallNormal(const KergsWall *, PetscReal n[]);
 /* Collective, over all disks: ek = sum 1/2 m |v|^2 + 1/2 I omega^2, vmax = largest speed. */
 PETSC_EXTERN PetscErrorCode KergsSceneKineticEnergy(KergsScene, PetscReal *ek, PetscReal *vmax);
 /* Make room for n local disks (owned + ghosts), keeping the first nlocal. */
@@ -158,9 +162,9 @@ PETSC_EXTERN PetscErrorCode KergsSceneRestoreDisks(KergsScene, PetscInt ndisks, 
 /* The clock, and the automatic alert distance and its floor as the run left them (with -alert given, this run's value
    is kept: the checkpointed run's, or the command line's). */
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreState(KergsScene, PetscInt step, PetscReal time, PetscReal alert, PetscReal alert_floor);
-/* Wall w's endpoints, velocity and displacement since the start of the run (KERGS_DIM values each) */
 /* Wall w's loaded length (KergsWall.span): what its pressure multiplies. */
 PETSC_EXTERN PetscErrorCode KergsSceneWallLoadedLength(KergsScene, PetscInt w, PetscReal *length);
+/* Wall w's endpoints, velocity and displacement since the start of the run (KERGS_DIM values each) */
 PETSC_EXTERN PetscErrorCode KergsSceneRestoreWall(KergsScene, PetscInt w, const PetscReal a[], const PetscReal b[], const PetscReal v[],
                                                   const PetscReal disp[]);
 /* The ghost layer as a checkpoint keeps it (src/scene/ghosts.c): whether it exists, the owned disks' positions when it

@@ -159,6 +159,21 @@ static void AddBody(HtRow *row, PetscInt dof, PetscBool rotates, const PetscReal
   }
 }
 
+/* A guided wall's DOFs see only the part of e along the wall's normal n: its row is -(e.n) n^T, so that W, the
+   velocity update and the kernel all keep the wall on its guide (a frictional contact's tangential row gets zeros on an
+   axis-aligned wall, whose DOFs are then simply uncoupled along it). */
+static void AddGuidedWall(HtRow *row, PetscInt dof, const KergsWall *wall, const PetscReal e[])
+{
+  PetscReal n[KERGS_DIM], en = 0.0;
+
+  KergsWallNormal(wall, n);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) en += e[d] * n[d];
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    row->col[row->ncol]   = dof + d;
+    row->val[row->ncol++] = -en * n[d];
+  }
+}
+
 /* Entries of the rows of H^T for one contact: for component c, body a's columns get +e_c (and -ra for the
    tangential component on the rotation), body b's get -e_c (and -rb on its rotation) (docs/design.md, notation):
    v_n = n.(u_a - u_b), v_t = t.(u_a - u_b) - ra w_a - rb w_b. Row c (0 normal, 1 tangential) of contact ct, split
@@ -173,6 +188,8 @@ void KergsOperatorsContactRows(KergsOperators ops, const StepData *sd, const Ker
   AddBody(free, KergsOperatorsDiskDof(ops, sd->D.gidx[ct->a]), rotates, e, 1.0, ct->ra, tang);
   if (ct->kind == KERGS_CONTACT_DISK_DISK)
     AddBody(free, KergsOperatorsDiskDof(ops, sd->D.gidx[ct->b]), rotates, e, -1.0, ct->rb, tang);
+  else if (sd->walls[ct->b].kind == KERGS_WALL_FREE && sd->walls[ct->b].guided)
+    AddGuidedWall(free, ops->wall_dof[ct->b], &sd->walls[ct->b], e);
   else if (sd->walls[ct->b].kind == KERGS_WALL_FREE)
     AddBody(free, ops->wall_dof[ct->b], PETSC_FALSE, e, -1.0, 0.0, tang);
   else

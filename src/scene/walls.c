@@ -8,7 +8,8 @@
    KergsSceneAdvanceWalls, CheckWall and ViewWall; a new kind adds its case there and its name to KergsWallKinds.
    Outside the scene, the operators (V_f or V_g), the kernel and the watch (energy, work) ask whether a wall is free.
    A pressure-controlled wall is a free wall whose force the scene sets from its pressure and loaded length (WallSpan,
-   UpdateWallPressures) whenever the walls move: at setup, after each step's motion and after a restart. */
+   UpdateWallPressures) whenever the walls move: at setup, after each step's motion and after a restart. A guided free
+   wall (the default under a pressure) moves along its normal only: the operators project its rows of H_f on n. */
 #include <kergs/private/sceneimpl.h>
 #include <petscviewer.h>
 
@@ -66,6 +67,13 @@ static PetscReal WallLoadedLength(const KergsWall walls[], PetscInt w)
     const PetscReal *lo = walls[wall->span[0]].a, *hi = walls[wall->span[1]].a;
     return PetscMax(0.0, t[0] * (hi[0] - lo[0]) + t[1] * (hi[1] - lo[1]));
   }
+}
+
+void KergsWallNormal(const KergsWall *w, PetscReal n[])
+{
+  PetscReal t[KERGS_DIM];
+
+  WallFrame(w, t, n);
 }
 
 PetscErrorCode KergsSceneWallLoadedLength(KergsScene scene, PetscInt w, PetscReal *length)
@@ -377,7 +385,7 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
   char      prefix[KERGS_WALL_PREFIX_LEN], title[KERGS_WALL_PREFIX_LEN];
   PetscReal vel[KERGS_DIM] = {0}, *prog;
   PetscInt  nvals;
-  PetscBool aset, bset, vset, fset, pset;
+  PetscBool aset, bset, vset, fset, pset, gset;
 
   PetscFunctionBeginUser;
   PetscCall(PetscSNPrintf(prefix, sizeof(prefix), "wall_%s_", w->name));
@@ -403,6 +411,11 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
                              "Pressure (N/m) on a free wall: force = pressure x loaded length, along the normal, every step (the "
                              "separation of the two walls perpendicular to it, or its own length)",
                              NULL, w->pressure, &w->pressure, &pset));
+  w->guided = (PetscBool)(w->guided || pset);
+  PetscCall(PetscOptionsBool("-guided",
+                             "A free wall moves along its normal only, as the confining walls of a cell (default: true with -pressure, "
+                             "false otherwise); false lets friction drag it along itself",
+                             NULL, w->guided, &w->guided, &gset));
   PetscOptionsEnd();
   PetscCheck(!needs_endpoints || (aset && bset), scene->comm, PETSC_ERR_ARG_WRONGSTATE,
              "Wall %s (from -walls) needs both -wall_%s_a x,y and -wall_%s_b x,y", w->name, w->name, w->name);
@@ -410,6 +423,9 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
   if (w->kind == KERGS_WALL_DRIVEN) PetscCall(KergsWallVelocityAt(w, time, w->v));
   PetscCall(PetscFree(prog));
   if (pset) PetscCall(WallCheckPressureOptions(scene->comm, w, fset));
+  PetscCheck(!gset || !w->guided || w->kind == KERGS_WALL_FREE, scene->comm, PETSC_ERR_ARG_INCOMP,
+             "Wall %s is driven: -wall_%s_guided applies to free walls only (a driven wall follows its velocity program)", w->name,
+             w->name);
   PetscFunctionReturn(0);
 }
 
@@ -462,6 +478,31 @@ PetscErrorCode KergsSceneSetWalls(KergsScene scene, KergsWallsSpec *spec)
 /* ------------------------------------------------------------------------------------------------ */
 /* Validation and view                                                                              */
 
+/* A guided wall moves along its normal only: neither its velocity nor its applied force may have a component along the
+   wall (the contacts' impulses have none, by construction of H_f), beyond rounding. */
+static PetscErrorCode CheckGuidedWall(MPI_Comm comm, const KergsWall *w)
+{
+  PetscReal t[KERGS_DIM], n[KERGS_DIM], vt = 0, ft = 0, vv = 0, ff = 0;
+
+  PetscFunctionBeginUser;
+  WallFrame(w, t, n);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    vt += w->v[d] * t[d];
+    ft += w->force[d] * t[d];
+    vv += PetscSqr(w->v[d]);
+    ff += PetscSqr(w->force[d]);
+  }
+  PetscCheck(PetscAbsReal(vt) <= 1e-12 * PetscSqrtReal(vv), comm, PETSC_ERR_ARG_INCOMP,
+             "Wall %s is guided (it moves along its normal (%g, %g) only): its velocity (%g, %g) has a component %g along the wall "
+             "(-wall_%s_velocity, or -wall_%s_guided false)",
+             w->name, (double)(n[0] + 0.0), (double)(n[1] + 0.0), (double)w->v[0], (double)w->v[1], (double)vt, w->name, w->name);
+  PetscCheck(PetscAbsReal(ft) <= 1e-12 * PetscSqrtReal(ff), comm, PETSC_ERR_ARG_INCOMP,
+             "Wall %s is guided (it moves along its normal (%g, %g) only): its force (%g, %g) has a component %g along the wall "
+             "(-wall_%s_force, or -wall_%s_guided false)",
+             w->name, (double)(n[0] + 0.0), (double)(n[1] + 0.0), (double)w->force[0], (double)w->force[1], (double)ft, w->name, w->name);
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode CheckWall(KergsScene scene, const KergsWall *w)
 {
   MPI_Comm  comm = scene->comm;
@@ -486,6 +527,7 @@ static PetscErrorCode CheckWall(KergsScene scene, const KergsWall *w)
              "Wall %s is driven: a pressure applies to free walls only (-wall_%s_type free)", w->name, w->name);
   PetscCheck(!w->has_pressure || (KergsSceneFinite(w->pressure) && w->pressure >= 0.0), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Wall %s: pressure %g must be finite and non-negative (-wall_%s_pressure)", w->name, (double)w->pressure, w->name);
+  if (w->kind == KERGS_WALL_FREE && w->guided) PetscCall(CheckGuidedWall(comm, w));
   PetscCheck(w->nprog >= 0 && w->nprog <= KERGS_MAX_PROGRAM, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Wall %s: %" PetscInt_FMT " program pieces, at most %d", w->name, w->nprog, KERGS_MAX_PROGRAM);
   for (PetscInt k = 0; k < w->nprog; k++) {
@@ -517,6 +559,7 @@ static PetscErrorCode ViewWall(PetscViewer viewer, const KergsWall walls[], cons
   if (w->kind == KERGS_WALL_FREE) {
     PetscCall(PetscViewerASCIIPrintf(viewer, ", mass %g, force (%g, %g), velocity (%g, %g)", (double)w->mass, (double)w->force[0],
                                      (double)w->force[1], (double)w->v[0], (double)w->v[1]));
+    PetscCall(PetscViewerASCIIPrintf(viewer, w->guided ? ", guided along its normal" : ", free to slide along itself"));
     if (w->has_pressure && w->span[0] >= 0)
       PetscCall(PetscViewerASCIIPrintf(viewer, ", pressure %g over the length from %s to %s", (double)w->pressure, walls[w->span[0]].name,
                                        walls[w->span[1]].name));
