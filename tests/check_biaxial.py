@@ -8,25 +8,25 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    the walls' pressure p in both directions to 1 % (measured 0.2 %), and the sample records its box (/sample/box, where
    the free walls stopped) as its grains' hull to 1e-5 (measured 1e-10), which biaxial_small takes by -box_from_sample;
 2. friction and density: the same options on 120 grains in a 0.46 m box (NLGS to quad 1e-4), compacted at mu = 0 and
-   at mu = 0.5, both to rest (the case's speed, or 1e-8 J/m per grain: at mu = 0.5 a rattler can go on bouncing at 6 mm/s
-   under NLGS's 1,000-sweep cap, above the case's 5 mm/s): the frictionless packing ends denser by more than 0.01 (measured 0.8070 against 0.7842,
-   a gap of 0.023; 0.808 against 0.787 with newton);
-3. biaxial: q/p, 0 at the end of the isotropic compaction (below 0.05, measured 0.015), stays above 0.2 over the run
-   (measured 0.30 to 0.40), and strain_axial equals the top wall's travel (from the snapshots' walls) over the initial
+   at mu = 0.5, both to rest (the case's speed, or 1e-8 J/m per grain: at mu = 0.5 a rattler can go on bouncing at
+   6 mm/s under NLGS's 1,000-sweep cap): the frictionless packing ends denser by more than 0.01 (measured 0.8071
+   against 0.7895, the walls guided; 0.8070 against 0.7842 free to slide along themselves);
+3. biaxial: q/p, 0 at the end of the isotropic compaction (below 0.05, measured 0.012), stays above 0.2 over the run
+   (measured 0.33 to 0.44), and strain_axial equals the top wall's travel (from the snapshots' walls) over the initial
    height to 1e-6;
-4. Rothenburg-Bathurst along the shear: q/p = (a_c + a_n + a_t)/2 in every row to 0.03 (measured largest gap 0.016 at
-   mu = 0.5 - a_t/2 is 0.03 to 0.08 of it - and 0.010-0.013 frictionless);
+4. Rothenburg-Bathurst along the shear: q/p = (a_c + a_n + a_t)/2 in every row to 0.03 (measured largest gap 0.019 at
+   mu = 0.5 and 0.008 frictionless);
 5. stress from contacts against stress from walls along the shear, quasi-static (I = 9.5e-4). Frictionless: the
    Love-Weber sxx and syy equal wall_sxx and wall_syy (normal forces over the walls' lengths) averaged over the run to
-   2 % (measured 0.1 % and 0.1 %; row by row the median gap is 0.9 % and 0.4 %, the largest 15 %, the walls' and
+   2 % (measured 0.08 % and 0.07 %; row by row the median gap is 0.9 % and 0.4 %, the largest 15 %, the walls' and
    grains' inertia). At mu = 0.5 the walls' friction adds to the boundary's stress what wall_sxx leaves out (the
-   average sxx is 23 % above it, syy 3 % below), so the Love-Weber stress is checked against the whole boundary's
+   average sxx is 18 % above it, syy 3 % below), so the Love-Weber stress is checked against the whole boundary's
    (the moment of every wall traction over the box area, friction included) at each snapshot, to 15 %, and on
-   average over the snapshots to 3 % (measured largest gap 6.4 %, 1.3 % on average); the lateral walls hold
-   sigma3 = 1: wall_sxx averages 1 to 2 % (measured 1.005, 1.003 frictionless);
+   average over the snapshots to 3 % (measured largest gap 10.8 %, 2.4 % on average); the lateral walls hold
+   sigma3 = 1: wall_sxx averages 1 to 2 % (measured 1.004, 1.003 frictionless);
 6. residual strength of frictionless disks: the same shear at -friction 0 ends (mean over the last third of the run)
-   at q/p between 0.02 and 0.15 (measured 0.051-0.056, at 1.8 % strain: not yet the critical state) and below half
-   the frictional run's (measured 0.34);
+   at q/p between 0.02 and 0.15 (measured 0.062, at 1.8 % strain: not yet the critical state) and below half
+   the frictional run's (measured 0.39);
 7. -stop_at_rest_energy alone (the 120 grains of 2, at mu = 0): the run stops at the first step whose kinetic energy
    per grain is below it, after one above;
 8. a tiled sample stays at rest: the compaction's sample mirrored into 2 x 3 tiles (scripts/tile_sample.py, 1,800
@@ -67,11 +67,11 @@ SMALL_N = 120
 REST_ENERGY = 1e-7  # -stop_at_rest_energy of the third small compaction (J/m per grain)
 SMALL = ["-random_n", SMALL_N, "-random_box", "0,0,0.46,0.46", "-box", "0,0,0.46,0.46", "-solver_type", "nlgs", "-solver_criterion", "quad",
          "-solver_tol", 1e-4, "-solver_max_it", 1000]
-DENSER_BY = 0.01  # frictionless against mu = 0.5 compaction (measured 0.023)
-RB_TOL = 0.03  # |q/p - (a_c + a_n + a_t)/2| (measured 0.016)
+DENSER_BY = 0.01  # frictionless against mu = 0.5 compaction (measured 0.018)
+RB_TOL = 0.03  # |q/p - (a_c + a_n + a_t)/2| (measured 0.019)
 WALL_MEAN_TOL = 0.02  # run-averaged Love-Weber against wall stress, frictionless (measured 0.1 %)
-BOUNDARY_TOL = 0.15  # Love-Weber against the whole boundary's stress at any snapshot, mu = 0.5 (measured 6.4 %)
-BOUNDARY_MEAN_TOL = 0.03  # the same, averaged over the snapshots (measured 1.3 %)
+BOUNDARY_TOL = 0.15  # Love-Weber against the whole boundary's stress at any snapshot, mu = 0.5 (measured 10.8 %)
+BOUNDARY_MEAN_TOL = 0.03  # the same, averaged over the snapshots (measured 2.4 %)
 SIGMA3_TOL = 0.02  # run-averaged wall_sxx against sigma3 (measured 0.5 %)
 Q_FRICTIONLESS = (0.02, 0.15)  # q/p over the last third of the frictionless shear (measured 0.056)
 TILES = (2, 3)

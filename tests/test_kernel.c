@@ -510,6 +510,35 @@ static PetscErrorCode TestFrictionalRow(void)
   PetscFunctionReturn(0);
 }
 
+/* A guided wall (a pressure wall: it moves along its normal only) has rows of H_f along its normal: with friction,
+   its single contact is not peeled, since the wall does not balance that contact's tangential impulse. Three disks in
+   a pyramid on a floor, between a fixed wall and a guided one touching one disk: the rank against the dense one
+   (peeling that contact would take 2 from the kernel's dimension), the projector identities, and one kept row of the
+   wall's two. */
+static PetscErrorCode TestGuidedWall(void)
+{
+  KergsStepper st;
+  KergsKernel  k;
+
+  PetscFunctionBeginUser;
+  PetscCall(
+      MakeStepper("-gravity 0,0 -friction 0.5 -disks_source list -disks_radius 0.5 -disks_x 0.5,0.5,1.5,0.5,1,1.3660254037844386 "
+                  "-walls floor,left,right -wall_floor_a 0,0 -wall_floor_b 2,0 -wall_floor_infinite -wall_left_a 0,3 -wall_left_b 0,0 "
+                  "-wall_left_infinite -wall_right_a 2,0 -wall_right_b 2,3 -wall_right_infinite -wall_right_type free "
+                  "-wall_right_mass 1 -wall_right_pressure 1 -alert 1e-6",
+                  &st));
+  PetscCall(Assemble(st));
+  PetscCall(MakeKernel("", st, &k));
+  PetscCall(Check((PetscBool)(k->peeled_contacts == 0), "guided wall: its single frictional contact is not peeled", k->peeled_contacts, 0));
+  PetscCall(Check((PetscBool)(k->kept_dofs == 10), "guided wall: 3 disks x 3 DOFs and one of the wall's", k->kept_dofs, 10));
+  PetscCall(CheckRank("guided wall", k, st));
+  PetscCall(CheckProjector("guided wall", k, st));
+  PetscCall(CheckDiagonal("guided wall", k, st));
+  PetscCall(KergsKernelDestroy(&k));
+  PetscCall(KergsStepperDestroy(&st));
+  PetscFunctionReturn(0);
+}
+
 /* A frictionless hexagonal patch without walls: more contact components than DOFs, yet H_f H_f^T is singular by
    the patch's rigid motions (two translations and the rotation, which frictionless contacts do not see).
    The automatic solver tries CHOLMOD on one rank, which must be rejected for MUMPS. */
@@ -575,6 +604,7 @@ int main(int argc, char **argv)
   PetscCall(TestCollinear("mumps"));
   if (size == 1) PetscCall(TestCollinear("cholmod"));
   PetscCall(TestFreePatch());
+  PetscCall(TestGuidedWall());
   PetscCall(TestFrictionalRow());
   PetscCall(TestCholmodParallel());
   {

@@ -367,7 +367,8 @@ static PetscErrorCode TestConvergedResidual(void)
 
 /* W assembled body by body (each rank adds its own disks' terms, rows of other ranks' contacts through the stash,
    a free wall's terms from the gathered list of its contacts) equals PETSc's product H_f^T M^-1 H_f, entry by entry
-   and with the same pattern. A frictional deposit pushed by a free (pressure-controlled) wall, on 1, 2 ranks. */
+   and with the same pattern. A frictional deposit pushed by a free wall under a constant force, guided (its rows of
+   H_f projected on its normal), on 1, 2 ranks. */
 static PetscErrorCode TestDelassusAssembly(void)
 {
   KergsStepper   st;
@@ -381,7 +382,8 @@ static PetscErrorCode TestDelassusAssembly(void)
   PetscCall(MakeStepper("-solver_type nlgs -solver_criterion quad -solver_tol 1e-4 -gap_rule paper "
                         "-gravity 0,-9.81 -friction 0.4 -dt 1e-3 -disks_source random -random_n 200 -random_box 0,0,0.5,0.8 "
                         "-random_radius 0.018,0.02 -box 0,0,0.5,1 -box_open_top -alert 0.01 -walls piston -wall_piston_a 0.5,0.685 "
-                        "-wall_piston_b 0,0.685 -wall_piston_type free -wall_piston_mass 0.5 -wall_piston_force 0,-5 -solver_max_it 50",
+                        "-wall_piston_b 0,0.685 -wall_piston_type free -wall_piston_mass 0.5 -wall_piston_force 0,-5 -wall_piston_guided "
+                        "-solver_max_it 50",
                         &st));
   for (PetscInt s = 0; s < 30; s++) PetscCall(KergsStepperStep(st));
   PetscCall(KergsContactsDetect(st->contacts, st->scene));

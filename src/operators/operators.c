@@ -159,9 +159,9 @@ static void AddBody(HtRow *row, PetscInt dof, PetscBool rotates, const PetscReal
   }
 }
 
-/* A guided wall's DOFs see only the part of e along the wall's normal n: its row is -(e.n) n^T, so that W, the
-   velocity update and the kernel all keep the wall on its guide (a frictional contact's tangential row gets zeros on an
-   axis-aligned wall, whose DOFs are then simply uncoupled along it). */
+/* A guided wall's DOFs see only the part of e along the wall's normal n: its row is -(e.n) n^T, so that W and the
+   velocity update keep the wall on its guide. A contact at the wall's line has e = +-n or +-t (src/detect), so its
+   tangential row is exactly zero; on an axis-aligned wall the DOF along the wall is then untouched to the bit. */
 static void AddGuidedWall(HtRow *row, PetscInt dof, const KergsWall *wall, const PetscReal e[])
 {
   PetscReal n[KERGS_DIM], en = 0.0;
@@ -361,6 +361,17 @@ PetscErrorCode KergsOperatorsSetImpulses(KergsOperators ops, KergsContacts conta
   PetscFunctionReturn(0);
 }
 
+/* v <- (v.n) n for a guided wall: on an oblique wall the update's two components round differently, and the rounding
+   along the wall would otherwise accumulate over the steps. */
+static void KeepOnGuide(const KergsWall *wall, PetscReal v[])
+{
+  PetscReal n[KERGS_DIM], vn = 0.0;
+
+  KergsWallNormal(wall, n);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) vn += v[d] * n[d];
+  for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = vn * n[d];
+}
+
 PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene scene)
 {
   const PetscScalar *vf;
@@ -396,6 +407,7 @@ PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene sce
     if (walls[w].kind != KERGS_WALL_FREE) continue;
     for (PetscInt d = 0; d < KERGS_DIM; d++) vw[d] = k >= 0 && k < ops->nfree_local ? vf[k + d] : walls[w].v[d];
     PetscCallMPI(MPI_Bcast(vw, KERGS_DIM, MPIU_REAL, size - 1, ops->comm));
+    if (walls[w].guided) KeepOnGuide(&walls[w], vw);
     PetscCall(KergsSceneSetWallVelocity(scene, w, vw));
   }
   PetscCall(VecRestoreArrayRead(ops->Vf, &vf));

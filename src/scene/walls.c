@@ -411,7 +411,7 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
                              "Pressure (N/m) on a free wall: force = pressure x loaded length, along the normal, every step (the "
                              "separation of the two walls perpendicular to it, or its own length)",
                              NULL, w->pressure, &w->pressure, &pset));
-  w->guided = (PetscBool)(w->guided || pset);
+  w->guided = pset;
   PetscCall(PetscOptionsBool("-guided",
                              "A free wall moves along its normal only, as the confining walls of a cell (default: true with -pressure, "
                              "false otherwise); false lets friction drag it along itself",
@@ -424,8 +424,8 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
   PetscCall(PetscFree(prog));
   if (pset) PetscCall(WallCheckPressureOptions(scene->comm, w, fset));
   PetscCheck(!gset || !w->guided || w->kind == KERGS_WALL_FREE, scene->comm, PETSC_ERR_ARG_INCOMP,
-             "Wall %s is driven: -wall_%s_guided applies to free walls only (a driven wall follows its velocity program)", w->name,
-             w->name);
+             "Wall %s is driven: -wall_%s_guided applies to free walls only (-wall_%s_type free -wall_%s_mass m)", w->name, w->name,
+             w->name, w->name);
   PetscFunctionReturn(0);
 }
 
@@ -479,7 +479,8 @@ PetscErrorCode KergsSceneSetWalls(KergsScene scene, KergsWallsSpec *spec)
 /* Validation and view                                                                              */
 
 /* A guided wall moves along its normal only: neither its velocity nor its applied force may have a component along the
-   wall (the contacts' impulses have none, by construction of H_f), beyond rounding. */
+   wall (the contacts' impulses have none, by construction of H_f), beyond rounding (1e-9, relative: a force typed with
+   rounded components on an oblique wall is accepted). On a restart the velocity is the checkpoint's. */
 static PetscErrorCode CheckGuidedWall(MPI_Comm comm, const KergsWall *w)
 {
   PetscReal t[KERGS_DIM], n[KERGS_DIM], vt = 0, ft = 0, vv = 0, ff = 0;
@@ -492,11 +493,11 @@ static PetscErrorCode CheckGuidedWall(MPI_Comm comm, const KergsWall *w)
     vv += PetscSqr(w->v[d]);
     ff += PetscSqr(w->force[d]);
   }
-  PetscCheck(PetscAbsReal(vt) <= 1e-12 * PetscSqrtReal(vv), comm, PETSC_ERR_ARG_INCOMP,
+  PetscCheck(PetscAbsReal(vt) <= 1e-9 * PetscSqrtReal(vv), comm, PETSC_ERR_ARG_INCOMP,
              "Wall %s is guided (it moves along its normal (%g, %g) only): its velocity (%g, %g) has a component %g along the wall "
-             "(-wall_%s_velocity, or -wall_%s_guided false)",
+             "(-wall_%s_velocity; on a restart, the checkpoint's: a run whose wall was not guided continues with -wall_%s_guided false)",
              w->name, (double)(n[0] + 0.0), (double)(n[1] + 0.0), (double)w->v[0], (double)w->v[1], (double)vt, w->name, w->name);
-  PetscCheck(PetscAbsReal(ft) <= 1e-12 * PetscSqrtReal(ff), comm, PETSC_ERR_ARG_INCOMP,
+  PetscCheck(PetscAbsReal(ft) <= 1e-9 * PetscSqrtReal(ff), comm, PETSC_ERR_ARG_INCOMP,
              "Wall %s is guided (it moves along its normal (%g, %g) only): its force (%g, %g) has a component %g along the wall "
              "(-wall_%s_force, or -wall_%s_guided false)",
              w->name, (double)(n[0] + 0.0), (double)(n[1] + 0.0), (double)w->force[0], (double)w->force[1], (double)ft, w->name, w->name);

@@ -19,6 +19,9 @@
       The factorizations read their package options with the prefix kernel_ (-kernel_mat_mumps_icntl_14 ...).
    4. A self-check on a pseudo-random x: |Hr^T P xr| <= -kernel_check_tol |Hr^T xr|.
    rank H_f = ncomp * peeled contacts + (rows of A) - (null pivots).
+   A guided free wall (docs/design.md) has rows of H_f that are multiples of its normal n: only its larger component's
+   row is kept (the other is proportional to it, or zero, and counts with the floating DOFs as a row without rank), and
+   with friction it peels nothing (one contact's tangential impulse is not balanced by the wall).
 
    P x = 0 on the peeled components, and xr - Hr y with A y = Hr^T xr on the kept ones: a generalized inverse
    from the null-pivot fixation gives the same Hr y, since Hr^T xr lies in range(A). */
@@ -180,7 +183,7 @@ PetscErrorCode KergsKernelDestroy(KergsKernel *k)
 typedef struct {
   KergsDisks       D;
   const KergsWall *walls;
-  PetscInt         ncontacts, nglobal, start;
+  PetscInt         nwalls, ncontacts, nglobal, start;
   KergsContact    *c;
   KergsDofLayout   L;
   Mat              HfT;
@@ -191,7 +194,7 @@ static PetscErrorCode GetKernelInput(KergsScene scene, KergsContacts contacts, K
 {
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetDisks(scene, &in->D));
-  PetscCall(KergsSceneGetWalls(scene, NULL, &in->walls));
+  PetscCall(KergsSceneGetWalls(scene, &in->nwalls, &in->walls));
   PetscCall(KergsContactsGetLocal(contacts, &in->ncontacts, &in->c));
   PetscCall(KergsContactsGetGlobalRange(contacts, &in->start, &in->nglobal));
   PetscCall(KergsOperatorsGetLayout(ops, &in->L));
@@ -206,6 +209,34 @@ static PetscInt BodyOfWall(const KernelInput *in, PetscInt w)
 {
   if (in->walls[w].kind != KERGS_WALL_FREE) return -1;
   return in->D.ndisks + (in->L.wall_dof[w] - in->D.ndisks * in->L.ndof_disk) / KERGS_DIM;
+}
+
+/* The free wall that is body b (b >= ndisks), or -1 for a disk. */
+static PetscInt WallOfBody(const KernelInput *in, PetscInt b)
+{
+  if (b < in->D.ndisks) return -1;
+  for (PetscInt w = 0; w < in->nwalls; w++)
+    if (BodyOfWall(in, w) == b) return w;
+  return -1;
+}
+
+/* A guided wall (docs/design.md) moves along its normal n only: its two columns of H_f^T are multiples of n_x and n_y,
+   so one of them, the larger component's, carries its whole rank (1), and with ncomp = 2 one contact at it leaves the
+   tangential impulse unbalanced by the wall: the wall cannot peel that contact (its block has rank 1, not 2). */
+static PetscBool GuidedBody(const KernelInput *in, PetscInt b)
+{
+  PetscInt w = WallOfBody(in, b);
+  return (PetscBool)(w >= 0 && in->walls[w].guided);
+}
+
+/* Whether free DOF g is kept in Hr: every DOF of a body with a live contact, except a guided wall's smaller component. */
+static PetscBool KeptDof(const KernelInput *in, PetscInt g, PetscInt b)
+{
+  PetscReal n[KERGS_DIM];
+
+  if (!GuidedBody(in, b)) return PETSC_TRUE;
+  KergsWallNormal(&in->walls[WallOfBody(in, b)], n);
+  return (PetscBool)((g - in->D.ndisks * in->L.ndof_disk) % KERGS_DIM == (PetscAbsReal(n[1]) > PetscAbsReal(n[0]) ? 1 : 0));
 }
 
 static PetscInt BodyOfDof(const KernelInput *in, PetscInt dof)
@@ -247,11 +278,11 @@ static PetscErrorCode GatherContactBodies(KergsKernel k, const KernelInput *in, 
   PetscFunctionReturn(0);
 }
 
-/* Peel the contact graph: while a body has a single live contact, kill that contact. alive[c] per global
+/* Peel the contact graph: while a body that can (peels[b]) has a single live contact, kill that contact. alive[c] per global
    contact; count[b] = live contacts of body b on exit, count0[b] before. Every rank runs the same sequential
    algorithm on the same data, so every rank gets the same answer. A queue makes it O(bodies + contacts). */
-static PetscErrorCode PeelContacts(PetscInt nbodies, PetscInt ncontacts, const PetscInt *ends, PetscBool *alive, PetscInt *count0,
-                                   PetscInt *count)
+static PetscErrorCode PeelContacts(PetscInt nbodies, PetscInt ncontacts, const PetscInt *ends, const PetscBool *peels, PetscBool *alive,
+                                   PetscInt *count0, PetscInt *count)
 {
   PetscInt *start, *adj, *fill, *queue, qhead = 0, qtail = 0;
 
@@ -269,7 +300,7 @@ static PetscErrorCode PeelContacts(PetscInt nbodies, PetscInt ncontacts, const P
     if (ends[e] >= 0) adj[fill[ends[e]]++] = e / 2;
   for (PetscInt c = 0; c < ncontacts; c++) alive[c] = (PetscBool)(ends[2 * c] >= 0); /* body a is a disk: -1 marks an inactive contact */
   for (PetscInt b = 0; b < nbodies; b++)
-    if (count[b] == 1) queue[qtail++] = b;
+    if (count[b] == 1 && peels[b]) queue[qtail++] = b;
   /* each body enters the queue at most once per decrement of its count, plus once initially */
   while (qhead < qtail) {
     PetscInt b = queue[qhead++], c = -1;
@@ -281,7 +312,7 @@ static PetscErrorCode PeelContacts(PetscInt nbodies, PetscInt ncontacts, const P
       PetscInt o = ends[2 * c + s];
       if (o < 0) continue;
       count[o]--;
-      if (count[o] == 1) queue[qtail++] = o;
+      if (count[o] == 1 && peels[o]) queue[qtail++] = o;
     }
   }
   PetscCall(PetscFree4(start, adj, fill, queue));
@@ -293,13 +324,14 @@ static PetscErrorCode PeelContacts(PetscInt nbodies, PetscInt ncontacts, const P
 static PetscErrorCode Eliminate(KergsKernel k, const KernelInput *in)
 {
   PetscInt   nbodies = in->D.ndisks + in->L.nfreewalls, nc = in->L.ncomp, *ends, *count0, *count, lo, hi, nkeep = 0, *idx;
-  PetscBool *alive;
+  PetscBool *alive, *peels;
   PetscInt   peeled_dofs = 0;
 
   PetscFunctionBeginUser;
   PetscCall(GatherContactBodies(k, in, &ends));
-  PetscCall(PetscMalloc3(in->nglobal + 1, &alive, nbodies + 1, &count0, nbodies + 1, &count));
-  PetscCall(PeelContacts(nbodies, in->nglobal, ends, alive, count0, count));
+  PetscCall(PetscMalloc4(in->nglobal + 1, &alive, nbodies + 1, &count0, nbodies + 1, &count, nbodies + 1, &peels));
+  for (PetscInt b = 0; b < nbodies; b++) peels[b] = (PetscBool)(nc == 1 || !GuidedBody(in, b));
+  PetscCall(PeelContacts(nbodies, in->nglobal, ends, peels, alive, count0, count));
   k->floating_grains = k->floating_dofs = k->single_contact_grains = k->peeled_contacts = 0;
   for (PetscInt b = 0; b < nbodies; b++) {
     PetscInt ndof = b < in->D.ndisks ? in->L.ndof_disk : KERGS_DIM;
@@ -309,6 +341,7 @@ static PetscErrorCode Eliminate(KergsKernel k, const KernelInput *in)
     } else if (count[b] == 0)
       peeled_dofs += ndof;
     if (b < in->D.ndisks && count0[b] == 1) k->single_contact_grains++;
+    if (count[b] > 0 && GuidedBody(in, b)) k->floating_dofs += KERGS_DIM - 1; /* its rows beyond the one kept carry no rank */
   }
   k->inactive_contacts = 0;
   for (PetscInt c = 0; c < in->nglobal; c++) {
@@ -324,7 +357,7 @@ static PetscErrorCode Eliminate(KergsKernel k, const KernelInput *in)
   PetscCall(VecGetOwnershipRange(in->Vf, &lo, &hi));
   PetscCall(PetscMalloc1(hi - lo + 1, &idx));
   for (PetscInt g = lo; g < hi; g++)
-    if (count[BodyOfDof(in, g)] > 0) idx[nkeep++] = g;
+    if (count[BodyOfDof(in, g)] > 0 && KeptDof(in, g, BodyOfDof(in, g))) idx[nkeep++] = g;
   PetscCall(ISCreateGeneral(k->comm, nkeep, idx, PETSC_OWN_POINTER, &k->keep_rows));
 
   /* kept contact components, and where each local contact's components sit in the reduced vectors */
@@ -338,7 +371,7 @@ static PetscErrorCode Eliminate(KergsKernel k, const KernelInput *in)
       for (PetscInt j = 0; j < nc; j++) idx[nkeep++] = gc * nc + j;
   }
   PetscCall(ISCreateGeneral(k->comm, nkeep, idx, PETSC_OWN_POINTER, &k->keep_cols));
-  PetscCall(PetscFree3(alive, count0, count));
+  PetscCall(PetscFree4(alive, count0, count, peels));
   PetscCall(PetscFree(ends));
   PetscFunctionReturn(0);
 }
