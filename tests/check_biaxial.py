@@ -41,10 +41,18 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    forces left out make it 130 times the tile's), and the tiled run starts from them: its first solve takes at most half the sweeps of
    the same run with -sample_forces false (measured newton 7 against 23). Given tangential forces, the copy's tiles
    (1, 0) and (1, 1) carry them reversed and kept (a reflection reverses the tangent t = (-n_y, n_x)).
+9. the force network (scripts/force_network.py on the mu = 0.5 shear, the last 40 % of its strain, 5 snapshots pooled):
+   the normal forces are spread as in dense 2D packings (Radjai et al., PRL 77, 274 (1996)): a fraction of them below
+   the mean between 0.5 and 0.75 (measured 0.59; an exponential distribution gives 0.63) and a tail P(f) ~ exp(-beta
+   f) with beta between 0.5 and 3 (measured 1.11); the strong network (f >= 1) carries the deviator and the weak one
+   almost none of it (Radjai et al., PRL 80, 61 (1998)): q/p of the strong network above the whole's, above the weak
+   one's, whose own is below a quarter of the whole's in magnitude (measured 0.50, 0.36, -0.013), and the strong
+   network carries more than 80 % of the deviator (measured 101 %); a strain window holding no snapshot is refused.
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
 import concurrent.futures
+import json
 import os
 import shutil
 import subprocess
@@ -76,6 +84,10 @@ SIGMA3_TOL = 0.02  # run-averaged wall_sxx against sigma3 (measured 0.5 %)
 Q_FRICTIONLESS = (0.02, 0.15)  # q/p over the last third of the frictionless shear (measured 0.056)
 TILES = (2, 3)
 TILED_STEPS = 10
+BELOW_MEAN = (0.5, 0.75)  # fraction of the normal forces below their mean (measured 0.59)
+TAIL_DECAY = (0.5, 3.0)  # beta of the exponential tail (measured 1.11)
+WEAK_Q = 0.25  # |q/p of the weak network| against the whole's (measured 0.04)
+STRONG_SHARE = 0.8  # the strong network's share of the deviator (measured 1.01)
 REST_PER_GRAIN = 1e-8  # kinetic energy per grain at rest, -stop_at_rest_energy of the large compactions (J/m)
 
 
@@ -187,6 +199,30 @@ def frictionless(k, out, p, q_frictional):
     q = q[-len(q) // 3:].mean()
     check(Q_FRICTIONLESS[0] < q < Q_FRICTIONLESS[1] and q < 0.5 * q_frictional,
           "mu = 0: residual strength q/p %.4f in (%g, %g), below half the frictional %.4f" % (q, *Q_FRICTIONLESS, q_frictional))
+
+
+def force_network(k, results):
+    """scripts/force_network.py on the frictional shear: the distribution of forces and the strong and weak networks."""
+    script = os.path.join(ROOT, "scripts", "force_network.py")
+    p = subprocess.run([sys.executable, script, results, "-o", k.path("network")], capture_output=True, text=True)
+    if not check(p.returncode == 0, "force_network.py exits 0 %s" % p.stderr[-300:]):
+        return
+    row = json.loads(p.stdout.strip().splitlines()[-1])
+    check(os.path.getsize(k.path("network_forces.png")) > 10000, "force_network.py draws %s" % k.path("network_forces.png"))
+    check(BELOW_MEAN[0] < row["below_mean"] < BELOW_MEAN[1] and row["snapshots"] >= 3,
+          "%.2f of %d normal forces below the mean, in (%g, %g), over %d snapshots" % (row["below_mean"], row["contacts"], *BELOW_MEAN,
+                                                                                       row["snapshots"]))
+    check(TAIL_DECAY[0] < row["tail_decay"] < TAIL_DECAY[1], "exponential tail exp(-%.2f f), beta in (%g, %g)" % (row["tail_decay"],
+                                                                                                              *TAIL_DECAY))
+    strong, whole, weak = row["q_over_p_strong"], row["q_over_p"], row["q_over_p_weak"]
+    check(strong > whole > weak and abs(weak) < WEAK_Q * whole,
+          "q/p strong %.3f > whole %.3f > weak %.3f, |weak| below %g of the whole" % (strong, whole, weak, WEAK_Q))
+    check(row["strong_share_q"] > STRONG_SHARE, "the strong network carries %.0f %% of the deviator (> %.0f %%)" % (100 * row["strong_share_q"],
+                                                                                                              100 * STRONG_SHARE))
+    lo = 0.5 * (row["strain_window"][0] + row["strain_window"][1])
+    p = subprocess.run([sys.executable, script, results, "--from-strain", str(lo), "--to-strain", str(lo), "-o", k.path("none")],
+                       capture_output=True, text=True)
+    check(p.returncode != 0 and "no snapshot in the strain window" in p.stderr, "an empty window is refused (%s)" % p.stderr.strip())
 
 
 def tile_sample(source, target):
@@ -338,6 +374,7 @@ def main():
         if got:
             q_frictional = biaxial(k, k.path("biaxial_0.5.h5"), shear[0.5].result(), q0)
             if q_frictional is not None:
+                force_network(k, k.path("biaxial_0.5.h5"))
                 frictionless(k, k.path("biaxial_0.h5"), shear[0].result(), q_frictional)
         if got:
             tiled(k, sample)
