@@ -151,6 +151,16 @@ def check_biaxial_reading(a):
     except SystemExit as e:
         refused = str(e)
     check("the bottom wall is a segment" in refused, f"a case whose bottom platen is a segment is refused: {refused or 'accepted'}")
+    unguided = os.path.join(a.dir, "unguided_walls.opts")
+    with open(unguided, "w") as f:
+        f.write(open(small).read() + "-wall_box_right_guided false\n")
+    try:
+        dc.check_case(dc.case_options(unguided), unguided)
+        refused = ""
+    except SystemExit as e:
+        refused = str(e)
+    check("the right wall is not guided" in refused, f"a case whose lateral wall slides along itself is refused: {refused or 'accepted'}")
+    dc.check_case(dc.case_options(small), small)  # the case as shipped: guided by default under its pressure
     grid = types.SimpleNamespace(strain=0.10, strain_step=0.0025)
     e = np.array(dc.strain_grid(grid))
     # q/p up to 0.5 at 2 %, down to 0.3 at 5 %, 0.28 from 5 to 6 % and 0.3 beyond: the peak is the largest mean of two
