@@ -32,8 +32,10 @@ only there.
 """
 import argparse
 import json
+import math
 import os
 import sys
+import tempfile
 
 import h5py
 import numpy as np
@@ -42,6 +44,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+RESULTS_FORMAT = "kergs results 1"  # the root attribute kergs_format of a results file (src/io/results.c)
 CRITICAL_WINDOW = 0.4  # the default window: this fraction of the run's final axial strain, at its end
 TAIL_MIN_COUNT = 5  # bins of the tail fit hold at least this many contacts
 BIN = 0.1  # width of the histogram's bins of f
@@ -54,24 +57,30 @@ def fail(message):
 
 def snapshot_steps(f, path):
     """(name, step) of every complete snapshot, in order."""
+    fmt = f.attrs.get("kergs_format", b"")
+    if (fmt.decode() if isinstance(fmt, bytes) else str(fmt)) != RESULTS_FORMAT:
+        fail(f"{path}: not a kergs results file (its root attribute kergs_format is not '{RESULTS_FORMAT}')")
     if "snapshots" not in f:
-        fail(f"{path}: no /snapshots (a run with -output_none, or not a kergs results file)")
+        fail(f"{path}: no /snapshots")
     count = int(f.attrs.get("nsnapshots", len(f["snapshots"])))
     names = sorted(f["snapshots"].keys())[:count]
+    if any("step" not in f["snapshots"][k].attrs for k in names):
+        fail(f"{path}: a snapshot has no step attribute (a damaged results file)")
     return [(k, int(f["snapshots"][k].attrs["step"])) for k in names]
 
 
 def choose(f, path, snaps, lo, hi):
     """The snapshots in the strain window [lo, hi] (None: the default window), and the window used."""
     stats = f.get("stats")
-    if stats is None or "strain_axial" not in stats or "step" not in stats or not (stats["box_area"][()] > 0).any():
+    if stats is None or any(k not in stats for k in ("strain_axial", "step", "box_area")) or not (stats["box_area"][()] > 0).any():
         if lo is not None or hi is not None:
             fail(f"{path}: the walls never form a box, so there is no axial strain for --from-strain or --to-strain")
         return snaps[1:], None
     strain = dict(zip(stats["step"][()].astype(int), stats["strain_axial"][()]))
     final = stats["strain_axial"][-1]
-    lo = (1 - CRITICAL_WINDOW) * final if lo is None else lo
-    hi = final if hi is None else hi
+    ends = sorted(((1 - CRITICAL_WINDOW) * final, final))  # an extension test has a negative axial strain
+    lo = ends[0] if lo is None else lo
+    hi = ends[1] if hi is None else hi
     if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
         fail(f"the strain window [{lo}, {hi}] is empty or not finite")
     chosen = [(k, s) for k, s in snaps if s in strain and lo <= strain[s] <= hi]
@@ -176,9 +185,15 @@ def network_shares(whole, strong, weak):
 
 
 def save_atomic(fig, out):
-    tmp = out + ".tmp.png"
-    fig.savefig(tmp)
-    os.replace(tmp, out)
+    """The figure to a new temporary file beside out, renamed onto out: never a partial PNG, nothing left on failure."""
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(out) or ".", prefix=".force_network.", suffix=".png")
+    os.close(fd)
+    try:
+        fig.savefig(tmp)
+        os.replace(tmp, out)
+    except OSError as e:
+        os.remove(tmp)
+        fail(f"cannot write {out}: {e}")
 
 
 def draw(out, fn, ft, n, centre, density, beta, scale, fits):
@@ -225,9 +240,19 @@ def main():
     ap.add_argument("--to-strain", type=float, help="upper end of the axial strain window (default: the final strain)")
     ap.add_argument("-o", "--prefix", help="output prefix (default: RESULTS without .h5)")
     a = ap.parse_args()
-    prefix = a.prefix or (a.results[:-3] if a.results.endswith(".h5") else a.results)
+    stem = os.path.basename(a.results)
+    for ext in (".tmp", ".h5"):
+        stem = stem[: -len(ext)] if stem.endswith(ext) else stem
+    prefix = a.prefix or os.path.join(os.path.dirname(a.results), stem)
+    if os.path.isdir(prefix):
+        prefix = os.path.join(prefix, stem)
     out = prefix + "_forces.png"
-    if os.path.exists(out) and os.path.samefile(out, a.results):
+    folder = os.path.dirname(out) or "."
+    if not os.path.isdir(folder) or not os.access(folder, os.W_OK):
+        fail(f"cannot write {out}: {folder} is not a writable folder")
+    if os.path.isdir(out):
+        fail(f"cannot write {out}: it is a folder")
+    if os.path.exists(out) and os.path.exists(a.results) and os.path.samefile(out, a.results):
         fail(f"the figure {out} would replace the results file")
     try:
         f = h5py.File(a.results, "r")
@@ -240,14 +265,19 @@ def main():
             fail(f"{a.results}: no snapshot in the strain window {window} (snapshots at steps "
                  f"{[s for _, s in snaps]}; -output_every sets how many there are)")
         n, fn, ft, whole, strong, weak = analyse(f, chosen)
+        complete = bool(f.attrs.get("complete", 1))
+    if not complete:
+        print(f"force_network.py: warning: {a.results} is not complete (a run still writing it, or killed): only its "
+              "snapshots so far are read, and the default window ends at the strain reached so far", file=sys.stderr)
     beta, scale, centre, density = tail_decay(fn)
     fits = anisotropies(n, fn, ft)
-    row = {"results": a.results, "snapshots": len(chosen), "steps": [s for _, s in chosen], "strain_window": window,
+    row = {"results": a.results, "complete": complete, "snapshots": len(chosen), "steps": [s for _, s in chosen], "strain_window": window,
            "contacts": int(len(fn)), "below_mean": float((fn < 1).mean()), "tail_decay": float(beta), "f_max": float(fn.max()),
            "a_c": float(fits[0]), "a_n": float(fits[1]), "a_t": float(fits[2])}
     row.update({k: float(v) for k, v in network_shares(whole, strong, weak).items()})
     draw(out, fn, ft, n, centre, density, beta, scale, fits)
-    print(json.dumps(row))
+    finite = lambda v: v if not isinstance(v, float) or math.isfinite(v) else None  # noqa: E731 (a fit without data)
+    print(json.dumps({k: finite(v) for k, v in row.items()}, allow_nan=False))
     return 0
 
 

@@ -387,6 +387,30 @@ static PetscErrorCode TestPressureWalls(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
+/* A guided wall's force typed to 6 digits along an oblique normal (-2, 1)/sqrt(5) is accepted and taken along it:
+   no component along the wall is left to drive it there. */
+static PetscErrorCode TestGuidedForce(MPI_Comm comm)
+{
+  KergsScene s;
+  PetscReal  n[KERGS_DIM], ft;
+
+  PetscFunctionBeginUser;
+  PetscCall(
+      SceneGood(comm,
+                "-walls w -wall_w_a 2,0 -wall_w_b 3,2 -wall_w_type free -wall_w_mass 1 -wall_w_guided -wall_w_force -0.894427,0.447214 "
+                "-wall_w_velocity -2e-6,1e-6 -disks_x 0,0 -disks_radius 0.1",
+                &s));
+  if (!s) PetscFunctionReturn(0);
+  KergsWallNormal(&s->walls[0], n);
+  ft = -n[1] * s->walls[0].force[0] + n[0] * s->walls[0].force[1];
+  PetscCall(CheckTrue(comm,
+                      (PetscBool)(PetscAbsReal(ft) < 1e-15 && PetscAbsReal(-n[1] * s->walls[0].v[0] + n[0] * s->walls[0].v[1]) < 1e-21 &&
+                                  Close(s->walls[0].force[0] * n[0] + s->walls[0].force[1] * n[1], 1.0, 1e-6)),
+                      "guided: a force and a velocity typed to 6 digits are taken along the oblique normal"));
+  PetscCall(KergsSceneDestroy(&s));
+  PetscFunctionReturn(0);
+}
+
 /* -box_affine_start: each grain's velocity plus the box walls' velocities interpolated across the box, the top wall's
    program read at the scene's start; a box at rest leaves the velocities as given. */
 static PetscErrorCode TestAffineStart(MPI_Comm comm)
@@ -485,9 +509,11 @@ static PetscErrorCode TestErrors(MPI_Comm comm)
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_pressure 5", "Free wall w: mass"},
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_guided", "Wall w is driven: -wall_w_guided"},
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_guided -wall_w_force 1,1",
-       "its force (1., 1.) has a component 1. along the wall"},
+       "its force (1, 1) has a component 0.707107 of its size along the wall, above 1e-06"},
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free -wall_w_mass 1 -wall_w_pressure 5 -wall_w_velocity 1,0",
-       "its velocity (1., 0.) has a component 1. along the wall"},
+       "its velocity (1, 0) has a component 1. of its size along the wall"},
+      {"-walls w -wall_w_a 2,0 -wall_w_b 3,2 -wall_w_type free -wall_w_mass 1 -wall_w_guided -wall_w_force -1,0",
+       "its force (-1, 0) has a component -0.447214 of its size"},
       {"-walls w,w -wall_w_a 0,0 -wall_w_b 1,0", "used twice"},
       {"-walls w -wall_w_a 0,0,1 -wall_w_b 1,0", "-wall_w_a"},
       {"-disks_x 0,0 -disks_radius 0.1 -disks_material 1", "Grain 0 has material 1"},
@@ -557,6 +583,7 @@ int main(int argc, char **argv)
     PetscCall(TestRandom(comm));
     PetscCall(TestWalls(comm));
     PetscCall(TestPressureWalls(comm));
+    PetscCall(TestGuidedForce(comm));
     PetscCall(TestAffineStart(comm));
     PetscCall(TestSetDisksEnergy(comm));
     PetscCall(TestErrors(comm));

@@ -363,6 +363,56 @@ static PetscErrorCode WallSetProgram(MPI_Comm comm, KergsWall *w, const PetscRea
   PetscFunctionReturn(0);
 }
 
+/* A guided wall moves along its normal only: neither its velocity nor its applied force may have a component along the
+   wall (the contacts' impulses have none, by construction of H_f) beyond KERGS_GUIDE_TOL, relative: a force typed with
+   6 significant digits on an oblique wall is accepted (GuideWall then takes it along n). On a restart the velocity is
+   the checkpoint's. */
+#define KERGS_GUIDE_TOL 1e-6
+static PetscErrorCode CheckGuidedWall(MPI_Comm comm, const KergsWall *w)
+{
+  PetscReal t[KERGS_DIM], n[KERGS_DIM], vt = 0, ft = 0, vv = 0, ff = 0;
+
+  PetscFunctionBeginUser;
+  WallFrame(w, t, n);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    vt += w->v[d] * t[d];
+    ft += w->force[d] * t[d];
+    vv += PetscSqr(w->v[d]);
+    ff += PetscSqr(w->force[d]);
+  }
+  PetscCheck(PetscAbsReal(vt) <= KERGS_GUIDE_TOL * PetscSqrtReal(vv), comm, PETSC_ERR_ARG_INCOMP,
+             "Wall %s is guided (it moves along its normal (%.10g, %.10g) only): its velocity (%.10g, %.10g) has a component %g of "
+             "its size along the wall, above %g (-wall_%s_velocity; on a restart, the checkpoint's: a run whose wall was not guided "
+             "continues with -wall_%s_guided false)",
+             w->name, (double)(n[0] + 0.0), (double)(n[1] + 0.0), (double)w->v[0], (double)w->v[1], (double)(vt / PetscSqrtReal(vv)),
+             (double)KERGS_GUIDE_TOL, w->name, w->name);
+  PetscCheck(PetscAbsReal(ft) <= KERGS_GUIDE_TOL * PetscSqrtReal(ff), comm, PETSC_ERR_ARG_INCOMP,
+             "Wall %s is guided (it moves along its normal (%.10g, %.10g) only): its force (%.10g, %.10g) has a component %g of its "
+             "size along the wall, above %g (-wall_%s_force, or -wall_%s_guided false)",
+             w->name, (double)(n[0] + 0.0), (double)(n[1] + 0.0), (double)w->force[0], (double)w->force[1],
+             (double)(ft / PetscSqrtReal(ff)), (double)KERGS_GUIDE_TOL, w->name, w->name);
+  PetscFunctionReturn(0);
+}
+
+/* A guided wall's given velocity and force, checked, then taken along n exactly (v <- (v.n) n, F <- (F.n) n). */
+static PetscErrorCode GuideWall(MPI_Comm comm, KergsWall *w)
+{
+  PetscReal t[KERGS_DIM], n[KERGS_DIM], vn = 0, fn = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(CheckGuidedWall(comm, w));
+  WallFrame(w, t, n);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    vn += w->v[d] * n[d];
+    fn += w->force[d] * n[d];
+  }
+  for (PetscInt d = 0; d < KERGS_DIM; d++) {
+    w->v[d]     = vn * n[d] + 0.0; /* + 0.0: no -0 in the view */
+    w->force[d] = fn * n[d] + 0.0;
+  }
+  PetscFunctionReturn(0);
+}
+
 /* -wall_<name>_pressure: a free wall's, finite and non-negative, instead of a constant -wall_<name>_force. */
 static PetscErrorCode WallCheckPressureOptions(MPI_Comm comm, KergsWall *w, PetscBool force_set)
 {
@@ -423,6 +473,7 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
   if (w->kind == KERGS_WALL_DRIVEN) PetscCall(KergsWallVelocityAt(w, time, w->v));
   PetscCall(PetscFree(prog));
   if (pset) PetscCall(WallCheckPressureOptions(scene->comm, w, fset));
+  if (w->kind == KERGS_WALL_FREE && w->guided) PetscCall(GuideWall(scene->comm, w));
   PetscCheck(!gset || !w->guided || w->kind == KERGS_WALL_FREE, scene->comm, PETSC_ERR_ARG_INCOMP,
              "Wall %s is driven: -wall_%s_guided applies to free walls only (-wall_%s_type free -wall_%s_mass m)", w->name, w->name,
              w->name, w->name);
@@ -477,32 +528,6 @@ PetscErrorCode KergsSceneSetWalls(KergsScene scene, KergsWallsSpec *spec)
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Validation and view                                                                              */
-
-/* A guided wall moves along its normal only: neither its velocity nor its applied force may have a component along the
-   wall (the contacts' impulses have none, by construction of H_f), beyond rounding (1e-9, relative: a force typed with
-   rounded components on an oblique wall is accepted). On a restart the velocity is the checkpoint's. */
-static PetscErrorCode CheckGuidedWall(MPI_Comm comm, const KergsWall *w)
-{
-  PetscReal t[KERGS_DIM], n[KERGS_DIM], vt = 0, ft = 0, vv = 0, ff = 0;
-
-  PetscFunctionBeginUser;
-  WallFrame(w, t, n);
-  for (PetscInt d = 0; d < KERGS_DIM; d++) {
-    vt += w->v[d] * t[d];
-    ft += w->force[d] * t[d];
-    vv += PetscSqr(w->v[d]);
-    ff += PetscSqr(w->force[d]);
-  }
-  PetscCheck(PetscAbsReal(vt) <= 1e-9 * PetscSqrtReal(vv), comm, PETSC_ERR_ARG_INCOMP,
-             "Wall %s is guided (it moves along its normal (%g, %g) only): its velocity (%g, %g) has a component %g along the wall "
-             "(-wall_%s_velocity; on a restart, the checkpoint's: a run whose wall was not guided continues with -wall_%s_guided false)",
-             w->name, (double)(n[0] + 0.0), (double)(n[1] + 0.0), (double)w->v[0], (double)w->v[1], (double)vt, w->name, w->name);
-  PetscCheck(PetscAbsReal(ft) <= 1e-9 * PetscSqrtReal(ff), comm, PETSC_ERR_ARG_INCOMP,
-             "Wall %s is guided (it moves along its normal (%g, %g) only): its force (%g, %g) has a component %g along the wall "
-             "(-wall_%s_force, or -wall_%s_guided false)",
-             w->name, (double)(n[0] + 0.0), (double)(n[1] + 0.0), (double)w->force[0], (double)w->force[1], (double)ft, w->name, w->name);
-  PetscFunctionReturn(0);
-}
 
 static PetscErrorCode CheckWall(KergsScene scene, const KergsWall *w)
 {
