@@ -112,6 +112,18 @@ def load_script():
     return module
 
 
+def case_refusal(dc, folder, name, lines):
+    """dem_compare's refusal of a case made of `lines` (its message), or "" when it accepts the case."""
+    path = os.path.join(folder, name)
+    with open(path, "w") as f:
+        f.write("".join(lines))
+    try:
+        dc.check_case(dc.case_options(path), path)
+    except SystemExit as e:
+        return str(e)
+    return ""
+
+
 def check_biaxial_reading(a):
     """Without a run: the friction read from a case (kergs's rule: -friction, then -friction_pairs), the macroscopic
     results read from curves of known peak, critical state and dilatancy, and the band arithmetic on two results files
@@ -142,24 +154,11 @@ def check_biaxial_reading(a):
               and all(float(l.split()[-5]) == got[1] for l in walls),
               f"{case}: LAMMPS's pair friction {got[0]} and wall friction {got[1]} ({pair}, {walls[:1]})")
     small = os.path.join(ROOT, "cases", "biaxial_small.opts")
-    segment = os.path.join(a.dir, "segment_platens.opts")
-    with open(segment, "w") as f:
-        f.write("".join(l for l in open(small) if not l.startswith("-wall_box_bottom_infinite")))
-    try:
-        dc.check_case(dc.case_options(segment), segment)
-        refused = ""
-    except SystemExit as e:
-        refused = str(e)
-    check("the bottom wall is a segment" in refused, f"a case whose bottom platen is a segment is refused: {refused or 'accepted'}")
-    unguided = os.path.join(a.dir, "unguided_walls.opts")
-    with open(unguided, "w") as f:
-        f.write(open(small).read() + "-wall_box_right_guided false\n")
-    try:
-        dc.check_case(dc.case_options(unguided), unguided)
-        refused = ""
-    except SystemExit as e:
-        refused = str(e)
-    check("the right wall is not guided" in refused, f"a case whose lateral wall slides along itself is refused: {refused or 'accepted'}")
+    lines = open(small).readlines()
+    segment = case_refusal(dc, a.dir, "segment_platens.opts", [l for l in lines if not l.startswith("-wall_box_bottom_infinite")])
+    check("the bottom wall is a segment" in segment, f"a case whose bottom platen is a segment is refused: {segment or 'accepted'}")
+    unguided = case_refusal(dc, a.dir, "unguided_walls.opts", lines + ["-wall_box_right_guided false\n"])
+    check("the right wall is not guided" in unguided, f"a case whose lateral wall slides along itself is refused: {unguided or 'accepted'}")
     dc.check_case(dc.case_options(small), small)  # the case as shipped: guided by default under its pressure
     grid = types.SimpleNamespace(strain=0.10, strain_step=0.0025)
     e = np.array(dc.strain_grid(grid))
