@@ -94,6 +94,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneFriction(KergsScene, PetscInt mat_a, Petsc
 PETSC_EXTERN PetscErrorCode KergsWallVelocityAt(const KergsWall *, PetscReal t, PetscReal v[]);
 /* The wall's unit normal n, towards the disks' side (the left normal of a->b). */
 PETSC_EXTERN void KergsWallNormal(const KergsWall *, PetscReal n[]);
+/* v <- (v.n) n: a guided wall's velocity or force taken along its normal. */
+PETSC_EXTERN void KergsWallOnNormal(const KergsWall *, PetscReal v[]);
 /* Collective, over all disks: ek = sum 1/2 m |v|^2 + 1/2 I omega^2, vmax = largest speed. */
 PETSC_EXTERN PetscErrorCode KergsSceneKineticEnergy(KergsScene, PetscReal *ek, PetscReal *vmax);
 /* Make room for n local disks (owned + ghosts), keeping the first nlocal. */

@@ -361,17 +361,6 @@ PetscErrorCode KergsOperatorsSetImpulses(KergsOperators ops, KergsContacts conta
   PetscFunctionReturn(0);
 }
 
-/* v <- (v.n) n for a guided wall: on an oblique wall the update's two components round differently, and the rounding
-   along the wall would otherwise accumulate over the steps. */
-static void KeepOnGuide(const KergsWall *wall, PetscReal v[])
-{
-  PetscReal n[KERGS_DIM], vn = 0.0;
-
-  KergsWallNormal(wall, n);
-  for (PetscInt d = 0; d < KERGS_DIM; d++) vn += v[d] * n[d];
-  for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = vn * n[d];
-}
-
 PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene scene)
 {
   const PetscScalar *vf;
@@ -407,7 +396,9 @@ PetscErrorCode KergsOperatorsUpdateVelocities(KergsOperators ops, KergsScene sce
     if (walls[w].kind != KERGS_WALL_FREE) continue;
     for (PetscInt d = 0; d < KERGS_DIM; d++) vw[d] = k >= 0 && k < ops->nfree_local ? vf[k + d] : walls[w].v[d];
     PetscCallMPI(MPI_Bcast(vw, KERGS_DIM, MPIU_REAL, size - 1, ops->comm));
-    if (walls[w].guided) KeepOnGuide(&walls[w], vw);
+    /* on an oblique guided wall the update's two components round differently: keep the velocity on the normal, or
+       the rounding along the wall accumulates over the steps */
+    if (walls[w].guided) KergsWallOnNormal(&walls[w], vw);
     PetscCall(KergsSceneSetWallVelocity(scene, w, vw));
   }
   PetscCall(VecRestoreArrayRead(ops->Vf, &vf));

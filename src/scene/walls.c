@@ -76,6 +76,15 @@ void KergsWallNormal(const KergsWall *w, PetscReal n[])
   WallFrame(w, t, n);
 }
 
+void KergsWallOnNormal(const KergsWall *w, PetscReal v[])
+{
+  PetscReal t[KERGS_DIM], n[KERGS_DIM], vn = 0.0;
+
+  WallFrame(w, t, n);
+  for (PetscInt d = 0; d < KERGS_DIM; d++) vn += v[d] * n[d];
+  for (PetscInt d = 0; d < KERGS_DIM; d++) v[d] = vn * n[d] + 0.0; /* + 0.0: no -0 in the view */
+}
+
 PetscErrorCode KergsSceneWallLoadedLength(KergsScene scene, PetscInt w, PetscReal *length)
 {
   PetscFunctionBeginUser;
@@ -397,19 +406,10 @@ static PetscErrorCode CheckGuidedWall(MPI_Comm comm, const KergsWall *w)
 /* A guided wall's given velocity and force, checked, then taken along n exactly (v <- (v.n) n, F <- (F.n) n). */
 static PetscErrorCode GuideWall(MPI_Comm comm, KergsWall *w)
 {
-  PetscReal t[KERGS_DIM], n[KERGS_DIM], vn = 0, fn = 0;
-
   PetscFunctionBeginUser;
   PetscCall(CheckGuidedWall(comm, w));
-  WallFrame(w, t, n);
-  for (PetscInt d = 0; d < KERGS_DIM; d++) {
-    vn += w->v[d] * n[d];
-    fn += w->force[d] * n[d];
-  }
-  for (PetscInt d = 0; d < KERGS_DIM; d++) {
-    w->v[d]     = vn * n[d] + 0.0; /* + 0.0: no -0 in the view */
-    w->force[d] = fn * n[d] + 0.0;
-  }
+  KergsWallOnNormal(w, w->v);
+  KergsWallOnNormal(w, w->force);
   PetscFunctionReturn(0);
 }
 
