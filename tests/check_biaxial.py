@@ -51,6 +51,12 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    carries more than 80 % of the deviator (measured 92 %, 101 % on the shipped sample); a strain window holding no
    snapshot is refused.
 
+10. a run from a sample keeps its own clock: the sample's time attribute (the compaction's, 2.18 s) is the
+   preparation's, and the test's time starts at 0, as its step count starts at 1. biaxial_small with the top wall given
+   a two-piece program instead of its velocity (-wall_box_top_program 0,0,-V1,2 dt,0,-V2) moves V1 dt on steps 1 and
+   2 and V2 dt on step 3 (to 1e-9 of a step's travel), and its time column is dt, 2 dt, 3 dt. On the preparation's
+   clock the first piece was skipped and the wall started at V2.
+
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
 import concurrent.futures
@@ -352,6 +358,30 @@ def tiled(k, sample):
     check(gap < 1e-8, "tiled: the solid fraction is the tile's %.6f to %.1e" % (phi, gap))
 
 
+def clock(k, sample):
+    """A velocity program in the test's time: the run from a sample starts at t = 0."""
+    v1, v2 = 0.001, 0.01
+    with open(os.path.join(ROOT, "cases/biaxial_small.opts")) as f:
+        lines = [line for line in f if not line.startswith("-wall_box_top_velocity")]
+    opts = k.path("biaxial_program.opts")
+    with open(opts, "w") as f:
+        f.writelines(lines)
+    out = k.path("biaxial_program.h5")
+    p = k.run(1, "-options_file", opts, "-sample_input", sample, "-wall_box_top_program", "0,0,%g,%g,0,%g" % (-v1, 2 * DT, -v2), "-steps", 3,
+              "-output", out, "-output_every", 1, "-checkpoint_every", 0, log="biaxial_program.log")
+    if not check(p.returncode == 0, "biaxial_small with a top wall program runs (exit %d)" % p.returncode):
+        return
+    with h5py.File(out, "r") as f:
+        snaps = f["snapshots"]
+        top = [snaps[key]["walls"][2, 1] for key in sorted(snaps.keys())]  # walls: bottom, right, top, left
+        time = f["stats/time"][()]
+    travel = -np.diff(top)
+    want = np.array([v1, v1, v2]) * DT
+    check(np.allclose(time, [DT, 2 * DT, 3 * DT], rtol=0, atol=1e-12) and np.abs(travel - want).max() < 1e-9 * want.max(),
+          "a run from a sample starts at t = 0: time %s, the top wall's travel per step %s against the program's %s"
+          % (np.round(time, 6), travel, want))
+
+
 def main():
     k = Kergs.from_command_line(__doc__.splitlines()[0])
     out, sample = k.path("compact.h5"), k.path("sample.h5")
@@ -380,6 +410,7 @@ def main():
                 frictionless(k, k.path("biaxial_0.h5"), shear[0].result(), q_frictional)
         if got:
             tiled(k, sample)
+            clock(k, sample)
     print("%d failure(s)" % len(failures))
     return 1 if failures else 0
 
