@@ -50,6 +50,10 @@ PETSC_EXTERN PetscErrorCode KergsOptionsCheckInt(MPI_Comm, const char prefix[], 
    integer options are read through this, so that a wrapped count is never used. */
 PETSC_EXTERN PetscErrorCode KergsOptionsInt(PetscOptionItems *, const char opt[], const char text[], const char man[], PetscInt current,
                                             PetscInt *value, PetscBool *set);
+/* PetscOptionsBool inside an options block, the value checked first: PETSc refuses an unknown truth value with
+   "Unknown logical value: maybe", naming no option; this names it and the values accepted. */
+PETSC_EXTERN PetscErrorCode KergsOptionsBool(PetscOptionItems *, const char opt[], const char text[], const char man[], PetscBool current,
+                                             PetscBool *value, PetscBool *set);
 /* As PetscObjectViewFromOptions for kergs's objects: when option (under prefix, may be NULL) is given, with PETSc's
    viewer syntax (-x_view, -x_view ::ascii_info_detail, -x_view ascii:FILE), view obj there with view(obj, viewer).
    Collective on comm. */

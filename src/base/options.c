@@ -154,3 +154,23 @@ PetscErrorCode KergsOptionsInt(PetscOptionItems *PetscOptionsObject, const char 
   PetscCall(PetscOptionsInt(opt, text, man, current, value, set));
   PetscFunctionReturn(0);
 }
+
+PetscErrorCode KergsOptionsBool(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], const char man[],
+                                PetscBool current, PetscBool *value, PetscBool *set)
+{
+  static const char *const truth[] = {"true", "false", "yes", "no", "on", "off", "1", "0"};
+  const char              *prefix  = PetscOptionsObject->prefix;
+  char                     given[256];
+  PetscBool                found, known = PETSC_FALSE;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsGetString(NULL, prefix, opt, given, sizeof(given), &found));
+  if (found && given[0]) {
+    for (size_t k = 0; k < sizeof(truth) / sizeof(truth[0]) && !known; k++) PetscCall(PetscStrcasecmp(given, truth[k], &known));
+    PetscCheck(known, PetscOptionsObject->comm, PETSC_ERR_ARG_WRONG,
+               "Option -%s%s: %s is not a truth value (true, false, yes, no, on, off, 1 or 0; the option alone means true)",
+               prefix ? prefix : "", opt + 1, given);
+  }
+  PetscCall(PetscOptionsBool(opt, text, man, current, value, set));
+  PetscFunctionReturn(0);
+}

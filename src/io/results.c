@@ -77,16 +77,17 @@ PetscErrorCode KergsResultsSetFromOptions(KergsResults res)
   if (set) PetscCall(PetscStrncpy(res->path, path, sizeof(res->path)));
   PetscCall(PetscOptionsInt("-output_every", "Snapshot every N steps (0: only the first and the last step)", "KergsResultsSnapshotDue",
                             res->snapshot_every, &res->snapshot_every, NULL));
-  PetscCall(PetscOptionsBool("-output_none", "Write no results file", "KergsResultsSetFromOptions", none, &none, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-output_none", "Write no results file", "KergsResultsSetFromOptions", none, &none, NULL));
   PetscCall(PetscOptionsInt("-output_flush_every",
                             "Write the statistics to the results file and flush it to disk every N steps (0: not by steps); a killed "
                             "run's <path>.tmp holds every flushed step",
                             "KergsResultsFlush", res->flush_every, &res->flush_every, NULL));
   PetscCall(PetscOptionsReal("-output_flush_seconds", "Also flush the results file to disk every T seconds of wall time (0: not by time)",
                              "KergsResultsFlush", res->flush_seconds, &res->flush_seconds, NULL));
-  PetscCall(PetscOptionsBool(
-      "-output_xdmf", "Write <output without .h5>.xdmf beside the results file: its snapshots as a time series for ParaView's XDMF Reader",
-      "KergsXdmfWrite", res->xdmf, &res->xdmf, NULL));
+  PetscCall(
+      KergsOptionsBool(PetscOptionsObject, "-output_xdmf",
+                       "Write <output without .h5>.xdmf beside the results file: its snapshots as a time series for ParaView's XDMF Reader",
+                       "KergsXdmfWrite", res->xdmf, &res->xdmf, NULL));
   PetscOptionsEnd();
   PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_every"));
   PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_flush_every"));

@@ -64,8 +64,8 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
   PetscCall(PetscOptionsViewer(
       "-partition_view", "Print per step and rank: grains, ghosts, contacts, work, sweep time; and the edge cut (PETSc viewer syntax)",
       "KergsPartitionView", &p->viewer, &p->view_format, NULL));
-  PetscCall(PetscOptionsBool(
-      "-partition_metis_curve",
+  PetscCall(KergsOptionsBool(
+      PetscOptionsObject, "-partition_metis_curve",
       "Join consecutive grains along a Hilbert curve by light edges in METIS's graph (locality for grains without contacts)", "",
       p->metis_curve, &p->metis_curve, NULL));
   PetscCall(PetscOptionsEnum(

@@ -452,8 +452,9 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
   PetscCall(PetscOptionsInt("-steps", "Number of time steps", NULL, scene->nsteps, &scene->nsteps, NULL));
   PetscCall(KergsOptionsCheckInt(scene->comm, NULL, "-steps"));
   PetscCall(PetscOptionsReal("-theta", "Theta of the theta-method, in (0,1] (Algorithm 1)", NULL, scene->theta, &scene->theta, NULL));
-  PetscCall(PetscOptionsBool("-disks_lock_rotation", "Disks translate only: no rotational DOFs even with friction (sliding blocks)", NULL,
-                             scene->lock_rotation, &scene->lock_rotation, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-disks_lock_rotation",
+                             "Disks translate only: no rotational DOFs even with friction (sliding blocks)", NULL, scene->lock_rotation,
+                             &scene->lock_rotation, NULL));
   PetscCall(PetscOptionsEnum(
       "-gap_rule",
       "Active contacts: paper (g~ = g- <= 0), lmgc90 (g~ = g- + (1-theta) dt vn- <= 0), predictive (every contact within the "

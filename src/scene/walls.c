@@ -273,11 +273,12 @@ PetscErrorCode KergsSceneWallsOptions(PetscOptionItems *PetscOptionsObject, Kerg
                               "Box x0,y0,x1,y1: driven walls box_bottom, box_right, box_top, box_left facing inward", 4, spec->box,
                               &spec->box_set));
   PetscCall(
-      PetscOptionsBool("-box_from_sample",
+      KergsOptionsBool(PetscOptionsObject, "-box_from_sample",
                        "Box from the sample file of -sample_input: where the run that wrote it left its four box walls (instead of -box)",
                        NULL, spec->box_from_sample, &spec->box_from_sample, NULL));
-  PetscCall(PetscOptionsBool("-box_open_top", "Omit the top wall of -box", NULL, spec->open_top, &spec->open_top, NULL));
-  PetscCall(PetscOptionsBool("-box_affine_start",
+  PetscCall(
+      KergsOptionsBool(PetscOptionsObject, "-box_open_top", "Omit the top wall of -box", NULL, spec->open_top, &spec->open_top, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-box_affine_start",
                              "Start the grains in the homogeneous deformation the box walls impose: add to each grain's velocity the "
                              "box walls' normal velocities interpolated linearly across the box (x between box_left and box_right, y "
                              "between box_bottom and box_top; a free wall's is zero at the start)",
@@ -446,8 +447,8 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-b", "Second endpoint x,y", w->b, &bset));
   PetscCall(PetscOptionsEnum("-type", "Wall kind: driven (velocity program) or free (mass, applied force)", NULL, KergsWallKinds,
                              (PetscEnum)w->kind, (PetscEnum *)&w->kind, NULL));
-  PetscCall(
-      PetscOptionsBool("-infinite", "Infinite line through a and b instead of the segment [a,b]", NULL, w->infinite, &w->infinite, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-infinite", "Infinite line through a and b instead of the segment [a,b]", NULL,
+                             w->infinite, &w->infinite, NULL));
   PetscCall(PetscOptionsInt("-material", "Material index of the wall", NULL, w->material, &w->material, NULL));
   PetscCall(KergsOptionsCheckInt(scene->comm, prefix, "-material"));
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-velocity",
@@ -462,7 +463,7 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
                              "separation of the two walls perpendicular to it, or its own length)",
                              NULL, w->pressure, &w->pressure, &pset));
   w->guided = pset;
-  PetscCall(PetscOptionsBool("-guided",
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-guided",
                              "A free wall moves along its normal only, as the confining walls of a cell (default: true with -pressure, "
                              "false otherwise); false lets friction drag it along itself",
                              NULL, w->guided, &w->guided, &gset));

@@ -73,7 +73,7 @@ PetscErrorCode KergsKernelSetFromOptions(KergsKernel k)
                              "entry, off-diagonal entries 0)",
                              "KergsKernelComputeDiagonalBlocks", KergsKernelDiags, (PetscEnum)k->diagtype, (PetscEnum *)&k->diagtype,
                              NULL));
-  PetscCall(PetscOptionsBool("-kernel_active_only",
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-kernel_active_only",
                              "Kernel of H_f over the active contacts only (default: every potential contact, as in Algorithm 1)",
                              "KergsKernelSetActive", k->active_only, &k->active_only, NULL));
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-kernel_diag_batch", "Exact diagonal: contacts per rank in one block of right-hand sides",

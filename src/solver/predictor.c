@@ -90,7 +90,7 @@ PetscErrorCode KergsPredictorSetFromOptions(KergsPredictor p)
                              "elastic: epsilon > 0 of r_n = -(dt/epsilon) g+ (a compliance), relative to dt^2 * mean W_nn (dimensionless), "
                              "or in s^2/kg with -predictor_relative 0",
                              "", p->epsilon, &p->epsilon, NULL));
-  PetscCall(PetscOptionsBool("-predictor_relative",
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-predictor_relative",
                              "linear, elastic: eta and epsilon relative to the mean W_nn of the active contacts (else absolute)", "",
                              p->relative, &p->relative, NULL));
   if (p->ops.setfromoptions) PetscCall((*p->ops.setfromoptions)(PetscOptionsObject, p));

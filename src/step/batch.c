@@ -30,8 +30,8 @@ PetscErrorCode KergsStepperBatchOptions(KergsStepper st)
                             &st->progress_every, NULL));
   PetscCall(PetscOptionsReal("-progress_seconds", "Print a progress line every T seconds of wall time (0: not by time)", "",
                              st->progress_seconds, &st->progress_seconds, NULL));
-  PetscCall(PetscOptionsBool("-error_on_nonconvergence", "Exit with status 3 at the end if some step did not converge", "",
-                             st->error_on_nonconvergence, &st->error_on_nonconvergence, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-error_on_nonconvergence", "Exit with status 3 at the end if some step did not converge",
+                             "", st->error_on_nonconvergence, &st->error_on_nonconvergence, NULL));
   PetscOptionsEnd();
   PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-checkpoint_every"));
   PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-progress_every"));

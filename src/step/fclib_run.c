@@ -63,8 +63,8 @@ static PetscErrorCode FCLibRunOptions(KergsFCLibRun r, PetscBool *set)
   PetscCall(PetscOptionsString("-fclib_input",
                                "Solve this 2D FCLib problem (local, or global with a diagonal M) instead of running a scene",
                                "KergsFCLibRead", r->path, r->path, sizeof(r->path), set));
-  PetscCall(PetscOptionsBool("-error_on_nonconvergence", "Exit with status 3 if the solve did not converge", "", r->error_on_nonconvergence,
-                             &r->error_on_nonconvergence, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-error_on_nonconvergence", "Exit with status 3 if the solve did not converge", "",
+                             r->error_on_nonconvergence, &r->error_on_nonconvergence, NULL));
   {
     const char *starts[] = {"zero", "solution"};
     PetscInt    start    = r->start_solution ? 1 : 0;

@@ -79,7 +79,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                        "", st->rest_energy, &st->rest_energy, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
-  PetscCall(PetscOptionsBool("-sample_forces",
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-sample_forces",
                              "With -disks_source file: start the first step from the contact forces the sample records, as a restart "
                              "would (false: from zero impulses)",
                              "", st->sample_forces, &st->sample_forces, NULL));
@@ -91,9 +91,9 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
       PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path), NULL));
   PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair",
                              "", st->overlap_tol, &st->overlap_tol, NULL));
-  PetscCall(PetscOptionsBool("-quiet", "Do not print a summary line per step", "", st->quiet, &st->quiet, NULL));
-  PetscCall(PetscOptionsBool(
-      "-keep_H",
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-quiet", "Do not print a summary line per step", "", st->quiet, &st->quiet, NULL));
+  PetscCall(KergsOptionsBool(
+      PetscOptionsObject, "-keep_H",
       "Keep H_f and H_g through the solve, next to W (default: freed before W is assembled and H_f assembled again for the velocity "
       "update, so that the peak memory is the larger of H and W, not their sum; solvers that use H keep it anyway)",
       "", st->keep_H, &st->keep_H, NULL));

@@ -707,8 +707,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_max_backtracks",
                             "Halvings of a Newton step before the smallest one is taken anyway", "", nt->max_backtracks,
                             &nt->max_backtracks, NULL));
-  PetscCall(PetscOptionsBool("-solver_newton_project", "Line search along the path projected on the Coulomb cones", "", nt->project,
-                             &nt->project, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-solver_newton_project", "Line search along the path projected on the Coulomb cones", "",
+                             nt->project, &nt->project, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_switch_tol", "NLGS sweeps first, until the natural residual is at most this, then Newton", "",
                              nt->switch_tol, &nt->switch_tol, NULL));
   PetscCall(
@@ -736,8 +736,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_stall_steps",
                             "Newton steps in a row that each cut |F| by less than a tenth and end an outer iteration's Newton (0: never)",
                             "", nt->stall_steps, &nt->stall_steps, NULL));
-  PetscCall(PetscOptionsBool("-solver_newton_smoothing", "Smoothing Newton steps first, then the proximal iterations if still needed", "",
-                             nt->smoothing, &nt->smoothing, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-solver_newton_smoothing",
+                             "Smoothing Newton steps first, then the proximal iterations if still needed", "", nt->smoothing,
+                             &nt->smoothing, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_smoothing_kappa", "Smoothing Newton: sigma of its Jacobian / (natural residual * mean W_nn)",
                              "", nt->smooth_kappa, &nt->smooth_kappa, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_smoothing_eps", "Smoothing Newton: first eps / largest |rho v^d_n|", "", nt->smooth_eps,
