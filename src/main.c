@@ -63,6 +63,7 @@ static PetscErrorCode CheckUnusedOptions(MPI_Comm comm, PetscBool fclib)
   PetscBool allow = PETSC_FALSE, bad = PETSC_FALSE;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsOptionsCheckBool(comm, NULL, "-allow_unused_options"));
   PetscCall(PetscOptionsGetBool(NULL, NULL, "-allow_unused_options", &allow, NULL));
   PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
   for (PetscInt i = 0; i < n; i++) {

@@ -16,6 +16,20 @@ add_test(NAME biaxial_inertial_warning
                  -options_file cases/biaxial_small.opts -wall_box_top_velocity 0,-2 -steps 0 -output_none
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(biaxial_inertial_warning PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
+# A program is judged by the largest speed it reaches, not by its first piece: biaxial_small's top wall given a program
+# that starts at 1 mm/s and reaches 2 m/s at t = 0.01 s gets the same warning as the constant 2 m/s above.
+file(READ ${CMAKE_SOURCE_DIR}/cases/biaxial_small.opts biaxial_small_opts)
+string(REGEX REPLACE "\n-wall_box_top_velocity[^\n]*" "" biaxial_small_opts "${biaxial_small_opts}")
+file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/biaxial_small_program.opts "${biaxial_small_opts}")
+add_test(NAME biaxial_inertial_warning_program
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/expect_output.sh
+                 "kergs: warning: wall box_top shears the sample at the inertial number I = eps_dot d sqrt\\(rho / sigma3\\) = 0\\.119, above 0\\.1"
+                 "kergs: done, exit status 0" --
+                 ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} 1 ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS}
+                 -options_file ${CMAKE_CURRENT_BINARY_DIR}/biaxial_small_program.opts -wall_box_top_program 0,0,-0.001,0.01,0,-2
+                 -steps 0 -output_none
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(biaxial_inertial_warning_program PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60 LABELS bad_input)
 # On the sample's scale the top wall's speed against sqrt(sigma3 / rho) (I H / d): at 0.5 m/s biaxial_small's I is 0.03,
 # below the first warning, but the wall moves at 0.5 sqrt(sigma3 / rho) over 17 diameters: the second warning.
 add_test(NAME biaxial_sample_speed_warning

@@ -4,12 +4,21 @@ kergs_bad_input(steps_overflow "Option .steps: 10000000000 is out of the range" 
 kergs_bad_input(steps_exponent_overflow "Option .steps: 1e10 is out of the range" -options_file cases/confine5.opts -steps 1e10)
 kergs_bad_input(steps_exponent "Option .steps: 1e3 is not an integer in digits.*write 1000" -options_file cases/confine5.opts -steps 1e3)
 # a truth value PETSc does not know (its own message, "Unknown logical value", names no option): the option is named,
-# at the top level, under a solver's prefix and under a wall's
+# read by the stepper, by a solver type, under a wall's prefix, and outside an options block; the words PETSc accepts,
+# in any case, still pass
 kergs_bad_input(bool_value "Option .quiet: maybe is not a truth value" -options_file cases/confine5.opts -quiet maybe)
 kergs_bad_input(bool_value_solver "Option .solver_newton_smoothing: off2 is not a truth value"
                 -options_file cases/confine5.opts -solver_type newton -solver_newton_smoothing off2)
 kergs_bad_input(bool_value_wall "Option .wall_box_top_guided: maybe is not a truth value"
                 -options_file cases/biaxial_small.opts -wall_box_top_guided maybe)
+kergs_bad_input(bool_value_unused "Option .allow_unused_options: maybe is not a truth value"
+                -options_file cases/confine5.opts -allow_unused_options maybe)
+add_test(NAME bool_values_accepted
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/expect_output.sh "kergs: done, exit status 0" --
+                 $<TARGET_FILE:kergs_exe> -options_file cases/confine5.opts -steps 1 -output_none -quiet FALSE -disks_lock_rotation Off
+                 -box_affine_start no -allow_unused_options 0 -solver_type newton -solver_newton_smoothing YES -solver_newton_project on
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(bool_values_accepted PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60)
 kergs_bad_input(dt_inf "Option .dt inf: the time step must be a finite positive number" -options_file cases/confine5.opts -dt inf)
 # a failed allocation says so, and where (PETSc's own message was the function's name alone); under a 3 GB address-space
 # limit, so that the 6 GB that 400 million disks ask for are refused without touching the machine's memory

@@ -50,8 +50,11 @@ PETSC_EXTERN PetscErrorCode KergsOptionsCheckInt(MPI_Comm, const char prefix[], 
    integer options are read through this, so that a wrapped count is never used. */
 PETSC_EXTERN PetscErrorCode KergsOptionsInt(PetscOptionItems *, const char opt[], const char text[], const char man[], PetscInt current,
                                             PetscInt *value, PetscBool *set);
-/* PetscOptionsBool inside an options block, the value checked first: PETSc refuses an unknown truth value with
-   "Unknown logical value: maybe", naming no option; this names it and the values accepted. */
+/* PETSc refuses an unknown truth value with "Unknown logical value: maybe", naming no option. Call before reading
+   option `name` (under prefix, may be NULL) as a bool: a value other than true, false, yes, no, on, off, 1 or 0 (any
+   case) is an error on comm naming the option and the values accepted; absent or given alone (true), it passes. */
+PETSC_EXTERN PetscErrorCode KergsOptionsCheckBool(MPI_Comm, const char prefix[], const char name[]);
+/* PetscOptionsBool inside an options block, the value checked first (KergsOptionsCheckBool). */
 PETSC_EXTERN PetscErrorCode KergsOptionsBool(PetscOptionItems *, const char opt[], const char text[], const char man[], PetscBool current,
                                              PetscBool *value, PetscBool *set);
 /* As PetscObjectViewFromOptions for kergs's objects: when option (under prefix, may be NULL) is given, with PETSc's

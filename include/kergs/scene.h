@@ -102,7 +102,8 @@ PETSC_EXTERN PetscErrorCode KergsSceneKineticEnergy(KergsScene, PetscReal *ek, P
 PETSC_EXTERN PetscErrorCode KergsSceneReserve(KergsScene, PetscInt n);
 
 /* Disk source "file": replace the scene's disks with those of a sample file written by KergsSampleWrite (kergs/sample.h;
-   materials must exist in the scene, grain ids must be distinct non-negative integers). Collective. */
+   materials must exist in the scene, grain ids must be distinct non-negative integers). The scene's time is set to 0:
+   the file's time is the run's that wrote it, and a run from a sample keeps its own clock. Collective. */
 PETSC_EXTERN PetscErrorCode KergsSampleRead(KergsScene, const char path[]);
 /* The box x0,y0,x1,y1 a sample file records (its run's four box walls where they stood), for -box_from_sample. */
 PETSC_EXTERN PetscErrorCode KergsSampleReadBox(MPI_Comm, const char path[], PetscReal box[4]);

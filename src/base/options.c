@@ -155,22 +155,27 @@ PetscErrorCode KergsOptionsInt(PetscOptionItems *PetscOptionsObject, const char 
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsOptionsBool(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], const char man[],
-                                PetscBool current, PetscBool *value, PetscBool *set)
+PetscErrorCode KergsOptionsCheckBool(MPI_Comm comm, const char prefix[], const char name[])
 {
   static const char *const truth[] = {"true", "false", "yes", "no", "on", "off", "1", "0"};
-  const char              *prefix  = PetscOptionsObject->prefix;
   char                     given[256];
   PetscBool                found, known = PETSC_FALSE;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscOptionsGetString(NULL, prefix, opt, given, sizeof(given), &found));
-  if (found && given[0]) {
-    for (size_t k = 0; k < sizeof(truth) / sizeof(truth[0]) && !known; k++) PetscCall(PetscStrcasecmp(given, truth[k], &known));
-    PetscCheck(known, PetscOptionsObject->comm, PETSC_ERR_ARG_WRONG,
-               "Option -%s%s: %s is not a truth value (true, false, yes, no, on, off, 1 or 0; the option alone means true)",
-               prefix ? prefix : "", opt + 1, given);
-  }
+  PetscCall(PetscOptionsGetString(NULL, prefix, name, given, sizeof(given), &found));
+  if (!found || !given[0]) PetscFunctionReturn(0); /* absent, or given alone: true */
+  for (size_t k = 0; k < sizeof(truth) / sizeof(truth[0]) && !known; k++) PetscCall(PetscStrcasecmp(given, truth[k], &known));
+  PetscCheck(known, comm, PETSC_ERR_ARG_WRONG,
+             "Option -%s%s: %s is not a truth value (true, false, yes, no, on, off, 1 or 0; the option alone means true)",
+             prefix ? prefix : "", name + 1, given);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOptionsBool(PetscOptionItems *PetscOptionsObject, const char opt[], const char text[], const char man[],
+                                PetscBool current, PetscBool *value, PetscBool *set)
+{
+  PetscFunctionBeginUser;
+  PetscCall(KergsOptionsCheckBool(PetscOptionsObject->comm, PetscOptionsObject->prefix, opt));
   PetscCall(PetscOptionsBool(opt, text, man, current, value, set));
   PetscFunctionReturn(0);
 }

@@ -70,8 +70,22 @@ static PetscReal ConfiningPressure(PetscInt nwalls, const KergsWall walls[])
   return sigma3;
 }
 
+/* The largest normal speed a driven wall's program reaches from time t on (the piece holding at t and every later
+   one): a program that ramps up to a fast final speed is judged by that speed, not by its first piece. */
+static PetscReal LargestSpeedAhead(const KergsWall *wall, PetscReal t, const PetscReal n[])
+{
+  PetscReal speed = 0;
+
+  for (PetscInt k = 0; k < wall->nprog; k++) {
+    if (k + 1 < wall->nprog && wall->prog_t[k + 1] <= t) continue; /* over before t */
+    speed = PetscMax(speed, PetscAbsReal(n[0] * wall->prog_v[k][0] + n[1] * wall->prog_v[k][1]));
+  }
+  return speed;
+}
+
 /* Before the first step, rank 0 prints one warning per driven wall whose inertial number exceeds 0.1, with the terms
-   of the formula, and one per driven wall faster than 0.3 sqrt(sigma3 / rho). Silent without a pressure wall or without a driven wall
+   of the formula, and one per driven wall faster than 0.3 sqrt(sigma3 / rho), each at the largest speed its program
+   reaches from the current time on. Silent without a pressure wall or without a driven wall
    moving along its normal. Collective. */
 PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper st)
 {
@@ -86,11 +100,10 @@ PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper st)
   if (sigma3 == 0) PetscFunctionReturn(0);
   PetscCall(GrainScales(st, &d, &rho));
   for (PetscInt w = 0; w < nwalls; w++) {
-    PetscReal n[KERGS_DIM], v[KERGS_DIM], speed, dist, rate, inertial;
+    PetscReal n[KERGS_DIM], speed, dist, rate, inertial;
     if (walls[w].kind != KERGS_WALL_DRIVEN) continue;
-    PetscCall(KergsWallVelocityAt(&walls[w], time, v));
     WallNormal(&walls[w], n);
-    speed = PetscAbsReal(n[0] * v[0] + n[1] * v[1]);
+    speed = LargestSpeedAhead(&walls[w], time, n);
     dist  = FacingDistance(nwalls, walls, w);
     if (!(speed > 0) || !(dist > 0)) continue;
     rate     = speed / dist;
