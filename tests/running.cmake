@@ -11,6 +11,7 @@ kergs_bad_input(bool_value_solver "Option .solver_newton_smoothing: off2 is not 
                 -options_file cases/confine5.opts -solver_type newton -solver_newton_smoothing off2)
 kergs_bad_input(bool_value_wall "Option .wall_box_top_guided: maybe is not a truth value"
                 -options_file cases/biaxial_small.opts -wall_box_top_guided maybe)
+kergs_bad_input(bool_value_fclib "Option .quiet: maybe is not a truth value" -fclib_input tests/data/no_such.fclib.h5 -quiet maybe)
 kergs_bad_input(bool_value_unused "Option .allow_unused_options: maybe is not a truth value"
                 -options_file cases/confine5.opts -allow_unused_options maybe)
 add_test(NAME bool_values_accepted

@@ -116,6 +116,7 @@ PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun r)
     PetscCall(PetscOptionsHasName(NULL, NULL, "-output_every", &every));
     PetscCheck(!every, r->comm, PETSC_ERR_ARG_WRONG,
                "-output_every: an -fclib_input run writes one /stats row and no snapshot (there are no bodies); remove it");
+    PetscCall(KergsOptionsCheckBool(r->comm, NULL, "-quiet"));
     PetscCall(PetscOptionsHasName(NULL, NULL, "-quiet", &quiet)); /* accepted: no step lines to silence, the summary stays */
   }
   PetscCall(KergsResultsSetFromOptions(r->results));
