@@ -3,6 +3,13 @@ kergs_bad_input(steps_overflow "Option .steps: 10000000000 is out of the range" 
 # messages that name the option: counts in exponent notation (PETSc's own message names none), a time step that is not finite
 kergs_bad_input(steps_exponent_overflow "Option .steps: 1e10 is out of the range" -options_file cases/confine5.opts -steps 1e10)
 kergs_bad_input(steps_exponent "Option .steps: 1e3 is not an integer in digits.*write 1000" -options_file cases/confine5.opts -steps 1e3)
+# every count read by the scene, the disks, the walls, the partition, the results and the stepper names itself (PETSc's
+# parser, reached first, said "Input string 2.5 has no integer value" and no option)
+foreach(count random_n random_seed output_every output_flush_every checkpoint_every progress_every solver_divergence_steps
+        partition_check_every partition_metis_seed materials wall_box_left_material disks_material fclib_step stop_at_rest_window)
+  kergs_bad_input(count_${count} "Option .${count}: 2.5 is not an integer" -options_file cases/compact_small.opts -output_none -${count} 2.5)
+endforeach()
+kergs_bad_input(count_list "Option .lattice_n: 2.5 is not an integer" -options_file cases/confine5.opts -disks_source lattice -lattice_n 3,2.5)
 # a truth value PETSc does not know (its own message, "Unknown logical value", names no option): the option is named,
 # read by the stepper, by a solver type, under a wall's prefix, and outside an options block; the words PETSc accepts,
 # in any case, still pass

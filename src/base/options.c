@@ -61,6 +61,7 @@ PetscErrorCode KergsOptionsIntList(PetscOptionItems *PetscOptionsObject, const c
   PetscBool found;
 
   PetscFunctionBeginUser;
+  PetscCall(KergsOptionsCheckInt(PetscOptionsObject->comm, PetscOptionsObject->prefix, opt));
   PetscCall(OptionsListAlloc(PetscOptionsObject, opt, sizeof(**values), values, n));
   PetscCall(PetscOptionsIntArray(opt, text, NULL, *values, n, &found));
   OptionsListRead(found, n, set);

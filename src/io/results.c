@@ -75,10 +75,10 @@ PetscErrorCode KergsResultsSetFromOptions(KergsResults res)
   PetscCall(PetscOptionsString("-output", "Results file (HDF5: /stats per step, /snapshots); written to <path>.tmp, renamed when complete",
                                "KergsResultsSetFromOptions", path, path, sizeof(path), &set));
   if (set) PetscCall(PetscStrncpy(res->path, path, sizeof(res->path)));
-  PetscCall(PetscOptionsInt("-output_every", "Snapshot every N steps (0: only the first and the last step)", "KergsResultsSnapshotDue",
-                            res->snapshot_every, &res->snapshot_every, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-output_every", "Snapshot every N steps (0: only the first and the last step)",
+                            "KergsResultsSnapshotDue", res->snapshot_every, &res->snapshot_every, NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-output_none", "Write no results file", "KergsResultsSetFromOptions", none, &none, NULL));
-  PetscCall(PetscOptionsInt("-output_flush_every",
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-output_flush_every",
                             "Write the statistics to the results file and flush it to disk every N steps (0: not by steps); a killed "
                             "run's <path>.tmp holds every flushed step",
                             "KergsResultsFlush", res->flush_every, &res->flush_every, NULL));
@@ -89,8 +89,6 @@ PetscErrorCode KergsResultsSetFromOptions(KergsResults res)
                        "Write <output without .h5>.xdmf beside the results file: its snapshots as a time series for ParaView's XDMF Reader",
                        "KergsXdmfWrite", res->xdmf, &res->xdmf, NULL));
   PetscOptionsEnd();
-  PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_every"));
-  PetscCall(KergsOptionsCheckInt(res->comm, NULL, "-output_flush_every"));
   PetscCheck(res->snapshot_every >= 0, res->comm, PETSC_ERR_ARG_OUTOFRANGE, "Option -output_every must be >= 0, got %" PetscInt_FMT,
              res->snapshot_every);
   PetscCheck(res->flush_every >= 0, res->comm, PETSC_ERR_ARG_OUTOFRANGE, "Option -output_flush_every must be >= 0, got %" PetscInt_FMT,

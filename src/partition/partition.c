@@ -58,8 +58,8 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
   PetscCall(PetscOptionsReal("-partition_edgecut_growth",
                              "Repartition when the edge cut exceeds this factor times max(1, the cut right after the last partition)", "",
                              p->edgecut_growth, &p->edgecut_growth, NULL));
-  PetscCall(PetscOptionsInt("-partition_check_every", "Steps between two checks of the partition (0: never repartition)", "",
-                            p->check_every, &p->check_every, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-partition_check_every",
+                            "Steps between two checks of the partition (0: never repartition)", "", p->check_every, &p->check_every, NULL));
   PetscCall(PetscViewerDestroy(&p->viewer));
   PetscCall(PetscOptionsViewer(
       "-partition_view", "Print per step and rank: grains, ghosts, contacts, work, sweep time; and the edge cut (PETSc viewer syntax)",
@@ -73,11 +73,9 @@ PetscErrorCode KergsPartitionSetFromOptions(KergsPartition p)
       "Work of a rank: measured (its time in the sweeps' arithmetic at the last step, spread over its grains by the model; balances what "
       "the model misses, not reproducible to the bit across runs) or model (active contacts count 6, inactive 1; deterministic)",
       "", KergsPartitionWorks, (PetscEnum)p->work, (PetscEnum *)&p->work, NULL));
-  PetscCall(PetscOptionsInt("-partition_metis_seed", "Seed of METIS's random choices (fixed: reproducible partitions)", "", p->metis_seed,
-                            &p->metis_seed, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-partition_metis_seed", "Seed of METIS's random choices (fixed: reproducible partitions)",
+                            "", p->metis_seed, &p->metis_seed, NULL));
   PetscOptionsEnd();
-  PetscCall(KergsOptionsCheckInt(p->comm, NULL, "-partition_check_every"));
-  PetscCall(KergsOptionsCheckInt(p->comm, NULL, "-partition_metis_seed"));
   PetscCheck(p->imbalance_tol >= 1.0 && !PetscIsInfOrNanReal(p->imbalance_tol), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-partition_imbalance_tol %g must be at least 1 (max work / mean work)", (double)p->imbalance_tol);
   PetscCheck(p->edgecut_growth > 0.0 && !PetscIsInfOrNanReal(p->edgecut_growth), p->comm, PETSC_ERR_ARG_OUTOFRANGE,

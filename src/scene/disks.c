@@ -59,22 +59,18 @@ static PetscErrorCode DiskOptionsRead(MPI_Comm comm, DiskOptions *o)
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-lattice_origin", "lattice: centre x,y of the first disk", o->lattice_origin, NULL));
   PetscCall(PetscOptionsReal("-lattice_spacing", "lattice: distance between neighbour centres (default 2 * radius: touching)", NULL,
                              o->lattice_spacing, &o->lattice_spacing, &o->lattice_spacing_set));
-  PetscCall(PetscOptionsInt("-random_n", "random: number of disks", NULL, o->random_n, &o->random_n, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-random_n", "random: number of disks", NULL, o->random_n, &o->random_n, NULL));
   PetscCall(KergsOptionsReals(PetscOptionsObject, "-random_box", "random: box x0,y0,x1,y1 that holds the disks", 4, o->random_box,
                               &o->random_box_set));
   PetscCall(KergsOptionsReals(PetscOptionsObject, "-random_radius", "random: radius range rmin,rmax (uniform distribution)", 2,
                               o->random_radius, &o->random_radius_set));
   PetscCall(PetscOptionsEList("-random_radius_law", "random: law of the radius in [rmin, rmax]: uniform in r, or uniform in area", NULL,
                               RadiusLaws, 2, RadiusLaws[o->random_radius_law], &o->random_radius_law, NULL));
-  PetscCall(PetscOptionsInt("-random_seed", "random: seed of the generator (same seed, same sample)", NULL, o->random_seed, &o->random_seed,
-                            NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-random_seed", "random: seed of the generator (same seed, same sample)", NULL,
+                            o->random_seed, &o->random_seed, NULL));
   PetscCall(PetscOptionsString("-sample_input", "file: sample file (HDF5) of an earlier run", NULL, o->sample, o->sample, sizeof(o->sample),
                                &o->sample_set));
   PetscOptionsEnd();
-  PetscCall(KergsOptionsCheckInt(comm, NULL, "-disks_material"));
-  PetscCall(KergsOptionsCheckInt(comm, NULL, "-lattice_n"));
-  PetscCall(KergsOptionsCheckInt(comm, NULL, "-random_n"));
-  PetscCall(KergsOptionsCheckInt(comm, NULL, "-random_seed"));
   PetscFunctionReturn(0);
 }
 

@@ -449,8 +449,7 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
                              "KergsSceneView", NULL));
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-gravity", "Gravity acceleration gx,gy (m/s^2)", scene->gravity, NULL));
   PetscCall(PetscOptionsReal("-dt", "Time step (s)", NULL, scene->dt, &scene->dt, NULL));
-  PetscCall(PetscOptionsInt("-steps", "Number of time steps", NULL, scene->nsteps, &scene->nsteps, NULL));
-  PetscCall(KergsOptionsCheckInt(scene->comm, NULL, "-steps"));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-steps", "Number of time steps", NULL, scene->nsteps, &scene->nsteps, NULL));
   PetscCall(PetscOptionsReal("-theta", "Theta of the theta-method, in (0,1] (Algorithm 1)", NULL, scene->theta, &scene->theta, NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-disks_lock_rotation",
                              "Disks translate only: no rotational DOFs even with friction (sliding blocks)", NULL, scene->lock_rotation,
@@ -481,8 +480,7 @@ static PetscErrorCode SceneMaterialOptions(PetscOptionItems *PetscOptionsObject,
   const char pre[] = "Scene materials";
 
   PetscFunctionBeginUser;
-  PetscCall(PetscOptionsInt("-materials", "Number of materials", NULL, nm, &nm, &set));
-  PetscCall(KergsOptionsCheckInt(PetscOptionsObject->comm, NULL, "-materials"));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-materials", "Number of materials", NULL, nm, &nm, &set));
   PetscCheck(nm >= 1, PetscOptionsObject->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s: -materials %" PetscInt_FMT " must be at least 1", pre, nm);
   PetscCall(KergsOptionsRealList(PetscOptionsObject, "-material_density",
                                  "Density of each material, d0,d1,... (mass per unit area, default 1)", &nd, &dens, NULL));

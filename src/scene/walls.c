@@ -449,8 +449,7 @@ static PetscErrorCode WallSetFromOptions(KergsScene scene, KergsWall *w, PetscBo
                              (PetscEnum)w->kind, (PetscEnum *)&w->kind, NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-infinite", "Infinite line through a and b instead of the segment [a,b]", NULL,
                              w->infinite, &w->infinite, NULL));
-  PetscCall(PetscOptionsInt("-material", "Material index of the wall", NULL, w->material, &w->material, NULL));
-  PetscCall(KergsOptionsCheckInt(scene->comm, prefix, "-material"));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-material", "Material index of the wall", NULL, w->material, &w->material, NULL));
   PetscCall(KergsOptionsVector(PetscOptionsObject, "-velocity",
                                "Constant velocity vx,vy of a driven wall, or initial velocity of a free wall", vel, &vset));
   PetscCall(KergsOptionsRealList(PetscOptionsObject, "-program",

@@ -18,23 +18,21 @@ PetscErrorCode KergsStepperBatchOptions(KergsStepper st)
   PetscCall(PetscOptionsString("-restart",
                                "Continue the run of this checkpoint file (its options are this run's; the command line overrides them)",
                                "KergsCheckpointRead", st->restart_path, st->restart_path, sizeof(st->restart_path), NULL));
-  PetscCall(PetscOptionsInt("-checkpoint_every", "Write a checkpoint every N steps (0: not by steps)", "KergsCheckpointWrite",
-                            st->checkpoint_every, &st->checkpoint_every, &every));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-checkpoint_every", "Write a checkpoint every N steps (0: not by steps)",
+                            "KergsCheckpointWrite", st->checkpoint_every, &st->checkpoint_every, &every));
   PetscCall(PetscOptionsReal("-checkpoint_seconds", "Write a checkpoint every T seconds of wall time (0: not by time)",
                              "KergsCheckpointWrite", st->checkpoint_seconds, &st->checkpoint_seconds, &seconds));
   PetscCall(PetscOptionsString("-checkpoint_path",
                                "Checkpoint file, written atomically (default: the results file's name with .checkpoint.h5; also written "
                                "on SIGTERM, SIGINT, SIGUSR1)",
                                "KergsCheckpointWrite", st->checkpoint_path, st->checkpoint_path, sizeof(st->checkpoint_path), &path));
-  PetscCall(PetscOptionsInt("-progress_every", "Print a progress line every N steps (0: not by steps)", "", st->progress_every,
-                            &st->progress_every, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-progress_every", "Print a progress line every N steps (0: not by steps)", "",
+                            st->progress_every, &st->progress_every, NULL));
   PetscCall(PetscOptionsReal("-progress_seconds", "Print a progress line every T seconds of wall time (0: not by time)", "",
                              st->progress_seconds, &st->progress_seconds, NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-error_on_nonconvergence", "Exit with status 3 at the end if some step did not converge",
                              "", st->error_on_nonconvergence, &st->error_on_nonconvergence, NULL));
   PetscOptionsEnd();
-  PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-checkpoint_every"));
-  PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-progress_every"));
   PetscCheck(st->checkpoint_every >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-checkpoint_every %" PetscInt_FMT " must be >= 0 (0: not by steps)", st->checkpoint_every);
   PetscCheck(st->checkpoint_seconds >= 0 && !PetscIsInfOrNanReal(st->checkpoint_seconds), st->comm, PETSC_ERR_ARG_OUTOFRANGE,

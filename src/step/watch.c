@@ -20,8 +20,8 @@ PetscErrorCode KergsStepperWatchOptions(KergsStepper st)
                              "A step whose natural residual exceeds this has diverged (0: never); -solver_divergence_steps in a row stop "
                              "the run with status 5",
                              "", st->divergence_tol, &st->divergence_tol, NULL));
-  PetscCall(PetscOptionsInt("-solver_divergence_steps", "Diverged steps in a row that stop the run with status 5", "", st->divergence_steps,
-                            &st->divergence_steps, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_divergence_steps", "Diverged steps in a row that stop the run with status 5", "",
+                            st->divergence_steps, &st->divergence_steps, NULL));
   {
     static const char *const actions[] = {"stop", "continue"};
     PetscInt                 action    = st->on_infeasible_continue ? 1 : 0;
@@ -32,7 +32,6 @@ PetscErrorCode KergsStepperWatchOptions(KergsStepper st)
     st->on_infeasible_continue = (PetscBool)(action == 1);
   }
   PetscOptionsEnd();
-  PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-solver_divergence_steps"));
   PetscCheck(st->blowup_overlap >= 0 && !PetscIsInfOrNanReal(st->blowup_overlap), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-blowup_overlap %g must be a non-negative fraction of a radius (0: never)", (double)st->blowup_overlap);
   PetscCheck(st->blowup_energy == 0 || (st->blowup_energy >= 1 && !PetscIsInfOrNanReal(st->blowup_energy)), st->comm,
