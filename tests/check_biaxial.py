@@ -55,6 +55,12 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    a two-piece program instead of its velocity (-wall_box_top_program 0,0,-V1,2 dt,0,-V2) moves V1 dt on steps 1 and
    2 and V2 dt on step 3 (to 1e-9 of a step's travel), and its time column is dt, 2 dt, 3 dt. On the preparation's
    clock the first piece was skipped and the wall started at V2.
+11. -stop_at_rest_inertial alone (the 120 grains of 2, at mu = 0, a snapshot every step): inertial_number is -1 while
+   the window of REST_WINDOW steps fills, then at least REST_INERTIAL in every row but the last, where the run stops;
+   that last value is the largest over the four pressure walls of |their normal displacement over the window| /
+   (the window's time * the facing wall's distance) * d sqrt(rho / p), recomputed from the snapshots' walls to 1e-9;
+   and the solid fraction where it stops is the energy rule's (item 2's frictionless run) to 0.002 (measured 0.8066
+   against 0.8071).
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
@@ -96,6 +102,9 @@ TAIL_DECAY = (0.5, 3.0)  # beta of the exponential tail (measured 1.19; 1.11 on 
 WEAK_Q = 0.5  # |q/p of the weak network| against the whole's (measured 0.31 here, -0.04 on cases/compact_small.h5)
 STRONG_SHARE = 0.8  # the strong network's share of the deviator (measured 0.92; 1.01 on cases/compact_small.h5)
 REST_PER_GRAIN = 1e-8  # kinetic energy per grain at rest, -stop_at_rest_energy of the large compactions (J/m)
+REST_INERTIAL, REST_WINDOW = 1e-4, 50  # -stop_at_rest_inertial and its default -stop_at_rest_window
+RHO = 1.0  # the grains' density (kg/m^2), kergs's default, which cases/compact_small.opts keeps
+REST_PHI_TOL = 0.002  # solid fraction at rest by the inertial number against by the energy (measured 0.0005)
 
 
 def compaction(k, out, sample, p):
@@ -125,6 +134,40 @@ def rest_by_energy(out, p):
         return
     ek = h5py.File(out, "r")["stats/kinetic_energy"][()] / SMALL_N
     check(len(ek) >= 2 and ek[-1] < REST_ENERGY <= ek[-2], "at rest by energy: %.2e per grain after %.2e, across %g" % (ek[-1], ek[-2], REST_ENERGY))
+
+
+def box_inertial_number(f, step, window):
+    """The box's inertial number over the window ending at step, from the snapshots' walls (rows ax, ay, bx, by)."""
+    now, then = (f["snapshots/%06d" % i] for i in (step, step - window))
+    walls, old = now["walls"][()], then["walls"][()]
+    d = 2 * now["radius"][()].mean()
+    seconds = window * (f["stats/time"][1] - f["stats/time"][0])
+    largest = 0.0
+    for w, (ax, ay, bx, by) in enumerate(walls):
+        n = np.array([-(by - ay), bx - ax]) / np.hypot(bx - ax, by - ay)  # inward: the left normal of a -> b
+        facing = [n @ (walls[j, :2] - walls[w, :2]) for j in range(len(walls)) if j != w and n @ [-(walls[j, 3] - walls[j, 1]), walls[j, 2] - walls[j, 0]] < 0]
+        rate = abs(n @ (walls[w, :2] - old[w, :2])) / (seconds * min(x for x in facing if x > 0))
+        largest = max(largest, rate * d * np.sqrt(RHO / P))
+    return largest
+
+
+def rest_by_inertial(out, p, energy_out):
+    """-stop_at_rest_inertial alone: the first step whose box inertial number over the window is below it ends the run."""
+    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
+                 "compaction with -stop_at_rest_inertial ends at rest by it (exit %d)" % p.returncode):
+        return
+    with h5py.File(out, "r") as f:
+        inertial, steps = f["stats/inertial_number"][()], f["stats/step"][()].astype(int)
+        full = inertial[REST_WINDOW:]
+        check(np.all(inertial[:REST_WINDOW] == -1) and len(full) >= 2 and np.all(full[:-1] >= REST_INERTIAL) and full[-1] < REST_INERTIAL,
+              "inertial_number: -1 over the first %d steps, then above %g until the last step, %.3e (%d steps)"
+              % (REST_WINDOW, REST_INERTIAL, inertial[-1], len(inertial)))
+        again = box_inertial_number(f, steps[-1], REST_WINDOW)
+        check(abs(again - inertial[-1]) <= 1e-9 * again, "the box's inertial number %.9e is the walls' displacement's %.9e" % (inertial[-1], again))
+        phi = f["stats/solid_fraction"][-1]
+    phi_energy = h5py.File(energy_out, "r")["stats/solid_fraction"][-1]
+    check(abs(phi - phi_energy) < REST_PHI_TOL, "at rest by the inertial number: solid fraction %.4f, by the energy %.4f (to %g)"
+          % (phi, phi_energy, REST_PHI_TOL))
 
 
 def friction_density(k, runs):
@@ -399,6 +442,9 @@ def main():
         by_energy = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-stop_at_rest", 0, "-stop_at_rest_energy",
                                 REST_ENERGY, "-output", k.path("small_energy.h5"), "-sample_output", k.path("small_energy.sample.h5"),
                                 log="small_energy.log")
+        by_inertial = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0, "-stop_at_rest", 0,
+                                  "-stop_at_rest_inertial", REST_INERTIAL, "-output_every", 1, "-output", k.path("small_inertial.h5"),
+                                  "-sample_output", k.path("small_inertial.sample.h5"), log="small_inertial.log")
         q0 = compaction(k, out, sample, compact.result())
         got = q0 is not None
         if got:
@@ -407,6 +453,7 @@ def main():
                      for mu in (0.5, 0)}
         friction_density(k, {mu: (small[mu], job.result()) for mu, job in smalls.items()})
         rest_by_energy(k.path("small_energy.h5"), by_energy.result())
+        rest_by_inertial(k.path("small_inertial.h5"), by_inertial.result(), small[0])
         if got:
             q_frictional = biaxial(k, k.path("biaxial_0.5.h5"), shear[0.5].result(), q0)
             if q_frictional is not None:

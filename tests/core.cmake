@@ -33,6 +33,12 @@ set_tests_properties(bad_input_truncated_sample PROPERTIES FIXTURES_REQUIRED tru
 kergs_bad_input(missing_sample "no_such_sample.h5" -options_file cases/confine500.opts -sample_input tests/data/no_such_sample.h5)
 # -box_from_sample: a sample written before samples recorded their box, -box as well, no sample at all
 kergs_bad_input(stop_at_rest_energy "stop_at_rest_energy" -options_file cases/confine5.opts -stop_at_rest_energy -1)
+kergs_bad_input(stop_at_rest_inertial "-stop_at_rest_inertial -1. must be a non-negative" -options_file cases/confine5.opts -stop_at_rest_inertial -1)
+kergs_bad_input(stop_at_rest_inertial_nan "-stop_at_rest_inertial nan. must be" -options_file cases/confine5.opts -stop_at_rest_inertial nan)
+kergs_bad_input(stop_at_rest_inertial_walls "no wall has one facing another" -options_file cases/confine5.opts -stop_at_rest_inertial 1e-4)
+kergs_bad_input(stop_at_rest_window "-stop_at_rest_window 0 must be at least 1" -options_file cases/compact_small.opts -stop_at_rest_inertial 1e-4
+                -stop_at_rest_window 0)
+kergs_bad_input(stop_at_rest_window_fraction "stop_at_rest_window" -options_file cases/compact_small.opts -stop_at_rest_window 2.5)
 kergs_bad_input(box_from_sample_none "records no box" -options_file cases/biaxial_small.opts -sample_input cases/deposit500.h5)
 kergs_bad_input(box_from_sample_and_box "Give -box or -box_from_sample, not both" -options_file cases/biaxial_small.opts -box 0,0,1,1)
 kergs_bad_input(box_from_sample_no_file "needs -disks_source file" -options_file cases/confine5.opts -box_from_sample)

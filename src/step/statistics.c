@@ -161,6 +161,7 @@ PetscErrorCode KergsStepperRecordStep(KergsStepper st, const KergsSolveStats *ss
   PetscCall(KergsStepperRecordSolve(res, ss));
   PetscCall(RecordPartition(res, &pm));
   PetscCall(KergsStepperRecordMacro(st));
+  if (st->rest_inertial > 0) PetscCall(KergsStepperTrackBox(st));
   PetscCall(KergsResultsEndStep(res));
   if (!st->quiet)
     PetscCall(PetscPrintf(st->comm,

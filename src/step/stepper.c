@@ -21,6 +21,8 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   st->divergence_tol   = 0.7; /* r = 0 scores 1 (KergsLawNaturalResidualScaled); a diverging NLGS-Jac 0.78-0.93 */
   st->divergence_steps = 5;
   st->sample_forces    = PETSC_TRUE;
+  st->rest_window      = 50; /* 0.1 s at a compaction's dt = 2e-3: longer than a free wall's rebounds (docs/biaxial.md) */
+  st->box_inertial     = -1;
   PetscCall(KergsStepperPeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));
   PetscCall(KergsContactsCreate(comm, &st->contacts));
@@ -77,13 +79,22 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                        "Or stop once the kinetic energy per grain (J/m) is below this, after the packing has had more (0: not this way; "
                        "when given, it alone says that the packing has moved)",
                        "", st->rest_energy, &st->rest_energy, NULL));
+  PetscCall(
+      PetscOptionsReal("-stop_at_rest_inertial",
+                       "Or stop once the box's inertial number I = eps_dot d sqrt(rho / p) is below this (quasi-static: 1e-4), eps_dot "
+                       "the largest normal displacement of a wall under pressure p over -stop_at_rest_window steps, per second and per "
+                       "distance to the wall facing it (0: not this way)",
+                       "", st->rest_inertial, &st->rest_inertial, NULL));
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-stop_at_rest_window",
+                            "Steps over which -stop_at_rest_inertial measures the walls' displacement", "", st->rest_window,
+                            &st->rest_window, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-sample_forces",
                              "With -disks_source file: start the first step from the contact forces the sample records, as a restart "
                              "would (false: from zero impulses)",
                              "", st->sample_forces, &st->sample_forces, NULL));
-  PetscCall(PetscOptionsInt("-fclib_step",
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-fclib_step",
                             "Export in FCLib format the local problem solved in this step, numbered as the step lines (1: the first step; "
                             "-1: none)",
                             "", st->fclib_step, &st->fclib_step, NULL));
@@ -98,11 +109,14 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
       "update, so that the peak memory is the larger of H and W, not their sum; solvers that use H keep it anyway)",
       "", st->keep_H, &st->keep_H, NULL));
   PetscOptionsEnd();
-  PetscCall(KergsOptionsCheckInt(st->comm, NULL, "-fclib_step"));
   PetscCheck(st->rest_speed >= 0 && !PetscIsInfOrNanReal(st->rest_speed), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-stop_at_rest %g must be a non-negative speed", (double)st->rest_speed);
   PetscCheck(st->rest_energy >= 0 && !PetscIsInfOrNanReal(st->rest_energy), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-stop_at_rest_energy %g must be a non-negative energy per grain", (double)st->rest_energy);
+  PetscCheck(st->rest_inertial >= 0 && !PetscIsInfOrNanReal(st->rest_inertial), st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-stop_at_rest_inertial %g must be a non-negative inertial number", (double)st->rest_inertial);
+  PetscCheck(st->rest_window >= 1, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-stop_at_rest_window %" PetscInt_FMT " must be at least 1 step",
+             st->rest_window);
   PetscCheck(st->fclib_step == -1 || st->fclib_step >= 1, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-fclib_step %" PetscInt_FMT " must be a step number (1 is the first step, as in the step lines) or -1 for none",
              st->fclib_step);
@@ -113,6 +127,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                             st->fclib_step));
   PetscCall(KergsStepperDefaultCheckpointPath(st));
   if (help) PetscFunctionReturn(0);
+  PetscCall(KergsStepperCheckRestInertial(st));
   PetscCall(KergsProvenanceSetOptions(st->comm)); /* the options as given, before any object adds its own */
   PetscCall(KergsStepperCheckPaths(st));          /* before the run writes anything */
   if (st->sample_forces && !st->restart_path[0]) PetscCall(KergsSampleReadForces(st->scene, NULL, NULL)); /* and the sample's forces */
@@ -346,7 +361,9 @@ static const char *EndText(KergsStepper st, PetscBool rest, char buf[], size_t l
    first steps are slower than any useful speed rule allows but not yet moving: 20,000 grains start at 2e-9 J/m each),
    else a grain faster than -stop_at_rest. The energy rule is for solvers stopped at a loose tolerance (NLGS to quad
    1e-4), whose answers keep a few grains of a 5,000-disk packing at rest above any useful speed threshold while the
-   energy per grain is 4e-6 of p d^2 (docs/biaxial.md). */
+   energy per grain is 4e-6 of p d^2 (docs/biaxial.md). Or the box's inertial number over the last -stop_at_rest_window
+   steps below -stop_at_rest_inertial: the walls have stopped closing in, whatever rattlers still move; the full window
+   is its own guard, as the first steps of a compaction move the walls fastest. */
 static PetscErrorCode StepperAtRest(KergsStepper st, PetscBool *rest)
 {
   KergsDisks D;
@@ -358,6 +375,11 @@ static PetscErrorCode StepperAtRest(KergsStepper st, PetscBool *rest)
   per_grain = D.ndisks > 0 ? ek / D.ndisks : 0.0;
   if (st->rest_energy > 0 ? per_grain >= st->rest_energy : vmax >= st->rest_speed) st->moved = PETSC_TRUE;
   *rest = (PetscBool)(st->moved && ((st->rest_speed > 0 && vmax < st->rest_speed) || (st->rest_energy > 0 && per_grain < st->rest_energy)));
+  if (!*rest && st->rest_inertial > 0 && st->box_inertial >= 0 && st->box_inertial < st->rest_inertial) {
+    *rest = PETSC_TRUE;
+    PetscCall(PetscPrintf(st->comm, "kergs: at rest by the inertial number: I = %.3g below %g over the last %" PetscInt_FMT " steps\n",
+                          (double)st->box_inertial, (double)st->rest_inertial, st->rest_window));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -422,7 +444,7 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
       PetscCall(PetscPrintf(st->comm, "kergs: %s\n", st->failure));
       break;
     }
-    if (st->rest_speed > 0 || st->rest_energy > 0) PetscCall(StepperAtRest(st, &rest));
+    if (st->rest_speed > 0 || st->rest_energy > 0 || st->rest_inertial > 0) PetscCall(StepperAtRest(st, &rest));
     PetscCall(KergsStepperProgress(st, PETSC_FALSE));
   }
   /* a finished run leaves a checkpoint too when asked for them, to be continued with a larger -steps; taken before the
@@ -473,6 +495,7 @@ PetscErrorCode KergsStepperDestroy(KergsStepper *st)
   PetscFunctionBeginUser;
   if (!*st) PetscFunctionReturn(0);
   PetscCall(KergsStepperCatchSignals(PETSC_FALSE));
+  PetscCall(PetscFree((*st)->box_track));
   PetscCall(KergsPartitionDestroy(&(*st)->partition));
   PetscCall(KergsResultsDestroy(&(*st)->results));
   PetscCall(KergsSolverDestroy(&(*st)->solver));

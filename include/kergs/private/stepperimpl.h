@@ -16,6 +16,12 @@ struct _p_KergsStepper {
   KergsPartition partition;                      /* ownership of the grains by the ranks (-partition_*) */
   PetscReal      rest_speed;                     /* -stop_at_rest: stop once every disk is slower than this (0: never) */
   PetscReal      rest_energy;                    /* -stop_at_rest_energy: or once the kinetic energy per grain is below this */
+  PetscReal      rest_inertial;                  /* -stop_at_rest_inertial: or once the box's inertial number is below this */
+  PetscInt       rest_window;                    /* -stop_at_rest_window: steps over which the box's strain rate is measured */
+  PetscReal     *box_track;                      /* per step of that window: its time, then each wall's normal position */
+  PetscInt       box_tracked;                    /* steps tracked so far in this run (the ring's next slot modulo the window + 1) */
+  PetscReal      box_inertial;                   /* the box's inertial number over the window (-1: the window is not full yet) */
+  PetscReal      grain_d, grain_rho;             /* the grains' mean diameter and density (0: not measured yet) */
   char           sample_out[PETSC_MAX_PATH_LEN]; /* -sample_output */
   PetscBool      sample_forces;                  /* -sample_forces: the first step starts from the sample's contact forces */
   PetscInt       sample_nforces;                 /* how many forces it restored (all ranks) */
@@ -109,6 +115,11 @@ PETSC_INTERN PetscErrorCode KergsStepperWatchOptions(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperFindOutside(KergsStepper, PetscInt *grain, PetscInt *wall);
 PETSC_INTERN PetscErrorCode KergsStepperCheckContainer(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper);
+/* -stop_at_rest_inertial (src/step/inertial.c): the refusal of a scene without a wall under pressure facing another,
+   and, after each step, the box's inertial number over the window into st->box_inertial and the current row.
+   Collective. */
+PETSC_INTERN PetscErrorCode KergsStepperCheckRestInertial(KergsStepper);
+PETSC_INTERN PetscErrorCode KergsStepperTrackBox(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperEnergy(KergsStepper, PetscReal *ek, PetscReal *vmax);
 /* Whether this rank's owned disks and the walls are finite: the first bad grain id (PETSC_MAX_INT: none; -1: a wall). */
 PETSC_INTERN PetscInt       KergsStepperFirstNonFiniteGrain(KergsScene);
