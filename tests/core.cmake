@@ -33,12 +33,20 @@ set_tests_properties(bad_input_truncated_sample PROPERTIES FIXTURES_REQUIRED tru
 kergs_bad_input(missing_sample "no_such_sample.h5" -options_file cases/confine500.opts -sample_input tests/data/no_such_sample.h5)
 # -box_from_sample: a sample written before samples recorded their box, -box as well, no sample at all
 kergs_bad_input(stop_at_rest_energy "stop_at_rest_energy" -options_file cases/confine5.opts -stop_at_rest_energy -1)
+# -stop_at_rest_inertial: a value that is not a non-negative number, a scene whose box it cannot judge (no free wall
+# under a pressure, one that faces no wall, a driven wall that moves), a window as long as the run
 kergs_bad_input(stop_at_rest_inertial "-stop_at_rest_inertial -1. must be a non-negative" -options_file cases/confine5.opts -stop_at_rest_inertial -1)
 kergs_bad_input(stop_at_rest_inertial_nan "-stop_at_rest_inertial nan. must be" -options_file cases/confine5.opts -stop_at_rest_inertial nan)
-kergs_bad_input(stop_at_rest_inertial_walls "no wall has one facing another" -options_file cases/confine5.opts -stop_at_rest_inertial 1e-4)
+kergs_bad_input(stop_at_rest_inertial_walls "no free wall is under a pressure" -options_file cases/confine500.opts -wall_box_right_velocity 0,0
+                -stop_at_rest_inertial 1e-4)
+kergs_bad_input(stop_at_rest_inertial_facing "wall box_bottom, under pressure, faces none" -options_file cases/confine500.opts
+                -wall_box_right_velocity 0,0 -wall_box_bottom_type free -wall_box_bottom_mass 1 -wall_box_bottom_pressure 1 -stop_at_rest_inertial 1e-4)
+kergs_bad_input(stop_at_rest_inertial_driven "wall box_top is driven at a speed along its normal" -options_file cases/biaxial_small.opts
+                -stop_at_rest_inertial 1e-4)
 kergs_bad_input(stop_at_rest_window "-stop_at_rest_window 0 must be at least 1" -options_file cases/compact_small.opts -stop_at_rest_inertial 1e-4
                 -stop_at_rest_window 0)
-kergs_bad_input(stop_at_rest_window_fraction "stop_at_rest_window" -options_file cases/compact_small.opts -stop_at_rest_window 2.5)
+kergs_bad_input(stop_at_rest_window_run "-stop_at_rest_window 50 is not shorter than the 50 steps left" -options_file cases/compact_small.opts
+                -stop_at_rest_inertial 1e-4 -steps 50)
 kergs_bad_input(box_from_sample_none "records no box" -options_file cases/biaxial_small.opts -sample_input cases/deposit500.h5)
 kergs_bad_input(box_from_sample_and_box "Give -box or -box_from_sample, not both" -options_file cases/biaxial_small.opts -box 0,0,1,1)
 kergs_bad_input(box_from_sample_no_file "needs -disks_source file" -options_file cases/confine5.opts -box_from_sample)

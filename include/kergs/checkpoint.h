@@ -21,6 +21,7 @@ typedef struct {
   PetscInt  nonconverged;  /* steps that did not converge so far */
   PetscReal max_violation; /* largest interpenetration seen so far */
   PetscBool moved;         /* -stop_at_rest: the packing has moved faster than the threshold */
+  PetscBool armed;         /* -stop_at_rest_inertial: the box's inertial number has been above the threshold */
 } KergsRunState;
 
 /* Collective: write the state of the run to path (via path.tmp). The results file must be flushed first

@@ -228,6 +228,7 @@ static PetscErrorCode WriteState(PetscViewer v, MPI_Comm comm, const WriteWork *
   PetscCall(WriteInt(v, NULL, "nonconverged", w->run->nonconverged));
   PetscCall(WriteReal(v, NULL, "max_violation", w->run->max_violation));
   PetscCall(WriteInt(v, NULL, "moved", w->run->moved ? 1 : 0));
+  PetscCall(WriteInt(v, NULL, "inertial_armed", w->run->armed ? 1 : 0));
   PetscCall(PetscViewerHDF5PopGroup(v));
   PetscFunctionReturn(0);
 }
@@ -598,7 +599,7 @@ PetscErrorCode KergsCheckpointRead(const char path[], KergsScene sc, KergsContac
   PetscMPIInt       size, rank;
   Header            h = {0};
   PetscReal        *xref;
-  PetscBool         same, enabled;
+  PetscBool         same, enabled, has;
   PetscInt          flag;
   KergsResultsState rs;
   char             *source;
@@ -642,6 +643,10 @@ PetscErrorCode KergsCheckpointRead(const char path[], KergsScene sc, KergsContac
   PetscCall(ReadReal(v, path, "/state", "max_violation", &run->max_violation));
   PetscCall(ReadInt(v, path, "/state", "moved", &flag));
   run->moved = flag ? PETSC_TRUE : PETSC_FALSE;
+  PetscCall(PetscViewerHDF5HasAttribute(v, "/state", "inertial_armed", &has)); /* checkpoints before -stop_at_rest_inertial: none */
+  flag = 0;
+  if (has) PetscCall(ReadInt(v, path, "/state", "inertial_armed", &flag));
+  run->armed = flag ? PETSC_TRUE : PETSC_FALSE;
   PetscCall(ReadInt(v, path, "/state", "results_enabled", &flag));
   PetscCall(ReadInt(v, path, "/state", "results_rows", &rs.nrows));
   PetscCall(ReadInt(v, path, "/state", "results_snapshots", &rs.nsnapshots));

@@ -212,7 +212,7 @@ PetscErrorCode KergsStepperPoll(KergsStepper st, KergsPoll *poll)
 
 PetscErrorCode KergsStepperCheckpoint(KergsStepper st)
 {
-  KergsRunState  run = {st->nonconverged, st->max_violation, st->moved};
+  KergsRunState  run = {st->nonconverged, st->max_violation, st->moved, st->inertial_armed};
   PetscInt       step;
   PetscLogDouble t0, t1;
 
@@ -237,9 +237,10 @@ PetscErrorCode KergsStepperRestore(KergsStepper st)
 
   PetscFunctionBeginUser;
   PetscCall(KergsCheckpointRead(st->restart_path, st->scene, st->contacts, st->partition, st->results, &run));
-  st->nonconverged  = run.nonconverged;
-  st->max_violation = run.max_violation;
-  st->moved         = run.moved;
+  st->nonconverged   = run.nonconverged;
+  st->max_violation  = run.max_violation;
+  st->moved          = run.moved;
+  st->inertial_armed = run.armed;
   PetscCall(KergsSceneGetStep(st->scene, &step, NULL, &nsteps));
   PetscCheck(nsteps >= step, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-steps %" PetscInt_FMT " is below the step of the checkpoint %s (%" PetscInt_FMT "): give -steps above %" PetscInt_FMT

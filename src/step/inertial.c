@@ -9,7 +9,9 @@
    the 5,000-disk test and 0.13 for the 20,000-disk one at I = 9.5e-4, whose Love-Weber stress matches the walls' to
    2 %. At 10^6 disks (H = 1,000 d) the same I gives 0.93: the sample's inertia, rho v^2 = 0.87 sigma3, is felt, and
    the Love-Weber sxx inside rose to 2.6 sigma3 in 4 steps while the lateral walls held sigma3 (docs/biaxial.md).
-   Above 0.3 (rho v^2 above 0.09 sigma3) a second warning says so. */
+   Above 0.3 (rho v^2 above 0.09 sigma3) a second warning says so.
+   The same number, measured on the box's walls as they move, is also a rest rule for a compaction under pressure
+   (-stop_at_rest_inertial, below): the walls have stopped closing in once I is well below the quasi-static bound. */
 #include <kergs/private/stepperimpl.h>
 
 #define KERGS_INERTIAL_WARN 0.1
@@ -24,20 +26,25 @@ static void WallNormal(const KergsWall *w, PetscReal n[])
   n[1] = len > 0 ? dx / len : 0.0;
 }
 
-/* The distance from wall w to the nearest wall facing it (antiparallel normal, in front of it); 0: none. */
-static PetscReal FacingDistance(PetscInt nwalls, const KergsWall walls[], PetscInt w)
+/* The wall facing wall w (antiparallel normal, in front of it) nearest to it, and its distance; -1 and 0: none */
+static PetscInt FacingWall(PetscInt nwalls, const KergsWall walls[], PetscInt w, PetscReal *dist)
 {
-  PetscReal n[KERGS_DIM], best = 0;
+  PetscReal n[KERGS_DIM];
+  PetscInt  facing = -1;
 
   WallNormal(&walls[w], n);
+  *dist = 0;
   for (PetscInt k = 0; k < nwalls; k++) {
-    PetscReal m[KERGS_DIM], dist;
+    PetscReal m[KERGS_DIM], d;
     WallNormal(&walls[k], m);
     if (k == w || n[0] * m[0] + n[1] * m[1] > -1 + 1e-9) continue;
-    dist = n[0] * (walls[k].a[0] - walls[w].a[0]) + n[1] * (walls[k].a[1] - walls[w].a[1]);
-    if (dist > 0 && (best == 0 || dist < best)) best = dist;
+    d = n[0] * (walls[k].a[0] - walls[w].a[0]) + n[1] * (walls[k].a[1] - walls[w].a[1]);
+    if (d > 0 && (facing < 0 || d < *dist)) {
+      facing = k;
+      *dist  = d;
+    }
   }
-  return best;
+  return facing;
 }
 
 /* The mean diameter and the density (total mass over total area) of every grain. Collective. */
@@ -104,7 +111,7 @@ PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper st)
     if (walls[w].kind != KERGS_WALL_DRIVEN) continue;
     WallNormal(&walls[w], n);
     speed = LargestSpeedAhead(&walls[w], time, n);
-    dist  = FacingDistance(nwalls, walls, w);
+    (void)FacingWall(nwalls, walls, w, &dist);
     if (!(speed > 0) || !(dist > 0)) continue;
     rate     = speed / dist;
     inertial = rate * d * PetscSqrtReal(rho / sigma3);
@@ -127,68 +134,112 @@ PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper st)
   PetscFunctionReturn(0);
 }
 
-/* Whether wall w is under a pressure and faces another wall: the walls whose motion -stop_at_rest_inertial judges */
-static PetscBool PressureWallFacing(PetscInt nwalls, const KergsWall walls[], PetscInt w)
+static PetscBool UnderPressure(const KergsWall *wall)
 {
-  return (PetscBool)(walls[w].kind == KERGS_WALL_FREE && walls[w].has_pressure && walls[w].pressure > 0 &&
-                     FacingDistance(nwalls, walls, w) > 0);
+  return (PetscBool)(wall->kind == KERGS_WALL_FREE && wall->has_pressure && wall->pressure > 0);
 }
 
-/* -stop_at_rest_inertial judges the walls under pressure: a scene without one facing another wall is refused before the
-   run, rather than never at rest. Collective. */
+/* -stop_at_rest_inertial judges the box by its walls under pressure, each against the wall facing it. Refused before the
+   run, each naming what is wrong: a wall under pressure that faces none (its motion would not be judged), a driven wall
+   that moves (the box is never at rest: a biaxial test would stop once its lateral walls stopped widening), no wall
+   under pressure at all, and a window as long as the run (it would never fill). Collective. */
 PetscErrorCode KergsStepperCheckRestInertial(KergsStepper st)
 {
   const KergsWall *walls;
-  PetscInt         nwalls, judged = 0;
+  PetscInt         nwalls, judged = 0, step, nsteps;
+  PetscReal        time, dist, n[KERGS_DIM];
 
   PetscFunctionBeginUser;
   if (!(st->rest_inertial > 0)) PetscFunctionReturn(0);
   PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
-  for (PetscInt w = 0; w < nwalls; w++) judged += PressureWallFacing(nwalls, walls, w);
+  PetscCall(KergsSceneGetStep(st->scene, &step, &time, &nsteps));
+  for (PetscInt w = 0; w < nwalls; w++) {
+    WallNormal(&walls[w], n);
+    PetscCheck(walls[w].kind != KERGS_WALL_DRIVEN || LargestSpeedAhead(&walls[w], time, n) == 0, st->comm, PETSC_ERR_ARG_INCOMP,
+               "-stop_at_rest_inertial judges a box closed by walls under pressure, and wall %s is driven at a speed along its normal: "
+               "the box is never at rest; stop by -steps",
+               walls[w].name);
+    if (!UnderPressure(&walls[w])) continue;
+    PetscCheck(FacingWall(nwalls, walls, w, &dist) >= 0, st->comm, PETSC_ERR_ARG_INCOMP,
+               "-stop_at_rest_inertial measures the box's strain rate between facing walls, and wall %s, under pressure, faces none",
+               walls[w].name);
+    judged++;
+  }
   PetscCheck(judged > 0, st->comm, PETSC_ERR_ARG_INCOMP,
-             "-stop_at_rest_inertial %g measures the box's strain rate by its walls under pressure, and no wall has one facing another "
-             "wall: give a wall -wall_<name>_type free and -wall_<name>_pressure, or stop by -stop_at_rest or -stop_at_rest_energy",
+             "-stop_at_rest_inertial %g measures the box's strain rate by its walls under pressure, and no free wall is under a pressure: "
+             "give a wall -wall_<name>_type free and -wall_<name>_pressure, or stop by -stop_at_rest or -stop_at_rest_energy",
              (double)st->rest_inertial);
+  PetscCheck(st->rest_window < nsteps - step, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-stop_at_rest_window %" PetscInt_FMT " is not shorter than the %" PetscInt_FMT " steps left to run (-steps %" PetscInt_FMT
+             "): the window would never fill",
+             st->rest_window, nsteps - step, nsteps);
   PetscFunctionReturn(0);
 }
 
-/* After each step: the step's time and each wall's position along its normal go into a ring of -stop_at_rest_window + 1
-   slots. Once it is full, the box's inertial number over the window is the largest over the walls under pressure of
-   I = eps_dot d sqrt(rho / p), eps_dot = |displacement along the normal| / (window's duration * distance to the wall
-   facing it), p the wall's pressure: a window rather than the walls' velocities because a free wall's velocity
-   changes sign as it rebounds (at 300 disks the window of 50 steps measured 1.3e-4 where the velocity gave 2.4e-5).
-   Recorded as inertial_number in the current row (-1 until the window is full). Collective. */
-PetscErrorCode KergsStepperTrackBox(KergsStepper st)
+/* The step's time and each wall's position along its own normal into the next slot of the ring of -stop_at_rest_window
+   + 1 slots. Collective only the first time (the grains' scales). */
+static PetscErrorCode PushBox(KergsStepper st)
 {
   const KergsWall *walls;
-  PetscInt         nwalls, slots = st->rest_window + 1, now, then;
-  PetscReal        time, n[KERGS_DIM], *cur, *old, largest = 0;
+  PetscInt         nwalls, slots = st->rest_window + 1;
+  PetscReal        time, n[KERGS_DIM], *cur;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
   PetscCall(KergsSceneGetStep(st->scene, NULL, &time, NULL));
   if (!st->box_track) PetscCall(PetscMalloc1(slots * (1 + nwalls), &st->box_track));
   if (st->grain_d == 0) PetscCall(GrainScales(st, &st->grain_d, &st->grain_rho));
-  now    = st->box_tracked % slots;
-  cur    = st->box_track + now * (1 + nwalls);
+  cur    = st->box_track + (st->box_tracked % slots) * (1 + nwalls);
   cur[0] = time;
   for (PetscInt w = 0; w < nwalls; w++) {
     WallNormal(&walls[w], n);
     cur[1 + w] = n[0] * walls[w].a[0] + n[1] * walls[w].a[1];
   }
   st->box_tracked++;
-  st->box_inertial = -1;
+  PetscFunctionReturn(0);
+}
+
+/* Before the first step of this run: the walls where they start, the ring's first slot */
+PetscErrorCode KergsStepperStartBox(KergsStepper st)
+{
+  PetscFunctionBeginUser;
+  if (st->rest_inertial > 0 && st->box_tracked == 0) PetscCall(PushBox(st));
+  PetscFunctionReturn(0);
+}
+
+/* After each step the walls go into the ring. Once it holds a whole window, the box's inertial number is the largest
+   over the walls under pressure of I = eps_dot d sqrt(rho / p), p the wall's pressure and eps_dot the path its distance
+   to the wall facing it has travelled over the window (the sum of the steps' changes, in absolute value), over the
+   window's duration and over that distance now: the mean strain rate of the box along that wall's normal, both walls'
+   motions included. A path over a window rather than the walls' velocities: a free wall rebounds, and its velocity
+   changes sign while the box still closes in. Recorded as inertial_number (-1 until the window is full). */
+PetscErrorCode KergsStepperTrackBox(KergsStepper st)
+{
+  const KergsWall *walls;
+  PetscInt         nwalls, slots = st->rest_window + 1, stride;
+  PetscReal        largest = -1;
+
+  PetscFunctionBeginUser;
+  PetscCall(PushBox(st));
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  stride = 1 + nwalls;
   if (st->box_tracked >= slots) {
-    then = st->box_tracked % slots; /* the oldest slot, window steps ago */
-    old  = st->box_track + then * (1 + nwalls);
+    const PetscReal *newest = st->box_track + ((st->box_tracked - 1) % slots) * stride;
+    const PetscReal *oldest = st->box_track + (st->box_tracked % slots) * stride;
     for (PetscInt w = 0; w < nwalls; w++) {
-      PetscReal rate;
-      if (!PressureWallFacing(nwalls, walls, w) || !(cur[0] > old[0])) continue;
-      rate    = PetscAbsReal(cur[1 + w] - old[1 + w]) / ((cur[0] - old[0]) * FacingDistance(nwalls, walls, w));
-      largest = PetscMax(largest, rate * st->grain_d * PetscSqrtReal(st->grain_rho / walls[w].pressure));
+      PetscReal dist, path = 0;
+      PetscInt  k = FacingWall(nwalls, walls, w, &dist);
+      if (!UnderPressure(&walls[w]) || k < 0 || !(newest[0] > oldest[0])) continue;
+      for (PetscInt j = 1; j < slots; j++) { /* the window's steps, oldest first: the distance is -(pos_w + pos_k) */
+        const PetscReal *a = st->box_track + ((st->box_tracked + j - 1) % slots) * stride;
+        const PetscReal *b = st->box_track + ((st->box_tracked + j) % slots) * stride;
+        path += PetscAbsReal((b[1 + w] + b[1 + k]) - (a[1 + w] + a[1 + k]));
+      }
+      largest = PetscMax(largest, path / ((newest[0] - oldest[0]) * dist) * st->grain_d * PetscSqrtReal(st->grain_rho / walls[w].pressure));
     }
-    st->box_inertial = largest;
   }
+  st->box_inertial = largest;
+  if (st->box_inertial >= st->rest_inertial) st->inertial_armed = PETSC_TRUE;
   PetscCall(KergsResultsRecord(st->results, "inertial_number", st->box_inertial));
   PetscFunctionReturn(0);
 }

@@ -21,7 +21,7 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   st->divergence_tol   = 0.7; /* r = 0 scores 1 (KergsLawNaturalResidualScaled); a diverging NLGS-Jac 0.78-0.93 */
   st->divergence_steps = 5;
   st->sample_forces    = PETSC_TRUE;
-  st->rest_window      = 50; /* 0.1 s at a compaction's dt = 2e-3: longer than a free wall's rebounds (docs/biaxial.md) */
+  st->rest_window      = 50; /* 0.05 s at cases/compact_small.opts's dt, 0.1 s at the large compactions' 2e-3 */
   st->box_inertial     = -1;
   PetscCall(KergsStepperPeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));
@@ -34,15 +34,14 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   PetscFunctionReturn(0);
 }
 
-/* -steps and -dt, as written: a count in digits within PetscInt's range, a finite time step ("-dt inf" was told
-   "must be positive", "-steps 1e10" got PETSc's message without the option's name). */
+/* -dt as written: a finite time step ("-dt inf" was told "must be positive"). -steps is checked where the scene reads it
+   (KergsOptionsInt). */
 static PetscErrorCode CheckClockOptions(MPI_Comm comm)
 {
   char      value[256];
   PetscBool set;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsOptionsCheckInt(comm, NULL, "-steps"));
   PetscCall(PetscOptionsGetString(NULL, NULL, "-dt", value, sizeof(value), &set));
   if (set) {
     char        *end;
@@ -72,22 +71,23 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(KergsStepperWatchOptions(st));
   PetscOptionsBegin(st->comm, NULL, "Time stepping options", NULL);
   PetscCall(PetscOptionsReal("-stop_at_rest",
-                             "Stop once every disk is slower than this speed, after the packing has moved faster (0: run all -steps)", "",
+                             "Stop once every disk is slower than this speed, after the packing has moved faster (0: not this way)", "",
                              st->rest_speed, &st->rest_speed, NULL));
   PetscCall(
       PetscOptionsReal("-stop_at_rest_energy",
                        "Or stop once the kinetic energy per grain (J/m) is below this, after the packing has had more (0: not this way; "
                        "when given, it alone says that the packing has moved)",
                        "", st->rest_energy, &st->rest_energy, NULL));
+  PetscCall(PetscOptionsReal(
+      "-stop_at_rest_inertial",
+      "Or stop once the box's inertial number I = eps_dot d sqrt(rho / p) is below this, after it has been above (e.g. 1e-4, "
+      "ten times below the quasi-static bound 1e-3): eps_dot the path the distance between a wall under pressure p and "
+      "the wall facing it travels over -stop_at_rest_window steps, per second and per that distance (0: not this way)",
+      "", st->rest_inertial, &st->rest_inertial, NULL));
   PetscCall(
-      PetscOptionsReal("-stop_at_rest_inertial",
-                       "Or stop once the box's inertial number I = eps_dot d sqrt(rho / p) is below this (quasi-static: 1e-4), eps_dot "
-                       "the largest normal displacement of a wall under pressure p over -stop_at_rest_window steps, per second and per "
-                       "distance to the wall facing it (0: not this way)",
-                       "", st->rest_inertial, &st->rest_inertial, NULL));
-  PetscCall(KergsOptionsInt(PetscOptionsObject, "-stop_at_rest_window",
-                            "Steps over which -stop_at_rest_inertial measures the walls' displacement", "", st->rest_window,
-                            &st->rest_window, NULL));
+      KergsOptionsInt(PetscOptionsObject, "-stop_at_rest_window",
+                      "Steps over which -stop_at_rest_inertial measures the walls' motion (inertial_number is -1 until they have run)", "",
+                      st->rest_window, &st->rest_window, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-sample_forces",
@@ -127,11 +127,11 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                             st->fclib_step));
   PetscCall(KergsStepperDefaultCheckpointPath(st));
   if (help) PetscFunctionReturn(0);
-  PetscCall(KergsStepperCheckRestInertial(st));
   PetscCall(KergsProvenanceSetOptions(st->comm)); /* the options as given, before any object adds its own */
   PetscCall(KergsStepperCheckPaths(st));          /* before the run writes anything */
   if (st->sample_forces && !st->restart_path[0]) PetscCall(KergsSampleReadForces(st->scene, NULL, NULL)); /* and the sample's forces */
   if (st->restart_path[0]) PetscCall(KergsStepperRestore(st));
+  PetscCall(KergsStepperCheckRestInertial(st)); /* the steps left: a restart's */
   PetscFunctionReturn(0);
 }
 
@@ -362,8 +362,8 @@ static const char *EndText(KergsStepper st, PetscBool rest, char buf[], size_t l
    else a grain faster than -stop_at_rest. The energy rule is for solvers stopped at a loose tolerance (NLGS to quad
    1e-4), whose answers keep a few grains of a 5,000-disk packing at rest above any useful speed threshold while the
    energy per grain is 4e-6 of p d^2 (docs/biaxial.md). Or the box's inertial number over the last -stop_at_rest_window
-   steps below -stop_at_rest_inertial: the walls have stopped closing in, whatever rattlers still move; the full window
-   is its own guard, as the first steps of a compaction move the walls fastest. */
+   steps below -stop_at_rest_inertial, once it has been above: the walls have stopped closing in, whatever rattlers
+   still move (the guard: heavy walls start so slowly that the first window could measure them at rest). */
 static PetscErrorCode StepperAtRest(KergsStepper st, PetscBool *rest)
 {
   KergsDisks D;
@@ -375,7 +375,7 @@ static PetscErrorCode StepperAtRest(KergsStepper st, PetscBool *rest)
   per_grain = D.ndisks > 0 ? ek / D.ndisks : 0.0;
   if (st->rest_energy > 0 ? per_grain >= st->rest_energy : vmax >= st->rest_speed) st->moved = PETSC_TRUE;
   *rest = (PetscBool)(st->moved && ((st->rest_speed > 0 && vmax < st->rest_speed) || (st->rest_energy > 0 && per_grain < st->rest_energy)));
-  if (!*rest && st->rest_inertial > 0 && st->box_inertial >= 0 && st->box_inertial < st->rest_inertial) {
+  if (!*rest && st->inertial_armed && st->box_inertial >= 0 && st->box_inertial < st->rest_inertial) {
     *rest = PETSC_TRUE;
     PetscCall(PetscPrintf(st->comm, "kergs: at rest by the inertial number: I = %.3g below %g over the last %" PetscInt_FMT " steps\n",
                           (double)st->box_inertial, (double)st->rest_inertial, st->rest_window));
@@ -404,6 +404,7 @@ PetscErrorCode KergsStepperRun(KergsStepper st)
   PetscCheck(st->fclib_step <= nsteps, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-fclib_step %" PetscInt_FMT " is beyond the run (-steps %" PetscInt_FMT "): no such step to export", st->fclib_step, nsteps);
   PetscCall(KergsStepperEnergyFloor(st));
+  PetscCall(KergsStepperStartBox(st));
   PetscCall(KergsStepperCatchSignals(PETSC_TRUE));
   PetscCall(KergsResultsOpen(st->results));
   PetscCall(KergsResultsGetState(st->results, &rs));

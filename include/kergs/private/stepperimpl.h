@@ -22,6 +22,7 @@ struct _p_KergsStepper {
   PetscInt       box_tracked;                    /* steps tracked so far in this run (the ring's next slot modulo the window + 1) */
   PetscReal      box_inertial;                   /* the box's inertial number over the window (-1: the window is not full yet) */
   PetscReal      grain_d, grain_rho;             /* the grains' mean diameter and density (0: not measured yet) */
+  PetscBool      inertial_armed;                 /* the box's inertial number has been at least -stop_at_rest_inertial */
   char           sample_out[PETSC_MAX_PATH_LEN]; /* -sample_output */
   PetscBool      sample_forces;                  /* -sample_forces: the first step starts from the sample's contact forces */
   PetscInt       sample_nforces;                 /* how many forces it restored (all ranks) */
@@ -115,10 +116,11 @@ PETSC_INTERN PetscErrorCode KergsStepperWatchOptions(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperFindOutside(KergsStepper, PetscInt *grain, PetscInt *wall);
 PETSC_INTERN PetscErrorCode KergsStepperCheckContainer(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper);
-/* -stop_at_rest_inertial (src/step/inertial.c): the refusal of a scene without a wall under pressure facing another,
-   and, after each step, the box's inertial number over the window into st->box_inertial and the current row.
-   Collective. */
+/* -stop_at_rest_inertial (src/step/inertial.c): the refusals of a scene whose box it cannot judge (before the run),
+   the walls where the run starts, and, after each step, the box's inertial number over the window into st->box_inertial
+   and the current row. Collective. */
 PETSC_INTERN PetscErrorCode KergsStepperCheckRestInertial(KergsStepper);
+PETSC_INTERN PetscErrorCode KergsStepperStartBox(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperTrackBox(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperEnergy(KergsStepper, PetscReal *ek, PetscReal *vmax);
 /* Whether this rank's owned disks and the walls are finite: the first bad grain id (PETSC_MAX_INT: none; -1: a wall). */
