@@ -66,14 +66,19 @@ static PetscErrorCode GrainScales(KergsStepper st, PetscReal *d, PetscReal *rho)
   PetscFunctionReturn(0);
 }
 
+/* A free wall under a positive pressure: what confines the sample, and what -stop_at_rest_inertial judges */
+static PetscBool UnderPressure(const KergsWall *wall)
+{
+  return (PetscBool)(wall->kind == KERGS_WALL_FREE && wall->has_pressure && wall->pressure > 0);
+}
+
 /* sigma3: the smallest positive pressure of the pressure-controlled walls (0: none) */
 static PetscReal ConfiningPressure(PetscInt nwalls, const KergsWall walls[])
 {
   PetscReal sigma3 = 0;
 
   for (PetscInt w = 0; w < nwalls; w++)
-    if (walls[w].kind == KERGS_WALL_FREE && walls[w].has_pressure && walls[w].pressure > 0 && (sigma3 == 0 || walls[w].pressure < sigma3))
-      sigma3 = walls[w].pressure;
+    if (UnderPressure(&walls[w]) && (sigma3 == 0 || walls[w].pressure < sigma3)) sigma3 = walls[w].pressure;
   return sigma3;
 }
 
@@ -132,11 +137,6 @@ PetscErrorCode KergsStepperWarnInertialNumber(KergsStepper st)
                           (double)d, (double)rho, (double)sigma3));
   }
   PetscFunctionReturn(0);
-}
-
-static PetscBool UnderPressure(const KergsWall *wall)
-{
-  return (PetscBool)(wall->kind == KERGS_WALL_FREE && wall->has_pressure && wall->pressure > 0);
 }
 
 /* -stop_at_rest_inertial judges the box by its walls under pressure, each against the wall facing it. Refused before the
