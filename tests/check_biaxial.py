@@ -108,6 +108,8 @@ REST_INERTIAL, REST_WINDOW = 1e-4, 50  # -stop_at_rest_inertial and its default 
 RHO = 1.0  # the grains' density (kg/m^2), kergs's default, which cases/compact_small.opts keeps
 REST_PHI_TOL = 0.002  # solid fraction at rest by the inertial number against by speed or energy (measured 1e-5)
 REST_STRESS_TOL = 0.05  # Love-Weber stress against p where the inertial number stops the run (measured 0.8 %)
+REST_STRESS_DEFAULT = 0.05  # kergs's default -stop_at_rest_stress
+REST_STRESS_TIGHT = 0.005  # below the gap where the walls stop (measured 0.013): the run goes on (7 steps, measured)
 
 
 def compaction(k, out, sample, p):
@@ -154,19 +156,41 @@ def box_inertial_number(f, step, window):
     return largest
 
 
+def first_rest_row(f, stress_tol):
+    """The rows of /stats as the inertial rule reads them: the index of the first row, once the inertial number has been
+    at least REST_INERTIAL, with it below REST_INERTIAL and stress_gap within stress_tol (0: not checked), or None; the
+    rows below REST_INERTIAL before it that the stress held back; and the largest difference between stress_gap and
+    max |s_ii / p - 1| recomputed from the Love-Weber sxx and syy averaged over the window's REST_WINDOW rows (the box's
+    pressure walls, all at P)."""
+    inertial, gap = f["stats/inertial_number"][()], f["stats/stress_gap"][()]
+    window = np.ones(REST_WINDOW) / REST_WINDOW
+    mean = [np.concatenate([np.full(REST_WINDOW - 1, np.nan), np.convolve(f["stats/" + c][()], window, "valid")]) for c in ("sxx", "syy")]
+    again = np.maximum(np.abs(mean[0] / P - 1), np.abs(mean[1] / P - 1))
+    armed = np.flatnonzero(inertial >= REST_INERTIAL)
+    if len(armed) == 0:
+        return None, [], np.inf
+    below = [i for i in range(armed[0], len(inertial)) if 0 <= inertial[i] < REST_INERTIAL]
+    ok = [i for i in below if stress_tol == 0 or gap[i] <= stress_tol]
+    first = ok[0] if ok else None
+    held = [i for i in below if first is None or i < first]
+    rows = inertial >= 0
+    return first, held, np.max(np.abs(gap[rows] - again[rows])) if rows.any() else np.inf
+
+
 def rest_by_inertial(out, p, energy_out):
-    """-stop_at_rest_inertial alone: the first step whose box inertial number over the window is below it ends the run."""
+    """-stop_at_rest_inertial alone: the first step whose box inertial number over the window is below it, with the stress
+    inside within the default -stop_at_rest_stress of p, ends the run."""
     if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
                  "compaction with -stop_at_rest_inertial ends at rest by it (exit %d)" % p.returncode):
         return
     with h5py.File(out, "r") as f:
         inertial, steps = f["stats/inertial_number"][()], f["stats/step"][()].astype(int)
         full = inertial[REST_WINDOW - 1:]  # from step REST_WINDOW on: the ring holds the walls at the start too
-        above = np.flatnonzero(full >= REST_INERTIAL)
-        check(np.all(inertial[:REST_WINDOW - 1] == -1) and np.all(full >= 0) and len(above) > 0 and np.all(full[above[0]:-1] >= REST_INERTIAL)
-              and full[-1] < REST_INERTIAL,
-              "inertial_number: -1 before step %d, then from the first row above %g the last row is the first below, %.3e (%d steps)"
-              % (REST_WINDOW, REST_INERTIAL, inertial[-1], len(inertial)))
+        first, _, gap_error = first_rest_row(f, REST_STRESS_DEFAULT)
+        check(np.all(inertial[:REST_WINDOW - 1] == -1) and np.all(full >= 0) and first == len(inertial) - 1,
+              "inertial_number: -1 before step %d; the last row, %.3e, is the first below %g once above it with stress_gap within %g (%d steps)"
+              % (REST_WINDOW, REST_INERTIAL, inertial[-1], REST_STRESS_DEFAULT, len(inertial)))
+        check(gap_error < 1e-12, "stress_gap is max |s_ii / p - 1| of the Love-Weber stress over the window (to %.1e)" % gap_error)
         again = box_inertial_number(f, steps[-1], REST_WINDOW)
         check(abs(again - inertial[-1]) <= 1e-9 * again, "the box's inertial number %.9e is the walls' displacement's %.9e" % (inertial[-1], again))
         phi, sxx, syy = (f["stats/" + name][-1] for name in ("solid_fraction", "sxx", "syy"))
@@ -175,6 +199,20 @@ def rest_by_inertial(out, p, energy_out):
     phi_energy = h5py.File(energy_out, "r")["stats/solid_fraction"][-1]
     check(abs(phi - phi_energy) < REST_PHI_TOL, "at rest by the inertial number: solid fraction %.4f, by speed or energy %.4f (to %g)"
           % (phi, phi_energy, REST_PHI_TOL))
+
+
+def rest_held_by_stress(out, p):
+    """-stop_at_rest_stress tighter than the stress inside where the walls stop: the run goes on past the rows whose
+    inertial number is below the threshold until the stress gap is within it too."""
+    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
+                 "compaction with -stop_at_rest_stress %g ends at rest by the inertial number (exit %d)" % (REST_STRESS_TIGHT, p.returncode)):
+        return
+    with h5py.File(out, "r") as f:
+        first, held, _ = first_rest_row(f, REST_STRESS_TIGHT)
+        gap, rows = f["stats/stress_gap"][()], len(f["stats/step"])
+        check(first == rows - 1 and len(held) > 0,
+              "-stop_at_rest_stress %g: the last row (gap %.4f) is the first within it; %d rows below the inertial threshold before it were "
+              "held back (gaps %s)" % (REST_STRESS_TIGHT, gap[-1], len(held), ", ".join("%.4f" % gap[i] for i in held[:5])))
 
 
 def friction_density(k, runs):
@@ -452,6 +490,9 @@ def main():
         by_inertial = pool.submit(k.run, 2, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0, "-stop_at_rest", 0,
                                   "-stop_at_rest_inertial", REST_INERTIAL, "-output_every", 1, "-output", k.path("small_inertial.h5"),
                                   "-sample_output", k.path("small_inertial.sample.h5"), log="small_inertial.log")
+        held = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0, "-stop_at_rest", 0,
+                           "-stop_at_rest_inertial", REST_INERTIAL, "-stop_at_rest_stress", REST_STRESS_TIGHT, "-output", k.path("small_held.h5"),
+                           "-sample_output", k.path("small_held.sample.h5"), log="small_held.log")
         q0 = compaction(k, out, sample, compact.result())
         got = q0 is not None
         if got:
@@ -461,6 +502,7 @@ def main():
         friction_density(k, {mu: (small[mu], job.result()) for mu, job in smalls.items()})
         rest_by_energy(k.path("small_energy.h5"), by_energy.result())
         rest_by_inertial(k.path("small_inertial.h5"), by_inertial.result(), small[0])
+        rest_held_by_stress(k.path("small_held.h5"), held.result())
         if got:
             q_frictional = biaxial(k, k.path("biaxial_0.5.h5"), shear[0.5].result(), q0)
             if q_frictional is not None:

@@ -47,6 +47,14 @@ kergs_bad_input(stop_at_rest_window "-stop_at_rest_window 0 must be at least 1" 
                 -stop_at_rest_window 0)
 kergs_bad_input(stop_at_rest_window_run "-stop_at_rest_window 50 is not shorter than the 50 steps left" -options_file cases/compact_small.opts
                 -stop_at_rest_inertial 1e-4 -steps 50)
+# -stop_at_rest_stress: not a non-negative number, or no box of four walls to measure the Love-Weber stress in (a fifth
+# wall, below the box, that leaves the box's facing walls as they are)
+kergs_bad_input(stop_at_rest_stress "-stop_at_rest_stress -0.1 must be a non-negative fraction" -options_file cases/compact_small.opts
+                -stop_at_rest_inertial 1e-4 -stop_at_rest_stress -0.1)
+kergs_bad_input(stop_at_rest_stress_nan "-stop_at_rest_stress nan. must be" -options_file cases/compact_small.opts -stop_at_rest_inertial 1e-4
+                -stop_at_rest_stress nan)
+kergs_bad_input(stop_at_rest_stress_box "the 5 walls are not a box of four axis-aligned walls: give -stop_at_rest_stress 0" -options_file
+                cases/compact_small.opts -stop_at_rest_inertial 1e-4 -walls extra -wall_extra_a -1,-1 -wall_extra_b 2,-1)
 kergs_bad_input(box_from_sample_none "records no box" -options_file cases/biaxial_small.opts -sample_input cases/deposit500.h5)
 kergs_bad_input(box_from_sample_and_box "Give -box or -box_from_sample, not both" -options_file cases/biaxial_small.opts -box 0,0,1,1)
 kergs_bad_input(box_from_sample_no_file "needs -disks_source file" -options_file cases/confine5.opts -box_from_sample)

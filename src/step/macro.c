@@ -2,7 +2,8 @@
    "Macroscopic response"): the Love-Weber stress from the contact forces and the stress from the wall forces, the
    principal stresses and q/p, the strains and the solid fraction from the walls' box, the coordination number with
    and without rattlers, the Rothenburg-Bathurst anisotropies and the fraction of sliding contacts. Post-processing of
-   the contacts' impulses after the solve: nothing here feeds back into the step. Every figure is global. */
+   the contacts' impulses after the solve: nothing here feeds back into the step (the rest rule of -stop_at_rest_stress
+   reads the Love-Weber stress to decide whether to stop). Every figure is global. */
 #include <kergs/private/stepperimpl.h>
 
 /* The four walls of an axis-aligned box, by the side they hold (-1: none), and the rectangle they span. */
@@ -59,6 +60,20 @@ static PetscErrorCode FindBox(PetscInt nwalls, const KergsWall walls[], MacroBox
   box->y0    = walls[box->bottom].a[1];
   box->y1    = walls[box->top].a[1];
   box->found = (PetscBool)(box->x1 > box->x0 && box->y1 > box->y0);
+  PetscFunctionReturn(0);
+}
+
+/* Whether the walls make the box the macroscopic response is measured in */
+PetscErrorCode KergsStepperHasBox(KergsStepper st, PetscBool *found)
+{
+  const KergsWall *walls;
+  PetscInt         nwalls;
+  MacroBox         box;
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSceneGetWalls(st->scene, &nwalls, &walls));
+  PetscCall(FindBox(nwalls, walls, &box));
+  *found = box.found;
   PetscFunctionReturn(0);
 }
 
@@ -233,24 +248,31 @@ static PetscErrorCode FindRattlers(MPI_Comm comm, const KergsDisks *D, PetscInt 
 
 /* The stress columns: Love-Weber over the box's area, its principal values and q/p, and the walls' stresses. Zero
    without a box. */
-static PetscErrorCode RecordStress(KergsResults res, const MacroBox *box, const PetscReal s[])
+/* The Love-Weber tensor sxx, syy, sxy over the box's area (zero without a box) */
+static void LoveWeber(const MacroBox *box, const PetscReal s[], PetscReal sigma[3])
+{
+  const PetscReal A = box->found ? (box->x1 - box->x0) * (box->y1 - box->y0) : 0;
+
+  sigma[0] = A > 0 ? s[M_SXX] / A : 0;
+  sigma[1] = A > 0 ? s[M_SYY] / A : 0;
+  sigma[2] = A > 0 ? 0.5 * (s[M_SXY] + s[M_SYX]) / A : 0;
+}
+
+static PetscErrorCode RecordStress(KergsResults res, const MacroBox *box, const PetscReal s[], const PetscReal sigma[])
 {
   const PetscReal W = box->x1 - box->x0, H = box->y1 - box->y0, A = box->found ? W * H : 0;
-  PetscReal       sxx = 0, syy = 0, sxy = 0, s1 = 0, s2 = 0, wxx = 0, wyy = 0;
+  PetscReal       s1 = 0, s2 = 0, wxx = 0, wyy = 0;
 
   PetscFunctionBeginUser;
   if (box->found) {
-    sxx = s[M_SXX] / A;
-    syy = s[M_SYY] / A;
-    sxy = 0.5 * (s[M_SXY] + s[M_SYX]) / A;
     wxx = 0.5 * (s[M_WALL + 0] + s[M_WALL + 1]) / H;
     wyy = 0.5 * (s[M_WALL + 2] + s[M_WALL + 3]) / W;
-    Principal(sxx, syy, sxy, &s1, &s2);
+    Principal(sigma[0], sigma[1], sigma[2], &s1, &s2);
   }
   PetscCall(KergsResultsRecord(res, "box_area", A));
-  PetscCall(KergsResultsRecord(res, "sxx", sxx));
-  PetscCall(KergsResultsRecord(res, "syy", syy));
-  PetscCall(KergsResultsRecord(res, "sxy", sxy));
+  PetscCall(KergsResultsRecord(res, "sxx", sigma[0]));
+  PetscCall(KergsResultsRecord(res, "syy", sigma[1]));
+  PetscCall(KergsResultsRecord(res, "sxy", sigma[2]));
   PetscCall(KergsResultsRecord(res, "s1", s1));
   PetscCall(KergsResultsRecord(res, "s2", s2));
   PetscCall(KergsResultsRecord(res, "q_over_p", s1 + s2 > 0 ? (s1 - s2) / (s1 + s2) : 0.0));
@@ -298,7 +320,9 @@ PetscErrorCode KergsStepperRecordMacro(KergsStepper st)
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, s, M_NSUMS, MPIU_REAL, MPIU_SUM, st->comm));
   PetscCall(FindRattlers(st->comm, &D, n, c, &nrattlers, &nends));
   if (box.found) BoxStrains(walls, &box, eps);
-  PetscCall(RecordStress(st->results, &box, s));
+  LoveWeber(&box, s, st->love_weber);
+  st->love_weber_found = box.found;
+  PetscCall(RecordStress(st->results, &box, s, st->love_weber));
   PetscCall(KergsResultsRecord(st->results, "strain_axial", eps[0]));
   PetscCall(KergsResultsRecord(st->results, "strain_lateral", eps[1]));
   PetscCall(KergsResultsRecord(st->results, "strain_volumetric", eps[2]));
