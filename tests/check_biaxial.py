@@ -189,7 +189,7 @@ def rest_by_inertial(out, p, energy_out):
         first, _, gap_error = first_rest_row(f, REST_STRESS_DEFAULT)
         check(np.all(inertial[:REST_WINDOW - 1] == -1) and np.all(full >= 0) and first == len(inertial) - 1,
               "inertial_number: -1 before step %d; the last row, %.3e, is the first below %g once above it with stress_gap within %g (%d steps)"
-              % (REST_WINDOW, REST_INERTIAL, inertial[-1], REST_STRESS_DEFAULT, len(inertial)))
+              % (REST_WINDOW, inertial[-1], REST_INERTIAL, REST_STRESS_DEFAULT, len(inertial)))
         check(gap_error < 1e-12, "stress_gap is max |s_ii / p - 1| of the Love-Weber stress over the window (to %.1e)" % gap_error)
         again = box_inertial_number(f, steps[-1], REST_WINDOW)
         check(abs(again - inertial[-1]) <= 1e-9 * again, "the box's inertial number %.9e is the walls' displacement's %.9e" % (inertial[-1], again))
