@@ -56,13 +56,19 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    2 and V2 dt on step 3 (to 1e-9 of a step's travel), and its time column is dt, 2 dt, 3 dt. On the preparation's
    clock the first piece was skipped and the wall started at V2.
 11. -stop_at_rest_inertial alone (the 120 grains of 2, at mu = 0, on 2 ranks, a snapshot every step): inertial_number
-   is -1 until the window of REST_WINDOW steps has run, then at least REST_INERTIAL in every row but the last, where the
-   run stops; that last value is the largest over the four pressure walls of the path the distance to the facing wall
+   is -1 until the window of REST_WINDOW steps has run; the last row, where the run stops, is the first below
+   REST_INERTIAL once it has been above with stress_gap within the default -stop_at_rest_stress; stress_gap is
+   max |s_ii - boundary_s_ii| / p over the window's rows, and boundary_sxx, boundary_syy are the walls' tractions'
+   moment about the box's centre recomputed from the last snapshot; the inertial number is the largest over the four pressure walls of the path the distance to the facing wall
    travelled over the window (the sum of the steps' changes in absolute value) / (the window's time * that distance)
    * d sqrt(rho / p), recomputed from the snapshots' walls to 1e-9 (the ring holds the walls at the start, so the window
    has run at step REST_WINDOW); the solid fraction where it stops is item 2's
    frictionless run's (at rest by the case's speed or 1e-8 J/m per grain) to 0.002 (measured 0.8071 against 0.8071),
-   and the Love-Weber sxx and syy equal p to 5 % (measured 0.8 % and 0.8 %, 1 rank).
+   and the Love-Weber sxx and syy equal p to 5 % (measured 0.8 % and 0.8 %, 1 rank). With -stop_at_rest_stress
+   REST_STRESS_TIGHT (1 rank), below the gap where the inertial number first falls below its threshold, rows below it are
+   held back and the run stops at the first within it. At mu = 0.5, walls included (1 rank), the walls' friction keeps
+   the Love-Weber stress more than FRICTIONAL_OFF off p at rest, and the rule still stops: it compares the Love-Weber
+   stress with the boundary's.
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
@@ -109,7 +115,8 @@ RHO = 1.0  # the grains' density (kg/m^2), kergs's default, which cases/compact_
 REST_PHI_TOL = 0.002  # solid fraction at rest by the inertial number against by speed or energy (measured 1e-5)
 REST_STRESS_TOL = 0.05  # Love-Weber stress against p where the inertial number stops the run (measured 0.8 %)
 REST_STRESS_DEFAULT = 0.05  # kergs's default -stop_at_rest_stress
-REST_STRESS_TIGHT = 0.005  # below the gap where the walls stop (measured 0.013): the run goes on (7 steps, measured)
+FRICTIONAL_OFF = 0.02  # the window's Love-Weber stress off p at rest with frictional walls, at least (measured 0.063)
+REST_STRESS_TIGHT = 0.0005  # below the gap where the walls stop (measured 0.0016): the run goes on (7 steps, measured)
 
 
 def compaction(k, out, sample, p):
@@ -160,12 +167,13 @@ def first_rest_row(f, stress_tol):
     """The rows of /stats as the inertial rule reads them: the index of the first row, once the inertial number has been
     at least REST_INERTIAL, with it below REST_INERTIAL and stress_gap within stress_tol (0: not checked), or None; the
     rows below REST_INERTIAL before it that the stress held back; and the largest difference between stress_gap and
-    max |s_ii / p - 1| recomputed from the Love-Weber sxx and syy averaged over the window's REST_WINDOW rows (the box's
-    pressure walls, all at P)."""
+    max |s_ii - b_ii| / p recomputed from the Love-Weber sxx, syy and the boundary's boundary_sxx, boundary_syy averaged
+    over the window's REST_WINDOW rows (the box's pressure walls, all at P)."""
     inertial, gap = f["stats/inertial_number"][()], f["stats/stress_gap"][()]
     window = np.ones(REST_WINDOW) / REST_WINDOW
-    mean = [np.concatenate([np.full(REST_WINDOW - 1, np.nan), np.convolve(f["stats/" + c][()], window, "valid")]) for c in ("sxx", "syy")]
-    again = np.maximum(np.abs(mean[0] / P - 1), np.abs(mean[1] / P - 1))
+    mean = [np.concatenate([np.full(REST_WINDOW - 1, np.nan), np.convolve(f["stats/" + c][()] - f["stats/boundary_" + c][()], window, "valid")])
+            for c in ("sxx", "syy")]
+    again = np.maximum(np.abs(mean[0]), np.abs(mean[1])) / P
     armed = np.flatnonzero(inertial >= REST_INERTIAL)
     if len(armed) == 0:
         return None, [], np.inf
@@ -190,7 +198,12 @@ def rest_by_inertial(out, p, energy_out):
         check(np.all(inertial[:REST_WINDOW - 1] == -1) and np.all(full >= 0) and first == len(inertial) - 1,
               "inertial_number: -1 before step %d; the last row, %.3e, is the first below %g once above it with stress_gap within %g (%d steps)"
               % (REST_WINDOW, inertial[-1], REST_INERTIAL, REST_STRESS_DEFAULT, len(inertial)))
-        check(gap_error < 1e-12, "stress_gap is max |s_ii / p - 1| of the Love-Weber stress over the window (to %.1e)" % gap_error)
+        check(gap_error < 1e-12, "stress_gap is max |s_ii - b_ii| / p of the Love-Weber and boundary stresses over the window (to %.1e)" % gap_error)
+        snap = f["snapshots/%06d" % steps[-1]]
+        bxx, byy = boundary_stress(snap, dt=f["stats/time"][0], centred=True)
+        check(abs(bxx - f["stats/boundary_sxx"][-1]) < 1e-9 and abs(byy - f["stats/boundary_syy"][-1]) < 1e-9,
+              "boundary_sxx %.9f, boundary_syy %.9f are the walls' tractions' moment about the box's centre, %.9f and %.9f"
+              % (f["stats/boundary_sxx"][-1], f["stats/boundary_syy"][-1], bxx, byy))
         again = box_inertial_number(f, steps[-1], REST_WINDOW)
         check(abs(again - inertial[-1]) <= 1e-9 * again, "the box's inertial number %.9e is the walls' displacement's %.9e" % (inertial[-1], again))
         phi, sxx, syy = (f["stats/" + name][-1] for name in ("solid_fraction", "sxx", "syy"))
@@ -215,6 +228,21 @@ def rest_held_by_stress(out, p):
               "held back (gaps %s)" % (REST_STRESS_TIGHT, gap[-1], len(held), ", ".join("%.4f" % gap[i] for i in held[:5])))
 
 
+def rest_frictional_walls(out, p):
+    """-stop_at_rest_inertial at mu = 0.5, walls included: their friction keeps the Love-Weber stress away from p at
+    rest, and the rule still stops, because it compares the Love-Weber stress with the boundary's."""
+    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
+                 "compaction at mu = 0.5 with -stop_at_rest_inertial ends at rest by it (exit %d)" % p.returncode):
+        return
+    with h5py.File(out, "r") as f:
+        s = {c: f["stats/" + c][-REST_WINDOW:].mean() for c in ("sxx", "syy", "boundary_sxx", "boundary_syy")}
+        gap = f["stats/stress_gap"][-1]
+    off = max(abs(s["sxx"] / P - 1), abs(s["syy"] / P - 1))
+    check(off > FRICTIONAL_OFF and gap <= REST_STRESS_DEFAULT,
+          "frictional walls at rest: the window's Love-Weber stress is %.3f off p (sxx %.4f, syy %.4f), the boundary's %.4f, %.4f, "
+          "stress_gap %.4f within %g" % (off, s["sxx"], s["syy"], s["boundary_sxx"], s["boundary_syy"], gap, REST_STRESS_DEFAULT))
+
+
 def friction_density(k, runs):
     """The small compactions at mu = 0 and mu = 0.5: both at rest, the frictionless one denser."""
     phi = {}
@@ -226,15 +254,19 @@ def friction_density(k, runs):
           "(more than %g)" % (phi[0], phi[0.5], DENSER_BY))
 
 
-def boundary_stress(snap):
+def boundary_stress(snap, dt=DT, centred=False):
     """The boundary's stress (sxx, syy) at a snapshot: the moment of every wall traction, friction included, over the
-    box's area (walls: bottom, right, top, left); equals Love-Weber's in static equilibrium without body forces."""
+    box's area (walls: bottom, right, top, left); equals Love-Weber's in static equilibrium without body forces. With
+    centred, the moment about the box's centre, as kergs's boundary_sxx and boundary_syy (out of equilibrium the
+    tractions do not sum to zero and the origin counts)."""
     x, rad, a, kind = snap["x"][()], snap["radius"][()], snap["a"][()].astype(int), snap["kind"][()]
     n, r, walls = snap["n"][()], snap["r"][()], snap["walls"][()]
     on = (kind != 0) & (r[:, 0] > 0)
     t = np.stack([-n[:, 1], n[:, 0]], axis=1)
-    f = (r[on, :1] * n[on] + r[on, 1:2] * t[on]) / DT
+    f = (r[on, :1] * n[on] + r[on, 1:2] * t[on]) / dt
     point = x[a[on]] - rad[a[on]][:, None] * n[on]
+    if centred:
+        point = point - np.array([0.5 * (walls[1, 0] + walls[3, 0]), 0.5 * (walls[0, 1] + walls[2, 1])])
     area = (walls[1, 0] - walls[3, 0]) * (walls[2, 1] - walls[0, 1])
     return -np.sum(f[:, 0] * point[:, 0]) / area, -np.sum(f[:, 1] * point[:, 1]) / area
 
@@ -493,6 +525,9 @@ def main():
         held = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0, "-stop_at_rest", 0,
                            "-stop_at_rest_inertial", REST_INERTIAL, "-stop_at_rest_stress", REST_STRESS_TIGHT, "-output", k.path("small_held.h5"),
                            "-sample_output", k.path("small_held.sample.h5"), log="small_held.log")
+        frictional = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0.5, "-stop_at_rest", 0,
+                                 "-stop_at_rest_inertial", REST_INERTIAL, "-steps", 1500, "-output", k.path("small_frictional.h5"),
+                                 "-sample_output", k.path("small_frictional.sample.h5"), log="small_frictional.log")
         q0 = compaction(k, out, sample, compact.result())
         got = q0 is not None
         if got:
@@ -503,6 +538,7 @@ def main():
         rest_by_energy(k.path("small_energy.h5"), by_energy.result())
         rest_by_inertial(k.path("small_inertial.h5"), by_inertial.result(), small[0])
         rest_held_by_stress(k.path("small_held.h5"), held.result())
+        rest_frictional_walls(k.path("small_frictional.h5"), frictional.result())
         if got:
             q_frictional = biaxial(k, k.path("biaxial_0.5.h5"), shear[0.5].result(), q0)
             if q_frictional is not None:

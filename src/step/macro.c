@@ -35,6 +35,10 @@ enum {
   M_TYY,
   M_FN,
   M_AREA,
+  M_BXX, /* the boundary's stress: minus the moment of every wall traction about the box's centre, friction included */
+  M_BXY,
+  M_BYX,
+  M_BYY,
   M_NSUMS
 };
 
@@ -124,6 +128,21 @@ static void AddContact(const KergsContact *c, const PetscReal l[], PetscReal dt,
   s[M_FN] += fn;
 }
 
+/* A wall's traction on disk a, f = r / dt at the contact point x_a - r_a n, into the boundary's stress
+   -sum f (x) (point - centre): in static equilibrium without body forces it equals the Love-Weber stress (each
+   disk's forces balance), and their difference is sum m dv/dt (x) x over the disks, the stress of their inertia. */
+static void AddTraction(const KergsContact *c, const PetscReal xa[], const MacroBox *box, PetscReal dt, PetscReal s[])
+{
+  const PetscReal fn = c->r[0] / dt, ft = c->r[1] / dt;
+  const PetscReal f[2]  = {fn * c->n[0] + ft * c->t[0], fn * c->n[1] + ft * c->t[1]};
+  const PetscReal pt[2] = {xa[0] - c->ra * c->n[0] - 0.5 * (box->x0 + box->x1), xa[1] - c->ra * c->n[1] - 0.5 * (box->y0 + box->y1)};
+
+  s[M_BXX] -= f[0] * pt[0];
+  s[M_BXY] -= f[0] * pt[1];
+  s[M_BYX] -= f[1] * pt[0];
+  s[M_BYY] -= f[1] * pt[1];
+}
+
 static void SumContacts(const KergsDisks *D, PetscInt n, const KergsContact c[], const MacroBox *box, PetscReal dt, PetscReal s[])
 {
   for (PetscInt k = 0; k < n; k++) {
@@ -137,6 +156,7 @@ static void SumContacts(const KergsDisks *D, PetscInt n, const KergsContact c[],
       for (PetscInt d = 0; d < KERGS_DIM; d++) l[d] = c[k].ra * c[k].n[d];
       s[M_NDW] += 1;
       if (side >= 0) s[M_WALL + side] += c[k].r[0] / dt;
+      AddTraction(&c[k], xa, box, dt, s);
     }
     AddContact(&c[k], l, dt, s);
   }
@@ -248,17 +268,19 @@ static PetscErrorCode FindRattlers(MPI_Comm comm, const KergsDisks *D, PetscInt 
 
 /* The stress columns: Love-Weber over the box's area, its principal values and q/p, and the walls' stresses. Zero
    without a box. */
-/* The Love-Weber tensor sxx, syy, sxy over the box's area (zero without a box) */
-static void LoveWeber(const MacroBox *box, const PetscReal s[], PetscReal sigma[3])
+/* The Love-Weber tensor sxx, syy, sxy over the box's area (zero without a box), or the boundary's from the sums at
+   first (M_SXX or M_BXX) */
+static void StressOverBox(const MacroBox *box, const PetscReal s[], PetscInt first, PetscReal sigma[3])
 {
   const PetscReal A = box->found ? (box->x1 - box->x0) * (box->y1 - box->y0) : 0;
 
-  sigma[0] = A > 0 ? s[M_SXX] / A : 0;
-  sigma[1] = A > 0 ? s[M_SYY] / A : 0;
-  sigma[2] = A > 0 ? 0.5 * (s[M_SXY] + s[M_SYX]) / A : 0;
+  sigma[0] = A > 0 ? s[first] / A : 0; /* xx, xy, yx, yy from first on */
+  sigma[1] = A > 0 ? s[first + 3] / A : 0;
+  sigma[2] = A > 0 ? 0.5 * (s[first + 1] + s[first + 2]) / A : 0;
 }
 
-static PetscErrorCode RecordStress(KergsResults res, const MacroBox *box, const PetscReal s[], const PetscReal sigma[])
+static PetscErrorCode RecordStress(KergsResults res, const MacroBox *box, const PetscReal s[], const PetscReal sigma[],
+                                   const PetscReal boundary[])
 {
   const PetscReal W = box->x1 - box->x0, H = box->y1 - box->y0, A = box->found ? W * H : 0;
   PetscReal       s1 = 0, s2 = 0, wxx = 0, wyy = 0;
@@ -278,6 +300,9 @@ static PetscErrorCode RecordStress(KergsResults res, const MacroBox *box, const 
   PetscCall(KergsResultsRecord(res, "q_over_p", s1 + s2 > 0 ? (s1 - s2) / (s1 + s2) : 0.0));
   PetscCall(KergsResultsRecord(res, "wall_sxx", wxx));
   PetscCall(KergsResultsRecord(res, "wall_syy", wyy));
+  PetscCall(KergsResultsRecord(res, "boundary_sxx", boundary[0]));
+  PetscCall(KergsResultsRecord(res, "boundary_syy", boundary[1]));
+  PetscCall(KergsResultsRecord(res, "boundary_sxy", boundary[2]));
   PetscCall(KergsResultsRecord(res, "solid_fraction", box->found ? s[M_AREA] / A : 0.0));
   PetscFunctionReturn(0);
 }
@@ -320,9 +345,10 @@ PetscErrorCode KergsStepperRecordMacro(KergsStepper st)
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, s, M_NSUMS, MPIU_REAL, MPIU_SUM, st->comm));
   PetscCall(FindRattlers(st->comm, &D, n, c, &nrattlers, &nends));
   if (box.found) BoxStrains(walls, &box, eps);
-  LoveWeber(&box, s, st->love_weber);
+  StressOverBox(&box, s, M_SXX, st->love_weber);
+  StressOverBox(&box, s, M_BXX, st->boundary_stress);
   st->love_weber_found = box.found;
-  PetscCall(RecordStress(st->results, &box, s, st->love_weber));
+  PetscCall(RecordStress(st->results, &box, s, st->love_weber, st->boundary_stress));
   PetscCall(KergsResultsRecord(st->results, "strain_axial", eps[0]));
   PetscCall(KergsResultsRecord(st->results, "strain_lateral", eps[1]));
   PetscCall(KergsResultsRecord(st->results, "strain_volumetric", eps[2]));

@@ -372,9 +372,9 @@ static const char *EndText(KergsStepper st, PetscBool rest, char buf[], size_t l
    energy per grain is 4e-6 of p d^2 (docs/biaxial.md). Or the box's inertial number over the last -stop_at_rest_window
    steps below -stop_at_rest_inertial, once it has been above: the walls have stopped closing in, whatever rattlers
    still move (the guard: heavy walls start so slowly that the first window could measure them at rest), with the
-   Love-Weber stress inside, averaged over the window, within -stop_at_rest_stress of the walls' pressure: the walls of a
-   large sample jam while the grains inside are still out of equilibrium (100,000 disks: 1.34 p in the step where the
-   rule alone stopped, docs/biaxial.md). */
+   Love-Weber stress inside and the walls', averaged over the window, within -stop_at_rest_stress p of each other: the
+   walls of a large sample jam while the grains inside are still out of equilibrium (100,000 disks: 1.34 p in the step
+   where the rule alone stopped, docs/biaxial.md). */
 static PetscErrorCode StepperAtRest(KergsStepper st, PetscBool *rest)
 {
   KergsDisks D;
@@ -391,7 +391,7 @@ static PetscErrorCode StepperAtRest(KergsStepper st, PetscBool *rest)
     *rest = PETSC_TRUE;
     PetscCall(PetscPrintf(st->comm,
                           "kergs: at rest by the inertial number: I = %.3g below %g over the last %" PetscInt_FMT
-                          " steps, the stress inside, averaged over them, within %.2g of the walls' pressure\n",
+                          " steps, and the Love-Weber stress, averaged over them, within %.2g p of the walls' (in equilibrium)\n",
                           (double)st->box_inertial, (double)st->rest_inertial, st->rest_window, (double)st->box_stress_gap));
   }
   PetscFunctionReturn(0);
