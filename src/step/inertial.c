@@ -173,8 +173,8 @@ PetscErrorCode KergsStepperCheckRestInertial(KergsStepper st)
              (double)st->rest_inertial);
   PetscCall(KergsStepperHasBox(st, &box));
   PetscCheck(box || !(st->rest_stress > 0), st->comm, PETSC_ERR_ARG_INCOMP,
-             "-stop_at_rest_stress %g compares the Love-Weber stress over the box's area with the walls' pressure, and the %" PetscInt_FMT
-             " walls are not a box of four axis-aligned walls: give -stop_at_rest_stress 0",
+             "-stop_at_rest_stress %g compares the Love-Weber stress over the box's area with the stress of the walls' tractions, and the "
+             "%" PetscInt_FMT " walls are not a box of four axis-aligned walls: give -stop_at_rest_stress 0",
              (double)st->rest_stress, nwalls);
   PetscCheck(st->rest_window < nsteps - step, st->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-stop_at_rest_window %" PetscInt_FMT " is not shorter than the %" PetscInt_FMT " steps left to run (-steps %" PetscInt_FMT
@@ -230,9 +230,9 @@ static const PetscReal *BoxSlot(KergsStepper st, PetscInt stride, PetscInt j)
    moment, friction included), both averaged over the window's steps, n the wall's normal (-1 without a box). Their
    difference is the stress of the grains' inertia, sum m dv/dt (x) x over the box's area (src/step/macro.c): 0 at
    rest whatever the walls' friction, which sets both apart from the walls' pressure (by 6 % at rest in the 120-grain
-   compaction of tests/check_biaxial.py at mu = 0.5, walls included). Averaged
-   because a step's stress is noisy at rest: 20,000 disks under NLGS to quad 1e-4 swing by up to 17 % of p from one
-   step to the next while the window's mean is within 1 to 3 % (docs/biaxial.md). */
+   compaction of tests/check_biaxial.py at mu = 0.5, walls included). Averaged because a step's stress is noisy at
+   rest: 20,000 disks under NLGS to quad 1e-4 swing by up to 17 % of p from one step to the next while the window's
+   mean is within 1 to 3 % (docs/biaxial.md). */
 static PetscReal StressGap(KergsStepper st, PetscInt nwalls, const KergsWall walls[], PetscInt stride)
 {
   PetscReal mean[3] = {0, 0, 0}, gap = -1, n[KERGS_DIM];
@@ -254,8 +254,8 @@ static PetscReal StressGap(KergsStepper st, PetscInt nwalls, const KergsWall wal
    value), over the window's duration and over that distance now: the mean strain rate of the box along that wall's
    normal, both walls' motions included. A path over a window rather than the walls' velocities: a free wall rebounds,
    and its velocity changes sign while the box still closes in. Recorded as inertial_number (-1 until the window is
-   full), and beside it the gap between the window's stress inside and the walls' pressure as stress_gap (StressGap;
-   -1 as long as inertial_number is). */
+   full), and beside it how far the window's Love-Weber stress is from the walls' as stress_gap (StressGap; -1 as long
+   as inertial_number is). */
 PetscErrorCode KergsStepperTrackBox(KergsStepper st)
 {
   const KergsWall *walls;
