@@ -49,7 +49,8 @@ static PetscErrorCode FindBox(PetscInt nwalls, const KergsWall walls[], MacroBox
 
   PetscFunctionBeginUser;
   box->left = box->right = box->bottom = box->top = -1;
-  box->found                                      = PETSC_FALSE;
+  box->x0 = box->x1 = box->y0 = box->y1 = 0; /* read by AddTraction even without a box */
+  box->found                            = PETSC_FALSE;
   if (nwalls != 4) PetscFunctionReturn(0);
   for (PetscInt w = 0; w < nwalls; w++) {
     const PetscReal dx = walls[w].b[0] - walls[w].a[0], dy = walls[w].b[1] - walls[w].a[1];

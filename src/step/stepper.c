@@ -22,7 +22,7 @@ PetscErrorCode KergsStepperCreate(MPI_Comm comm, KergsStepper *stepper)
   st->divergence_steps = 5;
   st->sample_forces    = PETSC_TRUE;
   st->rest_window      = 50;   /* 0.05 s at cases/compact_small.opts's dt, 0.1 s at the large compactions' 2e-3 */
-  st->rest_stress      = 0.05; /* the inertial rule's stops at 120 to 20,000 disks: within 1.1 %; 100,000 disks' early one: 34 % */
+  st->rest_stress      = 0.05; /* stress_gap where the inertial rule stops: 0.16 % (120 grains), 2.7 % (20,000 disks) */
   st->box_inertial     = -1;
   PetscCall(KergsStepperPeakMemory(comm, &st->baseline_rss));
   PetscCall(KergsSceneCreate(comm, &st->scene));
@@ -89,11 +89,11 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
       KergsOptionsInt(PetscOptionsObject, "-stop_at_rest_window",
                       "Steps over which -stop_at_rest_inertial measures the walls' motion (inertial_number is -1 until they have run)", "",
                       st->rest_window, &st->rest_window, NULL));
-  PetscCall(
-      PetscOptionsReal("-stop_at_rest_stress",
-                       "With -stop_at_rest_inertial: stop only once the Love-Weber stress inside, averaged over the same window, also "
-                       "matches each wall's pressure, |n.sigma.n / p - 1| at most this (stress_gap; 0: not checked)",
-                       "", st->rest_stress, &st->rest_stress, NULL));
+  PetscCall(PetscOptionsReal(
+      "-stop_at_rest_stress",
+      "With -stop_at_rest_inertial: stop only once the Love-Weber stress and the walls' tractions' (friction included), "
+      "averaged over the same window, differ by at most this times p along each pressure wall's normal (stress_gap; 0: not checked)",
+      "", st->rest_stress, &st->rest_stress, NULL));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-sample_forces",
