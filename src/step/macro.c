@@ -267,8 +267,6 @@ static PetscErrorCode FindRattlers(MPI_Comm comm, const KergsDisks *D, PetscInt 
   PetscFunctionReturn(0);
 }
 
-/* The stress columns: Love-Weber over the box's area, its principal values and q/p, and the walls' stresses. Zero
-   without a box. */
 /* The Love-Weber tensor sxx, syy, sxy over the box's area (zero without a box), or the boundary's from the sums at
    first (M_SXX or M_BXX) */
 static void StressOverBox(const MacroBox *box, const PetscReal s[], PetscInt first, PetscReal sigma[3])
@@ -280,6 +278,8 @@ static void StressOverBox(const MacroBox *box, const PetscReal s[], PetscInt fir
   sigma[2] = A > 0 ? 0.5 * (s[first + 1] + s[first + 2]) / A : 0;
 }
 
+/* The stress columns: Love-Weber over the box's area, its principal values and q/p, and the walls' stresses. Zero
+   without a box. */
 static PetscErrorCode RecordStress(KergsResults res, const MacroBox *box, const PetscReal s[], const PetscReal sigma[],
                                    const PetscReal boundary[])
 {
