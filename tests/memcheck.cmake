@@ -24,6 +24,10 @@ foreach(type newton snesvi tresca)
   kergs_test(NAME malloc_dump_confine5_${type} NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
              ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type ${type})
 endforeach()
+# newton's working set: J rebuilt over a subset of the contacts when the answer closes a deferred one
+kergs_test(NAME malloc_dump_confine5_newton_working_set NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
+           ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type newton
+                -gap_rule predictive -solver_newton_working_set)
 
 # 2. Label memcheck (ctest -L memcheck: about 85 s on 2 cores, 160 s of processor time): scenes under valgrind,
 #    failing on any invalid access, use of uninitialised memory or leak (definite, indirect, possible).

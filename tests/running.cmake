@@ -50,6 +50,9 @@ kergs_bad_input(newton_second_rho "-solver_newton_second_rho -0.1 must be 0 .non
                 -options_file cases/confine5.opts -solver_type newton -solver_newton_second_rho -0.1)
 kergs_bad_input(newton_second_window "-solver_newton_second_window 0 must be positive"
                 -options_file cases/confine5.opts -solver_type newton -solver_newton_second_window 0)
+# the working set leaves contacts out of J; the kernel term's projector is over every active contact
+kergs_bad_input(newton_working_set_kernel "-solver_newton_working_set needs -solver_prox identity or none"
+                -options_file cases/confine5.opts -solver_type newton -solver_prox kernel -solver_newton_working_set)
 kergs_bad_input(kernel_count_overflow "Option .kernel_diag_batch: -3000000000 is out of the range"
                 -options_file cases/confine5.opts -solver_type nlgsjac -kernel_diag_batch -3000000000)
 # a checkpoint's .tmp (a write that did not finish) is not restarted from; an export of a step beyond the run is refused

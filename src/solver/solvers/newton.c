@@ -118,23 +118,21 @@ static PetscErrorCode EnsureWork(Newton *nt, PetscInt n)
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
   PetscCall(PetscFree2(nt->Aused, nt->Bused));
   PetscCall(PetscFree2(nt->Afact, nt->Bfact));
+  PetscCall(PetscFree(nt->active_all));
   nt->nalloc = PetscMax(n, 2 * nt->nalloc);
   PetscCall(PetscMalloc2(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Afact, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Bfact));
   PetscCall(PetscMalloc2(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Aused, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Bused));
   PetscCall(PetscMalloc5(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->A, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->B, nt->nalloc,
                          &nt->rho, nt->nalloc, &nt->rho_nat, nt->nalloc, &nt->diagblock));
+  PetscCall(PetscMalloc1(nt->nalloc, &nt->active_all));
   PetscFunctionReturn(0);
 }
 
 static PetscErrorCode DestroyStepObjects(Newton *nt)
 {
   PetscFunctionBeginUser;
+  PetscCall(NewtonDestroyJacobian(nt));
   PetscCall(MatDestroy(&nt->Wfull));
-  PetscCall(MatDestroy(&nt->Wsorted));
-  PetscCall(PetscFree(nt->order));
-  PetscCall(VecDestroy(&nt->Fs));
-  PetscCall(VecDestroy(&nt->ds));
-  PetscCall(MatDestroy(&nt->J));
   PetscCall(VecDestroy(&nt->F));
   PetscCall(VecDestroy(&nt->d));
   PetscCall(VecDestroy(&nt->Wd));
@@ -180,7 +178,7 @@ static PetscErrorCode SolverSetUp_Newton(KergsSolver s, KergsScene scene, KergsC
   PetscCall(EnsureWork(nt, n));
   PetscCall(DestroyStepObjects(nt));
   PetscCall(KergsOperatorsGetFullW(ops, &nt->Wfull));
-  PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
+  if (!nt->working_set) PetscCall(NewtonSetUpJacobian(s, nt, n, nc)); /* else once the working set is chosen (SolverSolve_Newton) */
   PetscCall(PetscMalloc1(n * nc * nc + 1, &blocks));
   PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, blocks));
   for (PetscInt a = 0; a < n; a++) {
@@ -599,23 +597,56 @@ static PetscErrorCode Attempt(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc
   PetscFunctionReturn(0);
 }
 
+/* An Attempt from r, and when it stalls (-solver_newton_second_window Newton steps without a tenfold gain of the
+   natural residual) a second one from the same point with the rest of -solver_max_it and rho times
+   -solver_newton_second_rho; the better end of the two is kept. The Alart-Curnier merit has minima that are not
+   solutions, and which ones depends on rho: on the pile of radius ratio 100 of docs/running.md (mass ratio 1e4), six
+   steps of 40 to 110 contacts that newton left at natural residuals of 1e-4 to 0.1 after 1,000 Newton steps (one
+   still at 8e-5 after 20,000) were each solved in 25 to 113 Newton steps with rho / 10. -solver_max_it caps the
+   Newton steps of both. */
+static PetscErrorCode SolveFrom(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd, PetscReal wmean,
+                                PetscInt *steps, PetscReal *res)
+{
+  const PetscBool smoothing = (PetscBool)(nt->smoothing && nt->prox != NEWTON_PROX_NONE); /* it hands over to the proximal iterations */
+  const PetscBool second    = (PetscBool)(nt->second_rho > 0 && s->max_it - *steps >= 2);
+  const PetscReal start_res = *res;
+
+  PetscFunctionBeginUser;
+  if (second) PetscCall(VecCopy(r, nt->rstart));
+  PetscCall(Attempt(s, nt, n, nc, nglobal, r, u, vd, wmean, smoothing, s->max_it, second ? nt->second_window : 0, steps, res));
+  if (second && *res > s->tol && nglobal > 0 && *steps < s->max_it) {
+    const PetscReal first = *res;
+    PetscCall(PetscInfo(NULL, "first attempt ended at natural residual %g after %" PetscInt_FMT " Newton steps: a second, rho times %g\n",
+                        (double)first, *steps, (double)nt->second_rho));
+    nt->second_attempts++;
+    PetscCall(VecCopy(r, nt->rbest));
+    PetscCall(MoveTo(nt, nt->rstart, r, u, vd));
+    *res = start_res;
+    SetRho(nt, n, nt->rho_factor * nt->second_rho);
+    PetscCall(Attempt(s, nt, n, nc, nglobal, r, u, vd, wmean, smoothing, s->max_it, 0, steps, res));
+    SetRho(nt, n, nt->rho_factor);
+    if (first < *res) {
+      PetscCall(MoveTo(nt, nt->rbest, r, u, vd));
+      *res = first;
+      PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_FALSE, &nt->merit)); /* the statistic, at rho itself */
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
-   -solver_newton_switch_tol, then an Attempt. When it stalls (-solver_newton_second_window Newton steps without a
-   tenfold gain of the natural residual), a second Attempt starts again from the same point (the warm start, after
-   those sweeps) with the rest of -solver_max_it and rho times -solver_newton_second_rho, and the better end of the
-   two is kept. The Alart-Curnier merit has minima that are not solutions, and which ones depends on rho: on the pile
-   of radius ratio 100 of docs/running.md (mass ratio 1e4), six steps of 40 to 110 contacts that newton left at
-   natural residuals of 1e-4 to 0.1 after 1,000 Newton steps (one still at 8e-5 after 20,000) were each solved in 25
-   to 113 Newton steps with rho / 10. -solver_max_it caps the Newton steps of both. */
+   -solver_newton_switch_tol, then SolveFrom. With a working set (-solver_newton_working_set, newton_working.c) the
+   contacts that the warm start leaves open are deferred, and SolveFrom runs again from its answer, on a working set
+   grown by the deferred contacts that answer closes, until it closes none; the natural residual is then taken over
+   every contact. */
 static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
                                          KergsSolveStats *stats)
 {
   Newton        *nt = (Newton *)s->data;
   KergsDofLayout layout;
-  PetscInt       n, nglobal, nc, steps = 0;
-  PetscReal      res = 0.0, rmax, wmean = 1.0;
+  PetscInt       n, nglobal, nc, steps = 0, added;
+  PetscReal      res = 0.0, wmean = 1.0;
   PetscLogDouble t0, t1;
-  PetscBool      smoothing, second;
   Vec            r, u, vd;
 
   PetscFunctionBeginUser;
@@ -629,34 +660,27 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->linear_its = nt->backtracks = nt->failed_searches = nt->failed_linear = 0;
   nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = nt->second_attempts = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
+  nt->smooth_steps                           = 0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
-  PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
-  nt->smooth_steps = 0;
-  smoothing        = (PetscBool)(nt->smoothing && nt->prox != NEWTON_PROX_NONE); /* the phase hands over to the proximal iterations */
-  second           = (PetscBool)(nt->second_rho > 0 && s->max_it >= 2);
-  if (second) PetscCall(VecCopy(r, nt->rstart));
-  {
-    const PetscReal start_res = res;
-    PetscCall(Attempt(s, nt, n, nc, nglobal, r, u, vd, wmean, smoothing, s->max_it, second ? nt->second_window : 0, &steps, &res));
-    if (second && res > s->tol && nglobal > 0 && steps < s->max_it) {
-      const PetscReal first = res;
-      PetscCall(PetscInfo(NULL, "first attempt ended at natural residual %g after %" PetscInt_FMT " Newton steps: a second, rho times %g\n",
-                          (double)first, steps, (double)nt->second_rho));
-      nt->second_attempts++;
-      PetscCall(VecCopy(r, nt->rbest));
-      PetscCall(MoveTo(nt, nt->rstart, r, u, vd));
-      res = start_res;
-      SetRho(nt, n, nt->rho_factor * nt->second_rho);
-      PetscCall(Attempt(s, nt, n, nc, nglobal, r, u, vd, wmean, smoothing, s->max_it, 0, &steps, &res));
-      SetRho(nt, n, nt->rho_factor);
-      if (first < res) {
-        PetscCall(MoveTo(nt, nt->rbest, r, u, vd));
-        res = first;
-        PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_FALSE, &nt->merit)); /* the statistic, at rho itself */
-      }
-    }
+  if (nt->working_set) {
+    PetscCall(NewtonWorkingSetBegin(s, nt, n, nc, r, u));
+    PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
+    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res)); /* of the working set's problem */
+  }
+  for (;;) {
+    PetscCall(SolveFrom(s, nt, n, nc, nglobal, r, u, vd, wmean, &steps, &res));
+    if (!nt->working_set || nglobal == 0 || steps >= s->max_it) break;
+    PetscCall(NewtonWorkingSetGrow(s, nt, n, nc, u, &added));
+    if (!added) break;
+    PetscCall(NewtonDestroyJacobian(nt));
+    PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
+    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
+  }
+  if (nt->working_set) {
+    PetscCall(NewtonWorkingSetEnd(s, nt, n));
+    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res)); /* of the original problem: 0 from every deferred contact still open */
   }
   if (res > s->tol && nglobal > 0) PetscCall(Polish(s, nt, n, nc, r, u, vd, &res));
   stats->iterations = steps;
@@ -687,6 +711,10 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
   PetscCall(KergsSolveStatsAdd(st, "smoothing_steps", (PetscReal)nt->smooth_steps));
   PetscCall(KergsSolveStatsAdd(st, "second_attempts", (PetscReal)nt->second_attempts));
+  if (nt->working_set) {
+    PetscCall(KergsSolveStatsAdd(st, "working_rounds", (PetscReal)nt->rounds));
+    PetscCall(KergsSolveStatsAdd(st, "deferred_contacts", (PetscReal)nt->deferred));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -756,6 +784,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_max_sweeps",
                             "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol", "", nt->max_sweeps,
                             &nt->max_sweeps, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-solver_newton_working_set",
+                             "Leave the contacts that the warm start leaves open out of J, and put back those the answer closes", "",
+                             nt->working_set, &nt->working_set, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(nt->alpha > 0 && PetscIsNormalReal(nt->alpha), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_prox_alpha %g must be positive",
              (double)nt->alpha);
@@ -792,6 +823,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              (double)nt->armijo);
   PetscCheck(nt->max_backtracks >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_max_backtracks %" PetscInt_FMT " must be non-negative", nt->max_backtracks);
+  PetscCheck(!(nt->working_set && nt->prox == NEWTON_PROX_KERNEL), s->comm, PETSC_ERR_ARG_INCOMP,
+             "-solver_newton_working_set needs -solver_prox identity or none: the kernel term's projector is over every active contact");
   PetscCall(KSPSetFromOptions(nt->ksp));
   s->needs_H = (PetscBool)(nt->prox == NEWTON_PROX_KERNEL); /* the kernel projector factors H_f H_f^T */
   if (nt->prox == NEWTON_PROX_KERNEL && !nt->kernel) {
@@ -837,6 +870,9 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(
         viewer, "After %" PetscInt_FMT " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
         nt->second_window, (double)nt->second_rho));
+  if (nt->working_set)
+    PetscCall(PetscViewerASCIIPrintf(viewer,
+                                     "Working set: contacts the warm start leaves open are left out of J until the answer closes them\n"));
   if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
   if (nt->sorted_subdomains)
     PetscCall(PetscViewerASCIIPrintf(viewer,
@@ -860,6 +896,7 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
   PetscCall(PetscFree2(nt->Aused, nt->Bused));
   PetscCall(PetscFree2(nt->Afact, nt->Bfact));
+  PetscCall(PetscFree(nt->active_all));
   PetscCall(PetscFree(nt));
   s->data = NULL;
   PetscFunctionReturn(0);

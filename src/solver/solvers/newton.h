@@ -20,10 +20,18 @@ typedef struct {
   Mat         Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
   /* one rank, kergs's LU: J is stored with its block rows and columns in W's AMD order, factored in that (natural)
      order (PresortContacts) */
-  PetscInt  *order;   /* J's block row i is contact order[i]; NULL: J in the contacts' order */
-  PetscBool  presort; /* decided once the linear solver's options are read (NewtonChoosePresorting) */
-  Mat        Wsorted; /* W in that order: J's template */
-  Vec        Fs, ds;  /* -F and d in that order */
+  PetscInt *order;   /* J's block row i is local contact order[i]; NULL: J in the contacts' order, every contact a row */
+  PetscInt  nrows;   /* J's local block rows: the local contacts, or the working ones */
+  PetscBool presort; /* decided once the linear solver's options are read (NewtonChoosePresorting) */
+  Mat       Wsorted; /* W in that order: J's template */
+  /* -solver_newton_working_set: contacts open at the warm start and not closed by it are left out of J until the
+     answer closes them (newton_working.c) */
+  PetscBool  working_set; /* the option */
+  PetscBool *active_all;  /* the step's activity, kept while s->active has the deferred contacts off */
+  Mat        Wwork;       /* W over the working contacts: J's template (NULL: W itself) */
+  PetscInt   rounds;      /* solves of the last step's working sets (1: none grown) */
+  PetscInt   deferred;    /* contacts left out of J at the end of the last solve (global) */
+  Vec        Fs, ds;      /* -F and d in that order */
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
   Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */
@@ -86,6 +94,11 @@ PETSC_INTERN PetscErrorCode NewtonChooseSortedSubdomains(Newton *);
 PETSC_INTERN PetscErrorCode NewtonSetUpJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc);
 PETSC_INTERN PetscErrorCode NewtonAssembleJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma);
 PETSC_INTERN PetscErrorCode NewtonSolveDirection(Newton *, PetscInt n, PetscInt nc, PetscBool *solved);
+PETSC_INTERN PetscErrorCode NewtonDestroyJacobian(Newton *);
+/* newton_working.c */
+PETSC_INTERN PetscErrorCode NewtonWorkingSetBegin(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u);
+PETSC_INTERN PetscErrorCode NewtonWorkingSetGrow(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec u, PetscInt *added);
+PETSC_INTERN PetscErrorCode NewtonWorkingSetEnd(KergsSolver, Newton *, PetscInt n);
 /* newton_subdomain.c */
 PETSC_INTERN PetscErrorCode NewtonSubdomainSetSortedLU(PC);
 PETSC_INTERN PetscErrorCode NewtonSubdomainReleaseSortedLU(PC);

@@ -25,12 +25,14 @@ static PetscErrorCode GetParts(Mat M, PetscInt nc, Mat *Ad, Mat *Ao)
   PetscFunctionReturn(0);
 }
 
+/* J's template: W over J's rows (the working contacts, or all), in W's AMD order when presorted. */
+static Mat JacobianTemplate(const Newton *nt) { return nt->Wsorted ? nt->Wsorted : (nt->Wwork ? nt->Wwork : nt->Wfull); }
+
 /* Block row a of a sequential (B)AIJ part of J is B_k (nc x nc) times block row a of the same part of W (the same
    pattern, W being J's template), k the contact of that row (order[a], or a); in the diagonal part, A_k + sigma B_k +
    eps I is also added to the own block, found at diagblock[a]. BAIJ stores each block column by column: entry (c, e) at c + e nc. Reading W
    and writing J in one pass spares copying W into J first. */
-static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, PetscInt nc, PetscBool diagonal, PetscReal eps,
-                                     PetscReal sigma)
+static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt nc, PetscBool diagonal, PetscReal eps, PetscReal sigma)
 {
   const PetscInt *ia, *ja;
   PetscInt        nrow;
@@ -39,7 +41,7 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, P
 
   PetscFunctionBeginUser;
   PetscCall(MatGetRowIJ(P, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
-  PetscCheck(done && nrow == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the Jacobian's rows");
+  PetscCheck(done && nrow == nt->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the Jacobian's rows");
   if (nc > 1) {
     PetscCall(MatSeqBAIJGetArray(Wpart, &w));
     PetscCall(MatSeqBAIJGetArray(P, &v));
@@ -47,7 +49,7 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, P
     PetscCall(MatSeqAIJGetArrayRead(Wpart, (const PetscScalar **)&w));
     PetscCall(MatSeqAIJGetArray(P, &v));
   }
-  for (PetscInt a = 0; a < n; a++) {
+  for (PetscInt a = 0; a < nrow; a++) {
     const PetscInt   contact = nt->order ? nt->order[a] : a;
     const PetscReal *Ba = nt->B + contact * nc * nc, *Aa = nt->A + contact * nc * nc;
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
@@ -84,7 +86,7 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt n, P
 }
 
 /* Position of each block row's own block in the diagonal part (its local block column is the row). */
-static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt n, PetscInt nc)
+static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt nc)
 {
   const PetscInt *ia, *ja;
   PetscInt        nrow;
@@ -92,7 +94,7 @@ static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt n, Petsc
 
   PetscFunctionBeginUser;
   PetscCall(MatGetRowIJ(Ad, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
-  for (PetscInt a = 0; a < n; a++) {
+  for (PetscInt a = 0; a < nrow; a++) {
     nt->diagblock[a] = -1;
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
       if (ja[j] == a) nt->diagblock[a] = j;
@@ -130,10 +132,10 @@ PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pet
   nt->sigma_used = sigma;
   nt->jacobians++;
   nt->stale = PETSC_TRUE;
-  PetscCall(GetParts(nt->order ? nt->Wsorted : nt->Wfull, nc, &Wd, &Wo));
+  PetscCall(GetParts(JacobianTemplate(nt), nc, &Wd, &Wo));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
-  PetscCall(ScaleBlockRows(nt, Wd, Ad, n, nc, PETSC_TRUE, eps, sigma));
-  if (Ao) PetscCall(ScaleBlockRows(nt, Wo, Ao, n, nc, PETSC_FALSE, 0.0, 0.0));
+  PetscCall(ScaleBlockRows(nt, Wd, Ad, nc, PETSC_TRUE, eps, sigma));
+  if (Ao) PetscCall(ScaleBlockRows(nt, Wo, Ao, nc, PETSC_FALSE, 0.0, 0.0));
   /* values changed through the arrays: assembling again tells PETSc (and the factorization) that J changed */
   PetscCall(MatAssemblyBegin(nt->J, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(nt->J, MAT_FINAL_ASSEMBLY));
@@ -299,27 +301,77 @@ PetscErrorCode NewtonChooseSortedSubdomains(Newton *nt)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode PresortContacts(Newton *nt, PetscInt n, PetscInt nc)
+/* J's rows. Without a working set, every local contact. With one (-solver_newton_working_set, newton_working.c), the
+   contacts active in s->active: when some contact is deferred on any rank, W over the working contacts
+   (MatCreateSubMatrix, its rows in the contacts' order) becomes J's template and order[i] names J's row i. */
+static PetscErrorCode SelectRows(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc)
+{
+  PetscInt m = 0, left_out, rstart, *blocks;
+  IS       working;
+
+  PetscFunctionBeginUser;
+  nt->nrows = n;
+  if (!nt->working_set) PetscFunctionReturn(0);
+  for (PetscInt a = 0; a < n; a++)
+    if (s->active[a]) m++;
+  left_out = n - m;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &left_out, 1, MPIU_INT, MPI_SUM, s->comm));
+  if (left_out == 0) PetscFunctionReturn(0);
+  PetscCall(MatGetOwnershipRange(nt->Wfull, &rstart, NULL));
+  PetscCall(PetscMalloc1(m, &nt->order));
+  PetscCall(PetscMalloc1(m, &blocks));
+  m = 0;
+  for (PetscInt a = 0; a < n; a++)
+    if (s->active[a]) {
+      nt->order[m] = a;
+      blocks[m++]  = rstart / nc + a;
+    }
+  PetscCall(ISCreateBlock(s->comm, nc, m, blocks, PETSC_OWN_POINTER, &working));
+  PetscCall(MatCreateSubMatrix(nt->Wfull, working, working, MAT_INITIAL_MATRIX, &nt->Wwork));
+  PetscCall(ISDestroy(&working));
+  nt->nrows = m;
+  PetscFunctionReturn(0);
+}
+
+/* One rank: J's template (W, or W over the working contacts) permuted into its AMD order, and order[] composed with it. */
+static PetscErrorCode PresortContacts(Newton *nt, PetscInt nc)
 {
   IS              rows, cols, points;
   const PetscInt *idx;
-  PetscInt        m;
+  PetscInt        m, *order;
+  Mat             T = nt->Wwork ? nt->Wwork : nt->Wfull;
 
   PetscFunctionBeginUser;
-  if (!nt->presort || n == 0) PetscFunctionReturn(0);
-  PetscCall(MatGetOrdering(nt->Wfull, MATORDERINGAMD, &rows, &cols));
+  if (!nt->presort || nt->nrows == 0) PetscFunctionReturn(0);
+  PetscCall(MatGetOrdering(T, MATORDERINGAMD, &rows, &cols));
   PetscCall(ISGetLocalSize(rows, &m));
-  PetscCheck(m == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: W's ordering has %" PetscInt_FMT " entries for %" PetscInt_FMT " contacts",
-             m, n);
-  PetscCall(PetscMalloc1(n, &nt->order));
+  PetscCheck(m == nt->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "newton: W's ordering has %" PetscInt_FMT " entries for %" PetscInt_FMT " contacts", m, nt->nrows);
+  PetscCall(PetscMalloc1(m, &order));
   PetscCall(ISGetIndices(rows, &idx));
-  PetscCall(PetscArraycpy(nt->order, idx, n));
-  PetscCall(ISCreateBlock(PETSC_COMM_SELF, nc, n, idx, PETSC_COPY_VALUES, &points));
+  for (PetscInt i = 0; i < m; i++) order[i] = nt->order ? nt->order[idx[i]] : idx[i];
+  PetscCall(ISCreateBlock(PETSC_COMM_SELF, nc, m, idx, PETSC_COPY_VALUES, &points));
   PetscCall(ISRestoreIndices(rows, &idx));
-  PetscCall(MatPermute(nt->Wfull, points, points, &nt->Wsorted)); /* Wsorted(i, j) = W(order[i], order[j]), by blocks */
+  PetscCall(PetscFree(nt->order));
+  nt->order = order;
+  PetscCall(MatPermute(T, points, points, &nt->Wsorted)); /* Wsorted(i, j) = T(i', j'), i' = the AMD order's i-th row, by blocks */
+  PetscCall(MatDestroy(&nt->Wwork));                      /* Wsorted is the template now */
   PetscCall(ISDestroy(&points));
   PetscCall(ISDestroy(&rows));
   PetscCall(ISDestroy(&cols));
+  PetscFunctionReturn(0);
+}
+
+/* The step's (or the working set's) J and what was built with it. */
+PetscErrorCode NewtonDestroyJacobian(Newton *nt)
+{
+  PetscFunctionBeginUser;
+  PetscCall(MatDestroy(&nt->Wsorted));
+  PetscCall(MatDestroy(&nt->Wwork));
+  PetscCall(PetscFree(nt->order));
+  PetscCall(VecDestroy(&nt->Fs));
+  PetscCall(VecDestroy(&nt->ds));
+  PetscCall(MatDestroy(&nt->J));
   PetscFunctionReturn(0);
 }
 
@@ -346,19 +398,21 @@ static PetscErrorCode ReleaseSubdomainFactors(Newton *nt)
   PetscFunctionReturn(0);
 }
 
-/* The step's Jacobian and linear solver: W presorted (one rank, PresortContacts), J created on its pattern, the
-   position of every diagonal block, and the KSP reset to J's sizes, then chosen for them (ChooseLinearSolver). */
+/* The step's Jacobian and linear solver: J's rows chosen (SelectRows), W over them presorted (one rank,
+   PresortContacts), J created on its pattern, the position of every diagonal block, and the KSP reset to J's sizes,
+   then chosen for them (ChooseLinearSolver). */
 PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc)
 {
   Mat Ad, Ao;
 
   PetscFunctionBeginUser;
   PetscCall(ReleaseSubdomainFactors(nt));
-  PetscCall(PresortContacts(nt, n, nc));
-  PetscCall(MatDuplicate(nt->order ? nt->Wsorted : nt->Wfull, MAT_COPY_VALUES, &nt->J));
+  PetscCall(SelectRows(s, nt, n, nc));
+  PetscCall(PresortContacts(nt, nc));
+  PetscCall(MatDuplicate(JacobianTemplate(nt), MAT_COPY_VALUES, &nt->J));
   if (nt->order) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
-  PetscCall(LocateDiagonalBlocks(nt, Ad, n, nc));
+  PetscCall(LocateDiagonalBlocks(nt, Ad, nc));
   PetscCall(KSPReset(nt->ksp)); /* J's sizes and pattern are this step's */
   nt->sigma_used = -1.0;
   PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
@@ -401,14 +455,18 @@ static PetscErrorCode SolveNewtonSystem(Newton *nt, KSP ksp, KSPConvergedReason 
   PetscInt its;
 
   PetscFunctionBeginUser;
-  if (nt->order) { /* J in W's AMD order (PresortContacts): -F into that order, d back from it */
-    PetscInt           n, nc;
+  if (nt->order) { /* J's rows are order[]'s contacts (W's AMD order, the working set): -F into them, d back */
+    PetscInt           n, nc, local;
     const PetscScalar *f, *xs;
     PetscScalar       *bs, *x;
 
-    PetscCall(VecGetLocalSize(nt->F, &n));
     PetscCall(MatGetBlockSize(nt->J, &nc)); /* components per contact */
-    n /= nc;
+    PetscCall(VecGetLocalSize(nt->F, &local));
+    n = nt->nrows;
+    if (n * nc < local) { /* a contact outside J has F = r (the identity row): d = -F */
+      PetscCall(VecCopy(nt->F, nt->d));
+      PetscCall(VecScale(nt->d, -1.0));
+    }
     PetscCall(VecGetArrayRead(nt->F, &f));
     PetscCall(VecGetArray(nt->Fs, &bs));
     for (PetscInt i = 0; i < n; i++)
