@@ -316,15 +316,16 @@ static PetscErrorCode TestSmoothingRaise(void)
 }
 
 /* The working set (-solver_newton_working_set), on a chain whose answer is known: disk A (radius 0.1, no gravity)
-   hits B at 1 m/s; B is 1e-4 from C, which touches a wall. The warm start (r = 0) leaves B-C open, so it is deferred;
-   solving without it sends A and B on at 0.5 m/s, which closes B-C within the step (u_n = -0.5 + 1e-4 / dt < 0), so
-   it is put back. The answer of the original problem under the predictive gap rule: B may close the gap and no more,
-   so A and B move at 1e-4 / dt = 0.1 m/s, and C, against the wall, stays at rest. */
+   hits B at 1 m/s; B is 1e-4 from C, which touches a wall. The warm start (r = 0) leaves B-C open, so it is left out
+   of J; pushed by A, B closes B-C within the step (u_n = -0.5 + 1e-4 / dt < 0 once A and B share their momentum), so
+   B-C leaves the open piece and is put back into J. The answer of the original problem under the predictive gap
+   rule: B may close the gap and no more, so A and B move at 1e-4 / dt = 0.1 m/s, and C, against the wall, stays at
+   rest. */
 static PetscErrorCode TestWorkingSetChain(void)
 {
   KergsStepper    st;
   PetscInt        maxits, nconv;
-  PetscReal       maxres, v[3 * KERGS_DIM], rounds, err = 0.0;
+  PetscReal       maxres, v[3 * KERGS_DIM], grown, err = 0.0;
   const char     *opts = "-gravity 0,0 -dt 1e-3 -friction 0.3 -disks_source list -disks_radius 0.1 -disks_x 0,0,0.2,0,0.4001,0 "
                          "-disks_velocity 1,0,0,0,0,0 -walls right -wall_right_a 0.5001,-1 -wall_right_b 0.5001,1 -alert 0.01 "
                          "-gap_rule predictive -solver_type newton -solver_tol 1e-12 -solver_newton_working_set -steps 1";
@@ -332,11 +333,11 @@ static PetscErrorCode TestWorkingSetChain(void)
 
   PetscFunctionBeginUser;
   PetscCall(RunSteps(opts, 1, &st, &maxits, &maxres, &nconv));
-  PetscCall(StatAt(st->results, "working_rounds", 0, &rounds));
+  PetscCall(StatAt(st->results, "working_set_grown", 0, &grown));
   PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->v, KERGS_DIM, v));
   for (PetscInt k = 0; k < 3 * KERGS_DIM; k++) err = PetscMax(err, PetscAbsReal(v[k] - want[k]));
   PetscCall(Check((PetscBool)(nconv == 1), "chain, working set: the step converges to 1e-12", maxres, 1e-12));
-  PetscCall(Check((PetscBool)(rounds >= 2), "... the contact the answer closes is put back (working sets solved)", rounds, 2));
+  PetscCall(Check((PetscBool)(grown >= 1), "... the contact B closes is put back into J (times J grew)", grown, 1));
   PetscCall(Check((PetscBool)(err < 1e-9), "... A and B at 1e-4 / dt, C at rest (largest velocity error)", err, 1e-9));
   PetscCall(KergsStepperDestroy(&st));
   PetscFunctionReturn(0);

@@ -27,8 +27,9 @@
    proximal iterations finish from where it ends. A solve that stalls starts again from the same point with a smaller
    rho (SolverSolve_Newton, -solver_newton_second_rho). On one rank J is stored in W's AMD order (PresortContacts,
    newton_linear.c). The type is warm-started from the previous step's impulses like every type; optional NLGS sweeps
-   first (-solver_newton_max_sweeps, -solver_newton_switch_tol). Convergence is the natural residual of the original
-   problem (-solver_tol, default 1e-10). */
+   first (-solver_newton_max_sweeps, -solver_newton_switch_tol). With -solver_newton_working_set, contacts that the
+   warm start leaves open stay out of J while they are on the law's open piece (newton_working.c). Convergence is the
+   natural residual of the original problem (-solver_tol, default 1e-10). */
 #include "newton.h"
 
 static const char *const NewtonProxes[] = {"none", "identity", "kernel", "NewtonProx", "NEWTON_PROX_", NULL};
@@ -50,7 +51,8 @@ static PetscErrorCode EvaluateFunction(KergsSolver s, Newton *nt, PetscInt n, Pe
   PetscCall(VecGetArray(F, &Fl));
   for (PetscInt a = 0; a < n; a++) {
     PetscReal f[KERGS_MAXCOMP];
-    if (nt->eps > 0)
+    /* a contact left out of J (working set) keeps the exact law: on its open piece its row stays the identity */
+    if (nt->eps > 0 && !(nt->working_set && !nt->in_J[a]))
       KergsLawAlartCurnierSmoothed(nc, rl + a * nc, ul + a * nc, s->mu[a], nt->rho[a], s->active[a], nt->eps, f,
                                    jac ? nt->A + a * nc * nc : NULL, jac ? nt->B + a * nc * nc : NULL);
     else
@@ -118,13 +120,13 @@ static PetscErrorCode EnsureWork(Newton *nt, PetscInt n)
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
   PetscCall(PetscFree2(nt->Aused, nt->Bused));
   PetscCall(PetscFree2(nt->Afact, nt->Bfact));
-  PetscCall(PetscFree(nt->active_all));
+  PetscCall(PetscFree(nt->in_J));
   nt->nalloc = PetscMax(n, 2 * nt->nalloc);
   PetscCall(PetscMalloc2(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Afact, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Bfact));
   PetscCall(PetscMalloc2(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Aused, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->Bused));
   PetscCall(PetscMalloc5(nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->A, nt->nalloc * KERGS_MAXCOMP * KERGS_MAXCOMP, &nt->B, nt->nalloc,
                          &nt->rho, nt->nalloc, &nt->rho_nat, nt->nalloc, &nt->diagblock));
-  PetscCall(PetscMalloc1(nt->nalloc, &nt->active_all));
+  PetscCall(PetscMalloc1(nt->nalloc, &nt->in_J));
   PetscFunctionReturn(0);
 }
 
@@ -635,16 +637,14 @@ static PetscErrorCode SolveFrom(KergsSolver s, Newton *nt, PetscInt n, PetscInt 
 }
 
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
-   -solver_newton_switch_tol, then SolveFrom. With a working set (-solver_newton_working_set, newton_working.c) the
-   contacts that the warm start leaves open are deferred, and SolveFrom runs again from its answer, on a working set
-   grown by the deferred contacts that answer closes, until it closes none; the natural residual is then taken over
-   every contact. */
+   -solver_newton_switch_tol, then SolveFrom. With a working set (-solver_newton_working_set, newton_working.c) J is
+   set up here, once the contacts that the warm start leaves open are known. */
 static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
                                          KergsSolveStats *stats)
 {
   Newton        *nt = (Newton *)s->data;
   KergsDofLayout layout;
-  PetscInt       n, nglobal, nc, steps = 0, added;
+  PetscInt       n, nglobal, nc, steps = 0;
   PetscReal      res = 0.0, wmean = 1.0;
   PetscLogDouble t0, t1;
   Vec            r, u, vd;
@@ -667,21 +667,8 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   if (nt->working_set) {
     PetscCall(NewtonWorkingSetBegin(s, nt, n, nc, r, u));
     PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
-    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res)); /* of the working set's problem */
   }
-  for (;;) {
-    PetscCall(SolveFrom(s, nt, n, nc, nglobal, r, u, vd, wmean, &steps, &res));
-    if (!nt->working_set || nglobal == 0 || steps >= s->max_it) break;
-    PetscCall(NewtonWorkingSetGrow(s, nt, n, nc, u, &added));
-    if (!added) break;
-    PetscCall(NewtonDestroyJacobian(nt));
-    PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
-    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
-  }
-  if (nt->working_set) {
-    PetscCall(NewtonWorkingSetEnd(s, nt, n));
-    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res)); /* of the original problem: 0 from every deferred contact still open */
-  }
+  PetscCall(SolveFrom(s, nt, n, nc, nglobal, r, u, vd, wmean, &steps, &res));
   if (res > s->tol && nglobal > 0) PetscCall(Polish(s, nt, n, nc, r, u, vd, &res));
   stats->iterations = steps;
   stats->criterion  = res;
@@ -712,7 +699,7 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "smoothing_steps", (PetscReal)nt->smooth_steps));
   PetscCall(KergsSolveStatsAdd(st, "second_attempts", (PetscReal)nt->second_attempts));
   if (nt->working_set) {
-    PetscCall(KergsSolveStatsAdd(st, "working_rounds", (PetscReal)nt->rounds));
+    PetscCall(KergsSolveStatsAdd(st, "working_set_grown", (PetscReal)nt->grown));
     PetscCall(KergsSolveStatsAdd(st, "deferred_contacts", (PetscReal)nt->deferred));
   }
   PetscFunctionReturn(0);
@@ -896,7 +883,7 @@ static PetscErrorCode SolverDestroy_Newton(KergsSolver s)
   PetscCall(PetscFree5(nt->A, nt->B, nt->rho, nt->rho_nat, nt->diagblock));
   PetscCall(PetscFree2(nt->Aused, nt->Bused));
   PetscCall(PetscFree2(nt->Afact, nt->Bfact));
-  PetscCall(PetscFree(nt->active_all));
+  PetscCall(PetscFree(nt->in_J));
   PetscCall(PetscFree(nt));
   s->data = NULL;
   PetscFunctionReturn(0);

@@ -24,12 +24,12 @@ typedef struct {
   PetscInt  nrows;   /* J's local block rows: the local contacts, or the working ones */
   PetscBool presort; /* decided once the linear solver's options are read (NewtonChoosePresorting) */
   Mat       Wsorted; /* W in that order: J's template */
-  /* -solver_newton_working_set: contacts open at the warm start and not closed by it are left out of J until the
-     answer closes them (newton_working.c) */
+  /* -solver_newton_working_set: contacts open at the warm start and not closed by it are left out of J while they
+     stay on the law's open piece (newton_working.c) */
   PetscBool  working_set; /* the option */
-  PetscBool *active_all;  /* the step's activity, kept while s->active has the deferred contacts off */
-  Mat        Wwork;       /* W over the working contacts: J's template (NULL: W itself) */
-  PetscInt   rounds;      /* solves of the last step's working sets (1: none grown) */
+  PetscBool *in_J;        /* per local contact: a row of J */
+  Mat        Wwork;       /* W over J's rows: J's template (NULL: W itself) */
+  PetscInt   grown;       /* times the last solve put contacts back into J */
   PetscInt   deferred;    /* contacts left out of J at the end of the last solve (global) */
   Vec        Fs, ds;      /* -F and d in that order */
   Vec        F, d, Wd, rtry, utry, Ftry;
@@ -97,8 +97,7 @@ PETSC_INTERN PetscErrorCode NewtonSolveDirection(Newton *, PetscInt n, PetscInt 
 PETSC_INTERN PetscErrorCode NewtonDestroyJacobian(Newton *);
 /* newton_working.c */
 PETSC_INTERN PetscErrorCode NewtonWorkingSetBegin(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u);
-PETSC_INTERN PetscErrorCode NewtonWorkingSetGrow(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec u, PetscInt *added);
-PETSC_INTERN PetscErrorCode NewtonWorkingSetEnd(KergsSolver, Newton *, PetscInt n);
+PETSC_INTERN PetscErrorCode NewtonWorkingSetGrow(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscBool *grown);
 /* newton_subdomain.c */
 PETSC_INTERN PetscErrorCode NewtonSubdomainSetSortedLU(PC);
 PETSC_INTERN PetscErrorCode NewtonSubdomainReleaseSortedLU(PC);

@@ -118,13 +118,21 @@ static PetscInt ChangedBlocks(const Newton *nt, PetscInt n, PetscInt nc, const P
 
 /* J = A + B (W + sigma I) + eps I, unless the contact states (A, B) and sigma are those of the last Jacobian: F is
    piecewise linear, so once the states settle J stays the same and its factorization is reused (the Newton step then
-   costs one solve). */
+   costs one solve). With a working set, contacts left out of J that have left the law's open piece are put back
+   first (NewtonWorkingSetGrow), and J is set up again on its new rows. */
 PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
 {
-  Mat      Ad, Ao, Wd, Wo;
-  PetscInt changed = (PetscInt)(sigma != nt->sigma_used || ChangedBlocks(nt, n, nc, nt->Aused, nt->Bused) > 0);
+  Mat       Ad, Ao, Wd, Wo;
+  PetscInt  changed;
+  PetscBool grown = PETSC_FALSE;
 
   PetscFunctionBeginUser;
+  if (nt->working_set) PetscCall(NewtonWorkingSetGrow(s, nt, n, nc, &grown));
+  if (grown) { /* J's rows and pattern are new: set up again (sigma_used = -1 makes it assembled below) */
+    PetscCall(NewtonDestroyJacobian(nt));
+    PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
+  }
+  changed = (PetscInt)(sigma != nt->sigma_used || ChangedBlocks(nt, n, nc, nt->Aused, nt->Bused) > 0);
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_MAX, s->comm));
   if (!changed) PetscFunctionReturn(0);
   PetscCall(PetscArraycpy(nt->Aused, nt->A, n * nc * nc));
@@ -302,8 +310,8 @@ PetscErrorCode NewtonChooseSortedSubdomains(Newton *nt)
 }
 
 /* J's rows. Without a working set, every local contact. With one (-solver_newton_working_set, newton_working.c), the
-   contacts active in s->active: when some contact is deferred on any rank, W over the working contacts
-   (MatCreateSubMatrix, its rows in the contacts' order) becomes J's template and order[i] names J's row i. */
+   contacts marked in_J: when some contact is left out on any rank, W over J's contacts (MatCreateSubMatrix, its rows
+   in the contacts' order) becomes J's template and order[i] names J's row i. */
 static PetscErrorCode SelectRows(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc)
 {
   PetscInt m = 0, left_out, rstart, *blocks;
@@ -313,7 +321,7 @@ static PetscErrorCode SelectRows(KergsSolver s, Newton *nt, PetscInt n, PetscInt
   nt->nrows = n;
   if (!nt->working_set) PetscFunctionReturn(0);
   for (PetscInt a = 0; a < n; a++)
-    if (s->active[a]) m++;
+    if (nt->in_J[a]) m++;
   left_out = n - m;
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &left_out, 1, MPIU_INT, MPI_SUM, s->comm));
   if (left_out == 0) PetscFunctionReturn(0);
@@ -322,7 +330,7 @@ static PetscErrorCode SelectRows(KergsSolver s, Newton *nt, PetscInt n, PetscInt
   PetscCall(PetscMalloc1(m, &blocks));
   m = 0;
   for (PetscInt a = 0; a < n; a++)
-    if (s->active[a]) {
+    if (nt->in_J[a]) {
       nt->order[m] = a;
       blocks[m++]  = rstart / nc + a;
     }

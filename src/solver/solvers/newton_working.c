@@ -2,19 +2,21 @@
 
    Under the predictive gap rule every contact within the alert distance enters the step's problem, and one that
    stays open (r = 0, u_n >= 0) still brings its couplings into every factorization of J: on the 500-disk pressure
-   scene of docs/tradeoff.md, half of newton's solve. Here a contact is deferred when the warm start leaves it
-   unloaded and opening: its impulse at most 1e-12 of the largest, and its velocity there, u_n = (W r + v^d)_n with the
-   gap rule's offset in v^d, positive. (Newton leaves open contacts at such residues rather than at 0 after a damped
-   step; deferring only exact zeros left 0.64 of the solve time instead of 0.57 on that scene, and floors of 1e-9 or
-   1e-6 put back more contacts later, for no gain.) A deferred contact is off in s->active while the working set is
-   solved (F = r, its row left out of J, newton_linear.c). Its natural map at r = 0 vanishes exactly when u_n >= 0
-   (KergsLawNaturalMap), so once the working set is solved, the deferred contacts that the answer closes (u_n < 0)
-   are the only violations of the original problem: they are put back, and the solve goes on from that answer until
-   none is left. Putting back also the nearly closed ones (u_n below 0.3 of the gap's offset) took 7 % more time. */
+   scene of docs/tradeoff.md, half of newton's solve. On the law's open piece a contact's row of J is the identity
+   (A = I, B = 0: F = r), so its Newton direction is d = -F whatever the others do, and the other rows need its
+   column only through that d, which is 0 once r = 0. Such a contact can be left out of J, and the Newton directions
+   stay exact: F, the merit and the natural residual still run over every contact.
+
+   A contact is left out at the start of a solve when it is open at the start of the step (a predicted gap > 0,
+   hence an offset in v^d) and the warm start leaves it unloaded and opening: its impulse at most 1e-12 of the
+   largest, and its velocity there, u_n = (W r + v^d)_n, positive. Before each Jacobian is assembled, a contact left
+   out whose blocks have left the open piece (|A - I| or |B| / rho above 1e-3: the smoothing phase's blocks are never
+   exactly those of a piece, and off by less they change the direction by as little) is put back, and J is set up
+   again on its new rows (NewtonAssembleJacobian). */
 #include "newton.h"
 
-/* The normal velocity of local contact a (the first of its components). */
-static PetscReal NormalVelocity(const PetscScalar *ul, PetscInt nc, PetscInt a) { return PetscRealPart(ul[a * nc]); }
+/* Off the open piece: A_a - I or B_a / rho_a has an entry above this. */
+#define OFF_OPEN_PIECE 1e-3
 
 PetscErrorCode NewtonWorkingSetBegin(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u)
 {
@@ -23,7 +25,6 @@ PetscErrorCode NewtonWorkingSetBegin(KergsSolver s, Newton *nt, PetscInt n, Pets
   PetscReal          rmax, floor;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscArraycpy(nt->active_all, s->active, n));
   PetscCall(VecNorm(r, NORM_INFINITY, &rmax));
   floor = 1e-12 * rmax;
   PetscCall(VecGetArrayRead(r, &rl));
@@ -32,46 +33,43 @@ PetscErrorCode NewtonWorkingSetBegin(KergsSolver s, Newton *nt, PetscInt n, Pets
     PetscBool unloaded = PETSC_TRUE;
     for (PetscInt c = 0; c < nc; c++)
       if (PetscAbsScalar(rl[a * nc + c]) > floor) unloaded = PETSC_FALSE;
-    if (s->active[a] && unloaded && NormalVelocity(ul, nc, a) > 0) {
-      s->active[a] = PETSC_FALSE;
-      deferred++;
-    }
+    nt->in_J[a] = (PetscBool) !(s->active[a] && s->gapvel[a] > 0 && unloaded && PetscRealPart(ul[a * nc]) > 0);
+    if (!nt->in_J[a]) deferred++;
   }
   PetscCall(VecRestoreArrayRead(u, &ul));
   PetscCall(VecRestoreArrayRead(r, &rl));
   PetscCall(MPIU_Allreduce(&deferred, &nt->deferred, 1, MPIU_INT, MPI_SUM, s->comm));
-  nt->rounds = 1;
-  PetscCall(PetscInfo(NULL, "working set: %" PetscInt_FMT " contacts deferred\n", nt->deferred));
+  nt->grown = 0;
+  PetscCall(PetscInfo(NULL, "working set: %" PetscInt_FMT " contacts left out of J\n", nt->deferred));
   PetscFunctionReturn(0);
 }
 
-/* Puts back the deferred contacts that the current answer closes (u_n < 0); *added counts them over every rank. */
-PetscErrorCode NewtonWorkingSetGrow(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec u, PetscInt *added)
+/* Puts back into J the contacts left out whose current blocks (nt->A, nt->B) are off the open piece; *grown on every
+   rank when some rank put one back. */
+PetscErrorCode NewtonWorkingSetGrow(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscBool *grown)
 {
-  const PetscScalar *ul;
-  PetscInt           count = 0;
+  PetscInt count = 0, total;
 
   PetscFunctionBeginUser;
-  PetscCall(VecGetArrayRead(u, &ul));
-  for (PetscInt a = 0; a < n; a++)
-    if (nt->active_all[a] && !s->active[a] && NormalVelocity(ul, nc, a) < 0) {
-      s->active[a] = PETSC_TRUE;
+  for (PetscInt a = 0; a < n; a++) {
+    const PetscReal *A = nt->A + a * nc * nc, *B = nt->B + a * nc * nc;
+    PetscReal        off = 0.0;
+    if (nt->in_J[a]) continue;
+    for (PetscInt k = 0; k < nc * nc; k++) {
+      const PetscReal identity = k % (nc + 1) == 0 ? 1.0 : 0.0;
+      off                      = PetscMax(off, PetscMax(PetscAbsReal(A[k] - identity), PetscAbsReal(B[k]) / nt->rho[a]));
+    }
+    if (off > OFF_OPEN_PIECE) {
+      nt->in_J[a] = PETSC_TRUE;
       count++;
     }
-  PetscCall(VecRestoreArrayRead(u, &ul));
-  PetscCall(MPIU_Allreduce(&count, added, 1, MPIU_INT, MPI_SUM, s->comm));
-  if (*added) {
-    nt->deferred -= *added;
-    nt->rounds++;
-    PetscCall(PetscInfo(NULL, "working set: %" PetscInt_FMT " deferred contacts closed by the answer are put back\n", *added));
   }
-  PetscFunctionReturn(0);
-}
-
-/* The step's activity back: every contact of the original problem. */
-PetscErrorCode NewtonWorkingSetEnd(KergsSolver s, Newton *nt, PetscInt n)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscArraycpy(s->active, nt->active_all, n));
+  PetscCall(MPIU_Allreduce(&count, &total, 1, MPIU_INT, MPI_SUM, s->comm));
+  *grown = (PetscBool)(total > 0);
+  if (*grown) {
+    nt->deferred -= total;
+    nt->grown++;
+    PetscCall(PetscInfo(NULL, "working set: %" PetscInt_FMT " contacts off the open piece put back into J\n", total));
+  }
   PetscFunctionReturn(0);
 }
