@@ -326,7 +326,7 @@ static PetscErrorCode SelectRows(KergsSolver s, Newton *nt, PetscInt n, PetscInt
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &left_out, 1, MPIU_INT, MPI_SUM, s->comm));
   if (left_out == 0) PetscFunctionReturn(0);
   PetscCall(MatGetOwnershipRange(nt->Wfull, &rstart, NULL));
-  PetscCall(PetscMalloc1(m, &nt->order));
+  PetscCall(PetscMalloc1(m + 1, &nt->order)); /* never NULL: every rank, J rows or not, takes the path of a mapped J */
   PetscCall(PetscMalloc1(m, &blocks));
   m = 0;
   for (PetscInt a = 0; a < n; a++)
