@@ -191,7 +191,7 @@ static PetscErrorCode TestSmoothedLaw(void)
 
 /* One disk and one wall: open (moving away), resting (closing, stick), on a slope below and above tan = mu (stick,
    slip). Each step solved in at most 3 Newton steps, and the physics right. */
-/* `extra`: options added to every case (the working set). */
+/* `extra`: options added to every case (the working set off). */
 static PetscErrorCode TestOneContact(const char *extra)
 {
   struct {
@@ -221,7 +221,7 @@ static PetscErrorCode TestOneContact(const char *extra)
     PetscCall(PetscSNPrintf(opts, sizeof(opts), "%s -steps 5 %s", cases[i].opts, extra));
     PetscCall(RunSteps(opts, 5, &st, &maxits, &maxres, &nconv));
     PetscCall(Checkf((PetscBool)(maxits <= 3 && nconv == 5), maxits, 3, "%s%s: Newton steps per time step (all converged)", cases[i].what,
-                     extra[0] ? ", working set" : ""));
+                     extra[0] ? ", without the working set" : ""));
     PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->v, KERGS_DIM, v));
     if (i == 1 || i == 2)
       PetscCall(
@@ -614,7 +614,7 @@ int main(int argc, char **argv)
     PetscCall(TestJacobian());
     PetscCall(TestSmoothedLaw());
     PetscCall(TestOneContact(""));
-    PetscCall(TestOneContact("-solver_newton_working_set"));
+    PetscCall(TestOneContact("-solver_newton_working_set 0"));
     PetscCall(TestWorkingSetChain());
     PetscCall(TestWorkingSetConfine());
     PetscCall(TestWedged());
