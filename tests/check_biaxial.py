@@ -66,7 +66,9 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    frictionless run's (at rest by the case's speed or 1e-8 J/m per grain) to 0.002 (measured 0.8071 against 0.8071),
    and the Love-Weber sxx and syy equal p to 5 % (measured 0.8 % and 0.8 %, 1 rank). With -stop_at_rest_stress
    REST_STRESS_TIGHT (1 rank), below the gap where the inertial number first falls below its threshold, rows below it are
-   held back and the run stops at the first within it. At mu = 0.5, walls included (1 rank), the walls' friction keeps
+   held back and the run stops at the first within it. With -stop_at_rest_stress 0 (1 rank) the inertial number alone
+   stops the run, at the first row the tightened run held back, and the message says so rather than "in equilibrium",
+   which the other runs' messages say. At mu = 0.5, walls included (1 rank), the walls' friction keeps
    the Love-Weber stress more than FRICTIONAL_OFF off p at rest, and the rule still stops: it compares the Love-Weber
    stress with the boundary's.
 
@@ -185,11 +187,19 @@ def first_rest_row(f, stress_tol):
     return first, held, np.max(np.abs(gap[rows] - again[rows])) if rows.any() else np.inf
 
 
+def at_rest_by_inertial(p, checked):
+    """Whether the run ended at rest by the inertial rule with the message its -stop_at_rest_stress calls for: the stress
+    compared (checked, "(in equilibrium)") or the inertial number alone (-stop_at_rest_stress 0, no such claim)."""
+    line = [x for x in p.stdout.splitlines() if x.startswith("kergs: at rest by the inertial number")]
+    if checked:
+        return p.returncode == 0 and len(line) == 1 and "alone" not in line[0] and line[0].endswith("(in equilibrium)")
+    return p.returncode == 0 and len(line) == 1 and line[0].startswith("kergs: at rest by the inertial number alone") and "equilibrium" not in line[0]
+
+
 def rest_by_inertial(out, p, energy_out):
     """-stop_at_rest_inertial alone: the first step whose box inertial number over the window is below it, with the stress
     inside within the default -stop_at_rest_stress of p, ends the run."""
-    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
-                 "compaction with -stop_at_rest_inertial ends at rest by it (exit %d)" % p.returncode):
+    if not check(at_rest_by_inertial(p, True), "compaction with -stop_at_rest_inertial ends at rest by it, in equilibrium (exit %d)" % p.returncode):
         return
     with h5py.File(out, "r") as f:
         inertial, steps = f["stats/inertial_number"][()], f["stats/step"][()].astype(int)
@@ -217,8 +227,9 @@ def rest_by_inertial(out, p, energy_out):
 def rest_held_by_stress(out, p):
     """-stop_at_rest_stress tighter than the stress inside where the walls stop: the run goes on past the rows whose
     inertial number is below the threshold until the stress gap is within it too."""
-    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
-                 "compaction with -stop_at_rest_stress %g ends at rest by the inertial number (exit %d)" % (REST_STRESS_TIGHT, p.returncode)):
+    if not check(at_rest_by_inertial(p, True),
+                 "compaction with -stop_at_rest_stress %g ends at rest by the inertial number, in equilibrium (exit %d)"
+                 % (REST_STRESS_TIGHT, p.returncode)):
         return
     with h5py.File(out, "r") as f:
         first, held, _ = first_rest_row(f, REST_STRESS_TIGHT)
@@ -228,11 +239,28 @@ def rest_held_by_stress(out, p):
               "held back (gaps %s)" % (REST_STRESS_TIGHT, gap[-1], len(held), ", ".join("%.4f" % gap[i] for i in held[:5])))
 
 
+def rest_unchecked(out, p, held_out):
+    """-stop_at_rest_stress 0: the inertial number alone stops the run, at the first row below REST_INERTIAL once above
+    it, and the run's message claims no equilibrium; the held run (the same options and rank, REST_STRESS_TIGHT) went
+    the same way up to there, and was held back from exactly that row."""
+    if not check(at_rest_by_inertial(p, False),
+                 "compaction with -stop_at_rest_stress 0 ends at rest by the inertial number alone, without claiming equilibrium (exit %d)"
+                 % p.returncode):
+        return
+    with h5py.File(out, "r") as f, h5py.File(held_out, "r") as g:
+        first, _, _ = first_rest_row(f, 0)
+        _, held, _ = first_rest_row(g, REST_STRESS_TIGHT)
+        steps, held_steps = f["stats/step"][()].astype(int), g["stats/step"][()].astype(int)
+    check(first == len(steps) - 1 and len(held) > 0 and held_steps[held[0]] == steps[-1],
+          "-stop_at_rest_stress 0: the last row (step %d) is the first below %g once above it, the first the held run held back "
+          "(step %s)" % (steps[-1], REST_INERTIAL, held_steps[held[0]] if held else "none"))
+
+
 def rest_frictional_walls(out, p):
     """-stop_at_rest_inertial at mu = 0.5, walls included: their friction keeps the Love-Weber stress away from p at
     rest, and the rule still stops, because it compares the Love-Weber stress with the boundary's."""
-    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
-                 "compaction at mu = 0.5 with -stop_at_rest_inertial ends at rest by it (exit %d)" % p.returncode):
+    if not check(at_rest_by_inertial(p, True),
+                 "compaction at mu = 0.5 with -stop_at_rest_inertial ends at rest by it, in equilibrium (exit %d)" % p.returncode):
         return
     with h5py.File(out, "r") as f:
         s = {c: f["stats/" + c][-REST_WINDOW:].mean() for c in ("sxx", "syy", "boundary_sxx", "boundary_syy")}
@@ -525,6 +553,9 @@ def main():
         held = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0, "-stop_at_rest", 0,
                            "-stop_at_rest_inertial", REST_INERTIAL, "-stop_at_rest_stress", REST_STRESS_TIGHT, "-output", k.path("small_held.h5"),
                            "-sample_output", k.path("small_held.sample.h5"), log="small_held.log")
+        unchecked = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0, "-stop_at_rest", 0,
+                                "-stop_at_rest_inertial", REST_INERTIAL, "-stop_at_rest_stress", 0, "-output", k.path("small_unchecked.h5"),
+                                "-sample_output", k.path("small_unchecked.sample.h5"), log="small_unchecked.log")
         frictional = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0.5, "-stop_at_rest", 0,
                                  "-stop_at_rest_inertial", REST_INERTIAL, "-steps", 1500, "-output", k.path("small_frictional.h5"),
                                  "-sample_output", k.path("small_frictional.sample.h5"), log="small_frictional.log")
@@ -538,6 +569,7 @@ def main():
         rest_by_energy(k.path("small_energy.h5"), by_energy.result())
         rest_by_inertial(k.path("small_inertial.h5"), by_inertial.result(), small[0])
         rest_held_by_stress(k.path("small_held.h5"), held.result())
+        rest_unchecked(k.path("small_unchecked.h5"), unchecked.result(), k.path("small_held.h5"))
         rest_frictional_walls(k.path("small_frictional.h5"), frictional.result())
         if got:
             q_frictional = biaxial(k, k.path("biaxial_0.5.h5"), shear[0.5].result(), q0)
