@@ -70,7 +70,8 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    stops the run, at the first row the tightened run held back, and the message says so rather than "in equilibrium",
    which the other runs' messages say. At mu = 0.5, walls included (1 rank), the walls' friction keeps
    the Love-Weber stress more than FRICTIONAL_OFF off p at rest, and the rule still stops: it compares the Love-Weber
-   stress with the boundary's.
+   stress with the boundary's; there too the last row is the first the rule accepts, and stress_gap is recomputed from
+   the rows' sxx, syy, boundary_sxx and boundary_syy to 1e-12.
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
@@ -264,11 +265,15 @@ def rest_frictional_walls(out, p):
         return
     with h5py.File(out, "r") as f:
         s = {c: f["stats/" + c][-REST_WINDOW:].mean() for c in ("sxx", "syy", "boundary_sxx", "boundary_syy")}
-        gap = f["stats/stress_gap"][-1]
+        gap, rows = f["stats/stress_gap"][-1], len(f["stats/step"])
+        first, _, gap_error = first_rest_row(f, REST_STRESS_DEFAULT)
     off = max(abs(s["sxx"] / P - 1), abs(s["syy"] / P - 1))
-    check(off > FRICTIONAL_OFF and gap <= REST_STRESS_DEFAULT,
+    check(off > FRICTIONAL_OFF and gap <= REST_STRESS_DEFAULT and first == rows - 1,
           "frictional walls at rest: the window's Love-Weber stress is %.3f off p (sxx %.4f, syy %.4f), the boundary's %.4f, %.4f, "
-          "stress_gap %.4f within %g" % (off, s["sxx"], s["syy"], s["boundary_sxx"], s["boundary_syy"], gap, REST_STRESS_DEFAULT))
+          "stress_gap %.4f within %g; the last row is the first the rule accepts" % (off, s["sxx"], s["syy"], s["boundary_sxx"],
+                                                                                s["boundary_syy"], gap, REST_STRESS_DEFAULT))
+    check(gap_error < 1e-12, "frictional walls: stress_gap is max |s_ii - b_ii| / p of the window's Love-Weber and boundary stresses (to %.1e)"
+          % gap_error)
 
 
 def friction_density(k, runs):
