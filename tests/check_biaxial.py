@@ -155,12 +155,27 @@ def rest_by_energy(out, p):
     check(len(ek) >= 2 and ek[-1] < REST_ENERGY <= ek[-2], "at rest by energy: %.2e per grain after %.2e, across %g" % (ek[-1], ek[-2], REST_ENERGY))
 
 
+def step_dt(f):
+    """The run's time step, from two consecutive rows' times: the first row's time is dt only on a clock that starts
+    at 0 (a results file begun at a restart from step 400 starts at 0.401 s)."""
+    time = f["stats/time"]
+    return time[-1] - time[-2]
+
+
+def snapshots_by_step(f):
+    """The results file's snapshots by their step attribute: their names count the file's snapshots, which equal the
+    steps only for a run that started at step 0 with a snapshot every step (a file begun at a restart from step 400
+    names step 931's snapshot 000531)."""
+    return {int(g.attrs["step"]): g for g in f["snapshots"].values()}
+
+
 def box_inertial_number(f, step, window):
     """The box's inertial number over the window ending at step, from the snapshots' walls (rows ax, ay, bx, by): for
     each wall, the path its distance to the facing wall (the opposite side of the box) travels over the window."""
-    walls = np.array([f["snapshots/%06d" % i]["walls"][()] for i in range(step - window, step + 1)])
-    d = 2 * f["snapshots/%06d" % step]["radius"][()].mean()
-    seconds = window * (f["stats/time"][1] - f["stats/time"][0])
+    snaps = snapshots_by_step(f)
+    walls = np.array([snaps[i]["walls"][()] for i in range(step - window, step + 1)])
+    d = 2 * snaps[step]["radius"][()].mean()
+    seconds = window * step_dt(f)
     largest = -1.0
     normal = [np.array([-(by - ay), bx - ax]) / np.hypot(bx - ax, by - ay) for ax, ay, bx, by in walls[-1]]  # inward: left of a -> b
     for w, n in enumerate(normal):
@@ -214,8 +229,8 @@ def rest_by_inertial(out, p, energy_out):
               "inertial_number: -1 before step %d; the last row, %.3e, is the first below %g once above it with stress_gap within %g (%d steps)"
               % (REST_WINDOW, inertial[-1], REST_INERTIAL, REST_STRESS_DEFAULT, len(inertial)))
         check(gap_error < 1e-12, "stress_gap is max |s_ii - b_ii| / p of the Love-Weber and boundary stresses over the window (to %.1e)" % gap_error)
-        snap = f["snapshots/%06d" % steps[-1]]
-        bxx, byy = boundary_stress(snap, dt=f["stats/time"][0], centred=True)
+        snap = snapshots_by_step(f)[steps[-1]]
+        bxx, byy = boundary_stress(snap, dt=step_dt(f), centred=True)
         check(abs(bxx - f["stats/boundary_sxx"][-1]) < 1e-9 and abs(byy - f["stats/boundary_syy"][-1]) < 1e-9,
               "boundary_sxx %.9f, boundary_syy %.9f are the walls' tractions' moment about the box's centre, %.9f and %.9f"
               % (f["stats/boundary_sxx"][-1], f["stats/boundary_syy"][-1], bxx, byy))
