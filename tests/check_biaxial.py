@@ -225,9 +225,12 @@ def rest_by_inertial(out, p, energy_out):
         inertial, steps = f["stats/inertial_number"][()], f["stats/step"][()].astype(int)
         full = inertial[REST_WINDOW - 1:]  # from step REST_WINDOW on: the ring holds the walls at the start too
         first, _, gap_error = first_rest_row(f, REST_STRESS_DEFAULT)
+        gap = f["stats/stress_gap"][()]
         check(np.all(inertial[:REST_WINDOW - 1] == -1) and np.all(full >= 0) and first == len(inertial) - 1,
               "inertial_number: -1 before step %d; the last row, %.3e, is the first below %g once above it with stress_gap within %g (%d steps)"
               % (REST_WINDOW, inertial[-1], REST_INERTIAL, REST_STRESS_DEFAULT, len(inertial)))
+        check(np.all(gap[:REST_WINDOW - 1] == -1) and np.all(gap[REST_WINDOW - 1:] >= 0), "stress_gap: -1 before step %d, as inertial_number, "
+              "and measured from there on" % REST_WINDOW)
         check(gap_error < 1e-12, "stress_gap is max |s_ii - b_ii| / p of the Love-Weber and boundary stresses over the window (to %.1e)" % gap_error)
         snap = snapshots_by_step(f)[steps[-1]]
         bxx, byy = boundary_stress(snap, dt=step_dt(f), centred=True)
