@@ -66,9 +66,12 @@ cases/biaxial_small.opts, each also run with another friction, to check physics 
    frictionless run's (at rest by the case's speed or 1e-8 J/m per grain) to 0.002 (measured 0.8071 against 0.8071),
    and the Love-Weber sxx and syy equal p to 5 % (measured 0.8 % and 0.8 %, 1 rank). With -stop_at_rest_stress
    REST_STRESS_TIGHT (1 rank), below the gap where the inertial number first falls below its threshold, rows below it are
-   held back and the run stops at the first within it. At mu = 0.5, walls included (1 rank), the walls' friction keeps
+   held back and the run stops at the first within it. With -stop_at_rest_stress 0 (1 rank) the inertial number alone
+   stops the run, at the first row the tightened run held back, and the message says so rather than "in equilibrium",
+   which the other runs' messages say. At mu = 0.5, walls included (1 rank), the walls' friction keeps
    the Love-Weber stress more than FRICTIONAL_OFF off p at rest, and the rule still stops: it compares the Love-Weber
-   stress with the boundary's.
+   stress with the boundary's; there too the last row is the first the rule accepts, and stress_gap is recomputed from
+   the rows' sxx, syy, boundary_sxx and boundary_syy to 1e-12.
 
   check_biaxial.py --kergs build/kergs --mpiexec mpiexec --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
@@ -116,7 +119,11 @@ REST_PHI_TOL = 0.002  # solid fraction at rest by the inertial number against by
 REST_STRESS_TOL = 0.05  # Love-Weber stress against p where the inertial number stops the run (measured 0.8 %)
 REST_STRESS_DEFAULT = 0.05  # kergs's default -stop_at_rest_stress
 FRICTIONAL_OFF = 0.02  # the window's Love-Weber stress off p at rest with frictional walls, at least (measured 0.063)
-REST_STRESS_TIGHT = 0.0005  # below the gap where the walls stop (measured 0.0016): the run goes on (7 steps, measured)
+# -stop_at_rest_stress of the held run, far below the gap where the inertial number first falls below its threshold
+# (measured 0.0016 at step 820, 32 times above) and within the gap's floor at rest (NLGS to quad 1e-4; measured over
+# steps 850 to 1400: median 8e-5, a quarter of the rows within 5e-5): held 133 rows, to step 953 (0.0005 held 7 rows,
+# its last at 0.00055); well inside -steps 3000, 0.4 s more of steps.
+REST_STRESS_TIGHT = 5e-5
 
 
 def compaction(k, out, sample, p):
@@ -148,12 +155,27 @@ def rest_by_energy(out, p):
     check(len(ek) >= 2 and ek[-1] < REST_ENERGY <= ek[-2], "at rest by energy: %.2e per grain after %.2e, across %g" % (ek[-1], ek[-2], REST_ENERGY))
 
 
+def step_dt(f):
+    """The run's time step, from two consecutive rows' times: the first row's time is dt only on a clock that starts
+    at 0 (a results file begun at a restart from step 400 starts at 0.401 s)."""
+    time = f["stats/time"]
+    return time[-1] - time[-2]
+
+
+def snapshots_by_step(f):
+    """The results file's snapshots by their step attribute: their names count the file's snapshots, which equal the
+    steps only for a run that started at step 0 with a snapshot every step (a file begun at a restart from step 400
+    names step 931's snapshot 000531)."""
+    return {int(g.attrs["step"]): g for g in f["snapshots"].values()}
+
+
 def box_inertial_number(f, step, window):
     """The box's inertial number over the window ending at step, from the snapshots' walls (rows ax, ay, bx, by): for
     each wall, the path its distance to the facing wall (the opposite side of the box) travels over the window."""
-    walls = np.array([f["snapshots/%06d" % i]["walls"][()] for i in range(step - window, step + 1)])
-    d = 2 * f["snapshots/%06d" % step]["radius"][()].mean()
-    seconds = window * (f["stats/time"][1] - f["stats/time"][0])
+    snaps = snapshots_by_step(f)
+    walls = np.array([snaps[i]["walls"][()] for i in range(step - window, step + 1)])
+    d = 2 * snaps[step]["radius"][()].mean()
+    seconds = window * step_dt(f)
     largest = -1.0
     normal = [np.array([-(by - ay), bx - ax]) / np.hypot(bx - ax, by - ay) for ax, ay, bx, by in walls[-1]]  # inward: left of a -> b
     for w, n in enumerate(normal):
@@ -185,22 +207,33 @@ def first_rest_row(f, stress_tol):
     return first, held, np.max(np.abs(gap[rows] - again[rows])) if rows.any() else np.inf
 
 
+def at_rest_by_inertial(p, checked):
+    """Whether the run ended at rest by the inertial rule with the message its -stop_at_rest_stress calls for: the stress
+    compared (checked, "(in equilibrium)") or the inertial number alone (-stop_at_rest_stress 0, no such claim)."""
+    line = [x for x in p.stdout.splitlines() if x.startswith("kergs: at rest by the inertial number")]
+    if checked:
+        return p.returncode == 0 and len(line) == 1 and "alone" not in line[0] and line[0].endswith("(in equilibrium)")
+    return p.returncode == 0 and len(line) == 1 and line[0].startswith("kergs: at rest by the inertial number alone") and "equilibrium" not in line[0]
+
+
 def rest_by_inertial(out, p, energy_out):
     """-stop_at_rest_inertial alone: the first step whose box inertial number over the window is below it, with the stress
     inside within the default -stop_at_rest_stress of p, ends the run."""
-    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
-                 "compaction with -stop_at_rest_inertial ends at rest by it (exit %d)" % p.returncode):
+    if not check(at_rest_by_inertial(p, True), "compaction with -stop_at_rest_inertial ends at rest by it, in equilibrium (exit %d)" % p.returncode):
         return
     with h5py.File(out, "r") as f:
         inertial, steps = f["stats/inertial_number"][()], f["stats/step"][()].astype(int)
         full = inertial[REST_WINDOW - 1:]  # from step REST_WINDOW on: the ring holds the walls at the start too
         first, _, gap_error = first_rest_row(f, REST_STRESS_DEFAULT)
+        gap = f["stats/stress_gap"][()]
         check(np.all(inertial[:REST_WINDOW - 1] == -1) and np.all(full >= 0) and first == len(inertial) - 1,
               "inertial_number: -1 before step %d; the last row, %.3e, is the first below %g once above it with stress_gap within %g (%d steps)"
               % (REST_WINDOW, inertial[-1], REST_INERTIAL, REST_STRESS_DEFAULT, len(inertial)))
+        check(np.all(gap[:REST_WINDOW - 1] == -1) and np.all(gap[REST_WINDOW - 1:] >= 0), "stress_gap: -1 before step %d, as inertial_number, "
+              "and measured from there on" % REST_WINDOW)
         check(gap_error < 1e-12, "stress_gap is max |s_ii - b_ii| / p of the Love-Weber and boundary stresses over the window (to %.1e)" % gap_error)
-        snap = f["snapshots/%06d" % steps[-1]]
-        bxx, byy = boundary_stress(snap, dt=f["stats/time"][0], centred=True)
+        snap = snapshots_by_step(f)[steps[-1]]
+        bxx, byy = boundary_stress(snap, dt=step_dt(f), centred=True)
         check(abs(bxx - f["stats/boundary_sxx"][-1]) < 1e-9 and abs(byy - f["stats/boundary_syy"][-1]) < 1e-9,
               "boundary_sxx %.9f, boundary_syy %.9f are the walls' tractions' moment about the box's centre, %.9f and %.9f"
               % (f["stats/boundary_sxx"][-1], f["stats/boundary_syy"][-1], bxx, byy))
@@ -217,30 +250,52 @@ def rest_by_inertial(out, p, energy_out):
 def rest_held_by_stress(out, p):
     """-stop_at_rest_stress tighter than the stress inside where the walls stop: the run goes on past the rows whose
     inertial number is below the threshold until the stress gap is within it too."""
-    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
-                 "compaction with -stop_at_rest_stress %g ends at rest by the inertial number (exit %d)" % (REST_STRESS_TIGHT, p.returncode)):
+    if not check(at_rest_by_inertial(p, True),
+                 "compaction with -stop_at_rest_stress %g ends at rest by the inertial number, in equilibrium (exit %d)"
+                 % (REST_STRESS_TIGHT, p.returncode)):
         return
     with h5py.File(out, "r") as f:
         first, held, _ = first_rest_row(f, REST_STRESS_TIGHT)
         gap, rows = f["stats/stress_gap"][()], len(f["stats/step"])
         check(first == rows - 1 and len(held) > 0,
-              "-stop_at_rest_stress %g: the last row (gap %.4f) is the first within it; %d rows below the inertial threshold before it were "
-              "held back (gaps %s)" % (REST_STRESS_TIGHT, gap[-1], len(held), ", ".join("%.4f" % gap[i] for i in held[:5])))
+              "-stop_at_rest_stress %g: the last row (gap %.2g) is the first within it; %d rows below the inertial threshold before it were "
+              "held back (gaps %s)" % (REST_STRESS_TIGHT, gap[-1], len(held), ", ".join("%.2g" % gap[i] for i in held[:5])))
+
+
+def rest_unchecked(out, p, held_out):
+    """-stop_at_rest_stress 0: the inertial number alone stops the run, at the first row below REST_INERTIAL once above
+    it, and the run's message claims no equilibrium; the held run (the same options and rank, REST_STRESS_TIGHT) went
+    the same way up to there, and was held back from exactly that row."""
+    if not check(at_rest_by_inertial(p, False),
+                 "compaction with -stop_at_rest_stress 0 ends at rest by the inertial number alone, without claiming equilibrium (exit %d)"
+                 % p.returncode):
+        return
+    with h5py.File(out, "r") as f, h5py.File(held_out, "r") as g:
+        first, _, _ = first_rest_row(f, 0)
+        _, held, _ = first_rest_row(g, REST_STRESS_TIGHT)
+        steps, held_steps = f["stats/step"][()].astype(int), g["stats/step"][()].astype(int)
+    check(first == len(steps) - 1 and len(held) > 0 and held_steps[held[0]] == steps[-1],
+          "-stop_at_rest_stress 0: the last row (step %d) is the first below %g once above it, the first the held run held back "
+          "(step %s)" % (steps[-1], REST_INERTIAL, held_steps[held[0]] if held else "none"))
 
 
 def rest_frictional_walls(out, p):
     """-stop_at_rest_inertial at mu = 0.5, walls included: their friction keeps the Love-Weber stress away from p at
     rest, and the rule still stops, because it compares the Love-Weber stress with the boundary's."""
-    if not check(p.returncode == 0 and "at rest by the inertial number" in p.stdout,
-                 "compaction at mu = 0.5 with -stop_at_rest_inertial ends at rest by it (exit %d)" % p.returncode):
+    if not check(at_rest_by_inertial(p, True),
+                 "compaction at mu = 0.5 with -stop_at_rest_inertial ends at rest by it, in equilibrium (exit %d)" % p.returncode):
         return
     with h5py.File(out, "r") as f:
         s = {c: f["stats/" + c][-REST_WINDOW:].mean() for c in ("sxx", "syy", "boundary_sxx", "boundary_syy")}
-        gap = f["stats/stress_gap"][-1]
+        gap, rows = f["stats/stress_gap"][-1], len(f["stats/step"])
+        first, _, gap_error = first_rest_row(f, REST_STRESS_DEFAULT)
     off = max(abs(s["sxx"] / P - 1), abs(s["syy"] / P - 1))
-    check(off > FRICTIONAL_OFF and gap <= REST_STRESS_DEFAULT,
+    check(off > FRICTIONAL_OFF and gap <= REST_STRESS_DEFAULT and first == rows - 1,
           "frictional walls at rest: the window's Love-Weber stress is %.3f off p (sxx %.4f, syy %.4f), the boundary's %.4f, %.4f, "
-          "stress_gap %.4f within %g" % (off, s["sxx"], s["syy"], s["boundary_sxx"], s["boundary_syy"], gap, REST_STRESS_DEFAULT))
+          "stress_gap %.4f within %g; the last row is the first the rule accepts" % (off, s["sxx"], s["syy"], s["boundary_sxx"],
+                                                                                s["boundary_syy"], gap, REST_STRESS_DEFAULT))
+    check(gap_error < 1e-12, "frictional walls: stress_gap is max |s_ii - b_ii| / p of the window's Love-Weber and boundary stresses (to %.1e)"
+          % gap_error)
 
 
 def friction_density(k, runs):
@@ -525,6 +580,9 @@ def main():
         held = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0, "-stop_at_rest", 0,
                            "-stop_at_rest_inertial", REST_INERTIAL, "-stop_at_rest_stress", REST_STRESS_TIGHT, "-output", k.path("small_held.h5"),
                            "-sample_output", k.path("small_held.sample.h5"), log="small_held.log")
+        unchecked = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0, "-stop_at_rest", 0,
+                                "-stop_at_rest_inertial", REST_INERTIAL, "-stop_at_rest_stress", 0, "-output", k.path("small_unchecked.h5"),
+                                "-sample_output", k.path("small_unchecked.sample.h5"), log="small_unchecked.log")
         frictional = pool.submit(k.run, 1, "-options_file", "cases/compact_small.opts", *SMALL, "-friction", 0.5, "-stop_at_rest", 0,
                                  "-stop_at_rest_inertial", REST_INERTIAL, "-steps", 1500, "-output", k.path("small_frictional.h5"),
                                  "-sample_output", k.path("small_frictional.sample.h5"), log="small_frictional.log")
@@ -538,6 +596,7 @@ def main():
         rest_by_energy(k.path("small_energy.h5"), by_energy.result())
         rest_by_inertial(k.path("small_inertial.h5"), by_inertial.result(), small[0])
         rest_held_by_stress(k.path("small_held.h5"), held.result())
+        rest_unchecked(k.path("small_unchecked.h5"), unchecked.result(), k.path("small_held.h5"))
         rest_frictional_walls(k.path("small_frictional.h5"), frictional.result())
         if got:
             q_frictional = biaxial(k, k.path("biaxial_0.5.h5"), shear[0.5].result(), q0)

@@ -143,7 +143,7 @@ def pushed(k):
     row, snap = last_row(out)
     ref = recompute(snap, 2e-4, 0.3)
     check(row["sliding_fraction"] > 0.1, f"pushed: contacts slide (sliding_fraction {row['sliding_fraction']:.3f})")
-    agree("pushed", row, ref, ["sliding_fraction", "sxx", "wall_sxx", "boundary_sxx", "boundary_syy", "Z_nonrattler", "a_t"])
+    agree("pushed", row, ref, ["sliding_fraction", "sxx", "wall_sxx", "boundary_sxx", "boundary_syy", "boundary_sxy", "Z_nonrattler", "a_t"])
     lateral = 5 * 2e-4 * 0.05 / 0.5  # 5 steps of the right wall over the 0.5 m wide box
     for name, want in [("strain_lateral", lateral), ("strain_axial", 0.0), ("strain_volumetric", lateral)]:
         check(abs(row[name] - want) < 1e-12, f"pushed: {name} {row[name]:.6g} = {want:.6g}")

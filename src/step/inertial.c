@@ -202,7 +202,7 @@ static PetscErrorCode PushBox(KergsStepper st)
   if (st->grain_d == 0) PetscCall(GrainScales(st, &st->grain_d, &st->grain_rho));
   cur    = st->box_track + (st->box_tracked % slots) * (BOX_HEAD + nwalls);
   cur[0] = time;
-  for (PetscInt i = 0; i < 3; i++) cur[1 + i] = st->love_weber[i] - st->boundary_stress[i]; /* before the first step: unused */
+  for (PetscInt i = 0; i < 3; i++) cur[1 + i] = st->inertia_stress[i]; /* before the first step: unused */
   for (PetscInt w = 0; w < nwalls; w++) {
     WallNormal(&walls[w], n);
     cur[BOX_HEAD + w] = n[0] * walls[w].a[0] + n[1] * walls[w].a[1];
@@ -237,7 +237,7 @@ static PetscReal StressGap(KergsStepper st, PetscInt nwalls, const KergsWall wal
 {
   PetscReal mean[3] = {0, 0, 0}, gap = -1, n[KERGS_DIM];
 
-  if (!st->love_weber_found) return -1;
+  if (!st->inertia_found) return -1;
   for (PetscInt j = 1; j <= st->rest_window; j++)
     for (PetscInt i = 0; i < 3; i++) mean[i] += BoxSlot(st, stride, j)[1 + i] / st->rest_window;
   for (PetscInt w = 0; w < nwalls; w++) {

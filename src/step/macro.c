@@ -3,7 +3,8 @@
    principal stresses and q/p, the strains and the solid fraction from the walls' box, the coordination number with
    and without rattlers, the Rothenburg-Bathurst anisotropies and the fraction of sliding contacts. Post-processing of
    the contacts' impulses after the solve: nothing here feeds back into the step (the rest rule of -stop_at_rest_stress
-   reads the Love-Weber stress to decide whether to stop). Every figure is global. */
+   reads the Love-Weber stress minus the boundary's, st->inertia_stress, to decide whether to stop). Every figure is
+   global. */
 #include <kergs/private/stepperimpl.h>
 
 /* The four walls of an axis-aligned box, by the side they hold (-1: none), and the rectangle they span. */
@@ -333,7 +334,7 @@ PetscErrorCode KergsStepperRecordMacro(KergsStepper st)
   KergsContact    *c;
   MacroBox         box;
   PetscInt         n, nwalls, nrattlers = 0, nends = 0;
-  PetscReal        dt, s[M_NSUMS] = {0}, eps[3] = {0, 0, 0};
+  PetscReal        dt, s[M_NSUMS] = {0}, eps[3] = {0, 0, 0}, sigma[3], boundary[3];
 
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(KERGS_Macro, 0, 0, 0, 0));
@@ -346,10 +347,11 @@ PetscErrorCode KergsStepperRecordMacro(KergsStepper st)
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, s, M_NSUMS, MPIU_REAL, MPIU_SUM, st->comm));
   PetscCall(FindRattlers(st->comm, &D, n, c, &nrattlers, &nends));
   if (box.found) BoxStrains(walls, &box, eps);
-  StressOverBox(&box, s, M_SXX, st->love_weber);
-  StressOverBox(&box, s, M_BXX, st->boundary_stress);
-  st->love_weber_found = box.found;
-  PetscCall(RecordStress(st->results, &box, s, st->love_weber, st->boundary_stress));
+  StressOverBox(&box, s, M_SXX, sigma);
+  StressOverBox(&box, s, M_BXX, boundary);
+  for (PetscInt i = 0; i < 3; i++) st->inertia_stress[i] = sigma[i] - boundary[i];
+  st->inertia_found = box.found;
+  PetscCall(RecordStress(st->results, &box, s, sigma, boundary));
   PetscCall(KergsResultsRecord(st->results, "strain_axial", eps[0]));
   PetscCall(KergsResultsRecord(st->results, "strain_lateral", eps[1]));
   PetscCall(KergsResultsRecord(st->results, "strain_volumetric", eps[2]));

@@ -25,9 +25,8 @@ struct _p_KergsStepper {
   PetscBool      inertial_armed;                 /* the box's inertial number has been at least -stop_at_rest_inertial */
   PetscReal      rest_stress;                    /* -stop_at_rest_stress: the inertial rule also waits for equilibrium */
   PetscReal      box_stress_gap;                 /* largest |n.(Love-Weber - boundary).n| / p, the window's mean */
-  PetscBool      love_weber_found;               /* the walls make a box, and love_weber holds the latest step's stress */
-  PetscReal      love_weber[3];                  /* that step's Love-Weber sxx, syy, sxy over the box's area */
-  PetscReal      boundary_stress[3];             /* and the walls' tractions' (friction included) over the same area */
+  PetscBool      inertia_found;                  /* the walls make a box, and inertia_stress holds the latest step's */
+  PetscReal      inertia_stress[3];              /* that step's Love-Weber minus boundary sxx, syy, sxy: the grains' inertia */
   char           sample_out[PETSC_MAX_PATH_LEN]; /* -sample_output */
   PetscBool      sample_forces;                  /* -sample_forces: the first step starts from the sample's contact forces */
   PetscInt       sample_nforces;                 /* how many forces it restored (all ranks) */
@@ -87,8 +86,9 @@ struct _p_KergsStepper {
 PETSC_INTERN PetscErrorCode KergsStepperRecordStep(KergsStepper, const KergsSolveStats *, PetscLogDouble detect_seconds,
                                                    PetscLogDouble assemble_seconds);
 /* The macroscopic response of the step (src/step/macro.c, docs/results.md): stresses, strains, solid fraction,
-   coordination, anisotropies and sliding contacts, into the current row, and the Love-Weber and boundary stresses into
-   st->love_weber and st->boundary_stress. Collective. Whether the walls make the box it is measured in. */
+   coordination, anisotropies and sliding contacts, into the current row, and the Love-Weber minus the boundary's stress
+   into st->inertia_stress (what -stop_at_rest_stress reads). Collective. Whether the walls make the box it is measured
+   in. */
 PETSC_INTERN PetscErrorCode KergsStepperRecordMacro(KergsStepper);
 PETSC_INTERN PetscErrorCode KergsStepperHasBox(KergsStepper, PetscBool *found);
 /* The solve's figures (common ones, then the type's own figures and texts) into the current row. */
