@@ -5,7 +5,7 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
   confine500  10 steps: newton to natural residual 1e-10 against nlgs to natural 1e-6 (no cap). Target: every step
               <= 1e-10, mean solve time per step <= 1/5 of nlgs's.
   biaxial20k  5 steps: newton to 1e-8 against nlgs to quad 1e-4 (no cap). Target: every step <= 1e-8, in less time.
-  pressure20k the same comparison (newton 1e-8, also with -solver_newton_working_set, against nlgs quad 1e-4, 5 steps;
+  pressure20k the same comparison (newton 1e-8, also with -solver_newton_working_set 0, against nlgs quad 1e-4, 5 steps;
               target: 1/5 of nlgs's time; under the paper's gap rule and the predictive one) on a dense polydisperse packing whose
               contact problem does not hang on rounding, unlike the touching lattice of biaxial20k: cases/deposit500.h5
               tiled 40 times along x (20,000 disks, a 20 m x 1 m strip), pushed by a free right wall (1 kg, 20 N, no
@@ -147,8 +147,8 @@ if "pressure20k" in parts:
         P20K = pressure_scene(40, 5) + ["-gap_rule", rule]
         g = run(f"pressure20k{tag}_nlgs_quad_1e-4", 1, P20K + ["-solver_type", "nlgs", "-solver_tol", "1e-4", "-solver_max_it", "1000000"])
         w = run(f"pressure20k{tag}_newton_1e-8", 1, P20K + NEWTON + ["-solver_tol", "1e-8"])
-        ws = run(f"pressure20k{tag}_newton_1e-8_working_set", 1, P20K + NEWTON + ["-solver_tol", "1e-8", "-solver_newton_working_set"])
-        for label, r in (("newton", w), ("newton -solver_newton_working_set", ws)):
+        w0 = run(f"pressure20k{tag}_newton_1e-8_no_working_set", 1, P20K + NEWTON + ["-solver_tol", "1e-8", "-solver_newton_working_set", "0"])
+        for label, r in (("newton", w), ("newton -solver_newton_working_set 0", w0)):
             if g is not None and r is not None:
                 every = bool(np.all(r["residual"] <= 1e-8))
                 tg, tw = float(np.sum(g["solve_seconds"])), float(np.sum(r["solve_seconds"]))
