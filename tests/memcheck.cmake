@@ -72,3 +72,7 @@ set_tests_properties(memcheck_fclib_input_newton PROPERTIES FIXTURES_REQUIRED vg
 kergs_memcheck(sample_forces_2 2 kergs_exe -options_file cases/confine5.opts -disks_source file
                -sample_input ${KERGS_MEMCHECK_DIR}/vg_confine5_sample.h5 -steps 2 -quiet -output ${KERGS_MEMCHECK_DIR}/vg_sample_forces.h5)
 set_tests_properties(memcheck_sample_forces_2 PROPERTIES FIXTURES_REQUIRED vg_confine5_export)
+# newton's working set under valgrind: J set up again on more rows within a step (confine5 under the predictive rule
+# puts a contact back on steps 1 and 2)
+kergs_memcheck(confine5_newton_working_set 1 kergs_exe -options_file cases/confine5.opts -steps 3 -quiet -output_none -solver_type newton
+               -gap_rule predictive)

@@ -146,9 +146,6 @@ static PetscErrorCode DestroyStepObjects(Newton *nt)
   PetscCall(VecDestroy(&nt->rplain));
   PetscCall(VecDestroy(&nt->rstart));
   PetscCall(VecDestroy(&nt->rbest));
-  PetscCall(MatDestroy(&nt->Jprox));
-  PetscCall(VecDestroy(&nt->kx));
-  PetscCall(VecDestroy(&nt->kpx));
   PetscFunctionReturn(0);
 }
 
@@ -330,6 +327,23 @@ static PetscErrorCode MonitorNewtonStep(KergsSolver s, Newton *nt, PetscInt n, P
   PetscFunctionReturn(0);
 }
 
+/* With the working set: the contacts left out of J whose blocks left the law's open piece are put back, and J is set
+   up again on its new rows (newton_working.c). In the smoothing phase their law becomes the smoothed one, so F, its
+   blocks and *merit are evaluated again at r (u: the velocity the current F was evaluated with). */
+static PetscErrorCode GrowWorkingSet(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *merit)
+{
+  PetscBool grown;
+
+  PetscFunctionBeginUser;
+  if (!nt->working_set) PetscFunctionReturn(0);
+  PetscCall(NewtonWorkingSetGrow(s, nt, n, nc, &grown));
+  if (!grown) PetscFunctionReturn(0);
+  PetscCall(NewtonDestroyJacobian(nt));
+  PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
+  if (nt->eps > 0) PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_TRUE, merit));
+  PetscFunctionReturn(0);
+}
+
 /* Newton on the current (proximal) problem, from r: at most `count` steps, until |F| is at most `ftol`; *ok is false
    when some line search failed. Newton stops early when it crawls: -solver_newton_stall_steps steps in a row that
    each cut the merit by less than a tenth (many contacts change piece at every step, and the line search keeps
@@ -348,6 +362,7 @@ static PetscErrorCode InnerNewton(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   PetscCall(ProximalVelocity(nt, r, u, nt->ueff));
   PetscCall(EvaluateFunction(s, nt, n, nc, r, nt->ueff, nt->F, PETSC_TRUE, &merit));
   for (PetscInt k = 0; k < count && PetscSqrtReal(2.0 * merit) > ftol; k++) {
+    PetscCall(GrowWorkingSet(s, nt, n, nc, r, nt->ueff, &merit));
     /* with -solver_prox kernel, this J (sigma I) is the preconditioner of J_P (sigma P): NewtonSolveDirection */
     PetscCall(NewtonAssembleJacobian(s, nt, n, nc, nt->shift, nt->sigma));
     PetscCall(NewtonSolveDirection(nt, n, nc, &solved));
@@ -450,6 +465,7 @@ static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, Petsc
       stalls = 0;
       PetscCall(EvaluateFunction(s, nt, n, nc, r, u, nt->F, PETSC_TRUE, &merit));
     }
+    PetscCall(GrowWorkingSet(s, nt, n, nc, r, u, &merit));
     m0 = merit;
     PetscCall(NewtonAssembleJacobian(s, nt, n, nc, nt->shift, PetscMin(nt->smooth_kappa * *res, nt->sigma_max) * wmean));
     PetscCall(NewtonSolveDirection(nt, n, nc, &solved));
@@ -699,8 +715,8 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "smoothing_steps", (PetscReal)nt->smooth_steps));
   PetscCall(KergsSolveStatsAdd(st, "second_attempts", (PetscReal)nt->second_attempts));
   if (nt->working_set) {
-    PetscCall(KergsSolveStatsAdd(st, "working_set_grown", (PetscReal)nt->grown));
-    PetscCall(KergsSolveStatsAdd(st, "deferred_contacts", (PetscReal)nt->deferred));
+    PetscCall(KergsSolveStatsAdd(st, "working_set_rebuilds", (PetscReal)nt->rebuilds));
+    PetscCall(KergsSolveStatsAdd(st, "deferred_contacts", (PetscReal)nt->left_out));
   }
   PetscFunctionReturn(0);
 }
@@ -861,8 +877,9 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
         viewer, "After %" PetscInt_FMT " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
         nt->second_window, (double)nt->second_rho));
   if (nt->working_set)
-    PetscCall(PetscViewerASCIIPrintf(viewer,
-                                     "Working set: contacts the warm start leaves open are left out of J until the answer closes them\n"));
+    PetscCall(PetscViewerASCIIPrintf(
+        viewer,
+        "Working set: contacts the warm start leaves open are left out of J until an iterate takes them off the law's open piece\n"));
   if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
   if (nt->sorted_subdomains)
     PetscCall(PetscViewerASCIIPrintf(viewer,

@@ -1,5 +1,6 @@
 /* kergs solver type "newton" (newton.c): its state, shared with its linear algebra (newton_linear.c: the Jacobian
-   J = A + B (W + sigma I) + eps I on W's pattern, and the solves of J d = -F). Private to these two files. */
+   J = A + B (W + sigma I) + eps I on W's pattern, and the solves of J d = -F), its working set (newton_working.c) and
+   its subdomain solver (newton_subdomain.c). Private to these files. */
 #ifndef KERGS_NEWTON_H
 #define KERGS_NEWTON_H
 
@@ -18,20 +19,20 @@ typedef struct {
   Vec         kx, kpx;  /* work: x and P x */
   KSP         kreuse;   /* J d = -F by GMRES preconditioned by the last factorization of an earlier J; prefix solver_reuse_ */
   Mat         Wfull, J; /* W with both triangles, and the Jacobian on its pattern */
-  /* one rank, kergs's LU: J is stored with its block rows and columns in W's AMD order, factored in that (natural)
-     order (PresortContacts) */
+  /* J's rows: every local contact, or those of the working set (below); on one rank with kergs's LU, in the AMD order
+     of W over them, J factored in that (natural) order (PresortContacts) */
   PetscInt *order;   /* J's block row i is local contact order[i]; NULL: J in the contacts' order, every contact a row */
-  PetscInt  nrows;   /* J's local block rows: the local contacts, or the working ones */
+  PetscInt  nrows;   /* J's local block rows */
   PetscBool presort; /* decided once the linear solver's options are read (NewtonChoosePresorting) */
-  Mat       Wsorted; /* W in that order: J's template */
+  Mat       Wsorted; /* W over J's rows in that AMD order: J's template */
+  Vec       Fs, ds;  /* -F and d on J's rows, in J's order */
   /* -solver_newton_working_set: contacts open at the warm start and not closed by it are left out of J while they
      stay on the law's open piece (newton_working.c) */
   PetscBool  working_set; /* the option */
   PetscBool *in_J;        /* per local contact: a row of J */
   Mat        Wwork;       /* W over J's rows: J's template (NULL: W itself) */
-  PetscInt   grown;       /* times the last solve put contacts back into J */
-  PetscInt   deferred;    /* contacts left out of J at the end of the last solve (global) */
-  Vec        Fs, ds;      /* -F and d in that order */
+  PetscInt   rebuilds;    /* times the last solve put contacts back into J and set it up again */
+  PetscInt   left_out;    /* contacts left out of J at the end of the last solve (global) */
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
   Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */

@@ -118,20 +118,13 @@ static PetscInt ChangedBlocks(const Newton *nt, PetscInt n, PetscInt nc, const P
 
 /* J = A + B (W + sigma I) + eps I, unless the contact states (A, B) and sigma are those of the last Jacobian: F is
    piecewise linear, so once the states settle J stays the same and its factorization is reused (the Newton step then
-   costs one solve). With a working set, contacts left out of J that have left the law's open piece are put back
-   first (NewtonWorkingSetGrow), and J is set up again on its new rows. */
+   costs one solve). */
 PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
 {
-  Mat       Ad, Ao, Wd, Wo;
-  PetscInt  changed;
-  PetscBool grown = PETSC_FALSE;
+  Mat      Ad, Ao, Wd, Wo;
+  PetscInt changed;
 
   PetscFunctionBeginUser;
-  if (nt->working_set) PetscCall(NewtonWorkingSetGrow(s, nt, n, nc, &grown));
-  if (grown) { /* J's rows and pattern are new: set up again (sigma_used = -1 makes it assembled below) */
-    PetscCall(NewtonDestroyJacobian(nt));
-    PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
-  }
   changed = (PetscInt)(sigma != nt->sigma_used || ChangedBlocks(nt, n, nc, nt->Aused, nt->Bused) > 0);
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_MAX, s->comm));
   if (!changed) PetscFunctionReturn(0);
@@ -354,7 +347,7 @@ static PetscErrorCode PresortContacts(Newton *nt, PetscInt nc)
   PetscCall(MatGetOrdering(T, MATORDERINGAMD, &rows, &cols));
   PetscCall(ISGetLocalSize(rows, &m));
   PetscCheck(m == nt->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB,
-             "newton: W's ordering has %" PetscInt_FMT " entries for %" PetscInt_FMT " contacts", m, nt->nrows);
+             "newton: the ordering of J's template has %" PetscInt_FMT " entries for %" PetscInt_FMT " rows of J", m, nt->nrows);
   PetscCall(PetscMalloc1(m, &order));
   PetscCall(ISGetIndices(rows, &idx));
   for (PetscInt i = 0; i < m; i++) order[i] = nt->order ? nt->order[idx[i]] : idx[i];
@@ -367,19 +360,6 @@ static PetscErrorCode PresortContacts(Newton *nt, PetscInt nc)
   PetscCall(ISDestroy(&points));
   PetscCall(ISDestroy(&rows));
   PetscCall(ISDestroy(&cols));
-  PetscFunctionReturn(0);
-}
-
-/* The step's (or the working set's) J and what was built with it. */
-PetscErrorCode NewtonDestroyJacobian(Newton *nt)
-{
-  PetscFunctionBeginUser;
-  PetscCall(MatDestroy(&nt->Wsorted));
-  PetscCall(MatDestroy(&nt->Wwork));
-  PetscCall(PetscFree(nt->order));
-  PetscCall(VecDestroy(&nt->Fs));
-  PetscCall(VecDestroy(&nt->ds));
-  PetscCall(MatDestroy(&nt->J));
   PetscFunctionReturn(0);
 }
 
@@ -403,6 +383,27 @@ static PetscErrorCode ReleaseSubdomainFactors(Newton *nt)
     PetscCall(KSPGetPC(sub[b], &subpc));
     PetscCall(NewtonSubdomainReleaseSortedLU(subpc));
   }
+  PetscFunctionReturn(0);
+}
+
+/* The step's (or the working set's) J, what was built with it, and the linear solvers' hold on it (factors included). */
+PetscErrorCode NewtonDestroyJacobian(Newton *nt)
+{
+  PetscFunctionBeginUser;
+  PetscCall(ReleaseSubdomainFactors(nt));
+  PetscCall(KSPReset(nt->ksp));
+  PetscCall(KSPReset(nt->kreuse));
+  if (nt->kprox) PetscCall(KSPReset(nt->kprox));
+  nt->factored = PETSC_FALSE;
+  PetscCall(MatDestroy(&nt->Jprox));
+  PetscCall(VecDestroy(&nt->kx));
+  PetscCall(VecDestroy(&nt->kpx));
+  PetscCall(MatDestroy(&nt->Wsorted));
+  PetscCall(MatDestroy(&nt->Wwork));
+  PetscCall(PetscFree(nt->order));
+  PetscCall(VecDestroy(&nt->Fs));
+  PetscCall(VecDestroy(&nt->ds));
+  PetscCall(MatDestroy(&nt->J));
   PetscFunctionReturn(0);
 }
 
