@@ -723,8 +723,8 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
 
 static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptionsObject, KergsSolver s)
 {
-  Newton   *nt                = (Newton *)s->data;
-  PetscBool working_set_given = PETSC_FALSE;
+  Newton   *nt          = (Newton *)s->data;
+  PetscBool working_set = PETSC_TRUE, working_set_given = PETSC_FALSE; /* on by default (docs/solver.md) */
 
   PetscFunctionBeginUser;
   PetscOptionsHeadBegin(PetscOptionsObject, "Semismooth Newton on the Alart-Curnier formulation (newton)");
@@ -791,9 +791,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(
       KergsOptionsBool(PetscOptionsObject, "-solver_newton_working_set",
                        "Leave the contacts that the warm start leaves open out of J while they stay open (not with -solver_prox kernel)",
-                       "", nt->working_set, &nt->working_set, &working_set_given));
+                       "", working_set, &working_set, &working_set_given));
   PetscOptionsHeadEnd();
-  if (nt->prox == NEWTON_PROX_KERNEL && !working_set_given) nt->working_set = PETSC_FALSE; /* the default gives way */
+  nt->working_set = (PetscBool)(working_set && (working_set_given || nt->prox != NEWTON_PROX_KERNEL)); /* the default gives way */
   PetscCheck(nt->alpha > 0 && PetscIsNormalReal(nt->alpha), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_prox_alpha %g must be positive",
              (double)nt->alpha);
   PetscCheck(nt->sigma_min > 0 && nt->sigma_min <= nt->sigma_max && PetscIsNormalReal(nt->sigma_max), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -938,7 +938,6 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->smooth_raises  = 1;
   nt->second_rho     = 0.1;
   nt->second_window  = 250;
-  nt->working_set    = PETSC_TRUE; /* 0.52-0.54 of the solve time under the predictive rule, no change under the paper's (docs/solver.md) */
   PetscCall(NewtonCreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 1000; /* the cap of the tradeoff study's reference runs (docs/tradeoff.md) */
