@@ -122,10 +122,9 @@ static PetscInt ChangedBlocks(const Newton *nt, PetscInt n, PetscInt nc, const P
 PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma)
 {
   Mat      Ad, Ao, Wd, Wo;
-  PetscInt changed;
+  PetscInt changed = (PetscInt)(sigma != nt->sigma_used || ChangedBlocks(nt, n, nc, nt->Aused, nt->Bused) > 0);
 
   PetscFunctionBeginUser;
-  changed = (PetscInt)(sigma != nt->sigma_used || ChangedBlocks(nt, n, nc, nt->Aused, nt->Bused) > 0);
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_MAX, s->comm));
   if (!changed) PetscFunctionReturn(0);
   PetscCall(PetscArraycpy(nt->Aused, nt->A, n * nc * nc));
@@ -340,7 +339,7 @@ static PetscErrorCode PresortContacts(Newton *nt, PetscInt nc)
   IS              rows, cols, points;
   const PetscInt *idx;
   PetscInt        m, *order;
-  Mat             T = nt->Wwork ? nt->Wwork : nt->Wfull;
+  Mat             T = JacobianTemplate(nt); /* W, or W over the working contacts: not yet sorted */
 
   PetscFunctionBeginUser;
   if (!nt->presort || nt->nrows == 0) PetscFunctionReturn(0);
@@ -407,27 +406,24 @@ PetscErrorCode NewtonDestroyJacobian(Newton *nt)
   PetscFunctionReturn(0);
 }
 
-/* The step's Jacobian and linear solver: J's rows chosen (SelectRows), W over them presorted (one rank,
-   PresortContacts), J created on its pattern, the position of every diagonal block, and the KSP reset to J's sizes,
-   then chosen for them (ChooseLinearSolver). */
+/* The step's Jacobian and linear solver, after NewtonDestroyJacobian has released the last ones: J's rows chosen
+   (SelectRows), W over them presorted (one rank, PresortContacts), J created on its pattern, the position of every
+   diagonal block, and the KSPs given J, then the linear solver chosen for its size (ChooseLinearSolver). */
 PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc)
 {
   Mat Ad, Ao;
 
   PetscFunctionBeginUser;
-  PetscCall(ReleaseSubdomainFactors(nt));
   PetscCall(SelectRows(s, nt, n, nc));
   PetscCall(PresortContacts(nt, nc));
   PetscCall(MatDuplicate(JacobianTemplate(nt), MAT_COPY_VALUES, &nt->J));
   if (nt->order) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
   PetscCall(LocateDiagonalBlocks(nt, Ad, nc));
-  PetscCall(KSPReset(nt->ksp)); /* J's sizes and pattern are this step's */
   nt->sigma_used = -1.0;
-  PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J));
-  PetscCall(KSPReset(nt->kreuse));
+  PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J)); /* reset by NewtonDestroyJacobian: J's sizes and pattern are new */
   PetscCall(KSPSetOperators(nt->kreuse, nt->J, nt->J));
-  nt->factored = nt->stale = PETSC_FALSE;
+  nt->stale = PETSC_FALSE;
   PetscCall(ChooseLinearSolver(s, nt));
   PetscCall(EnableNullPivots(nt));
   if (nt->prox == NEWTON_PROX_KERNEL) { /* J_P, a shell on J's layout */
@@ -437,7 +433,6 @@ PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscI
     PetscCall(MatCreateShell(s->comm, m, m, N, N, nt, &nt->Jprox));
     PetscCall(MatShellSetOperation(nt->Jprox, MATOP_MULT, (void (*)(void))KernelJacobianMult));
     PetscCall(MatCreateVecs(nt->J, &nt->kx, &nt->kpx));
-    PetscCall(KSPReset(nt->kprox));
     PetscCall(KSPSetOperators(nt->kprox, nt->Jprox, nt->Jprox));
   }
   PetscFunctionReturn(0);
