@@ -551,6 +551,44 @@ static PetscErrorCode TestSortedSubdomains(const char *scene, PetscInt nsteps, c
   PetscFunctionReturn(0);
 }
 
+/* Several ranks, additive Schwarz: each subdomain's J is computed from W's subdomain, extracted once per J, and the A
+   and B blocks of its rows (newton_subdomain.c), instead of extracted from J at every set-up
+   (-solver_newton_subdomains_from_w 0). The arithmetic is J's own, entry for entry, so the subdomain matrices, hence
+   the GMRES iterations, the Newton steps and the velocities, are the same both ways (measured: bitwise); a wrong block,
+   row or sigma changes the preconditioner and the GMRES iterations at once. With the predictive gap rule the working
+   set sets J up again within a step (9 times over those 2 steps), and the subdomains are built again with it. */
+static PetscErrorCode TestSubdomainsFromW(const char *scene, const char *extra, PetscInt nsteps, const char *what)
+{
+  KergsStepper st[2];
+  PetscInt     maxits[2], nconv[2];
+  PetscReal    maxres[2], linear[2] = {0, 0}, l, diff, scale;
+  PetscBool    from_w[2];
+  char         opts[PETSC_MAX_PATH_LEN], label[256];
+
+  PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < 2; k++) {
+    PetscCall(PetscSNPrintf(opts, sizeof(opts),
+                            "%s -steps %" PetscInt_FMT " -solver_type newton -solver_tol 1e-10 -solver_newton_redundant_max 0 %s%s", scene,
+                            nsteps, extra, k ? " -solver_newton_subdomains_from_w 0" : ""));
+    PetscCall(MakeStepper(opts, &st[k]));
+    PetscCall(StepAndSummarize(st[k], nsteps, &maxits[k], &maxres[k], &nconv[k]));
+    PetscCall(ViewSays(PETSC_COMM_WORLD, st[k]->solver, "computed from W's subdomain", &from_w[k]));
+    for (PetscInt s = 0; s < nsteps; s++) {
+      PetscCall(StatAt(st[k]->results, "linear_iterations", s, &l));
+      linear[k] += l;
+    }
+  }
+  PetscCall(PetscSNPrintf(label, sizeof(label), "%s, additive Schwarz: subdomains computed from W's (not with the option off)", what));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(from_w[0] && !from_w[1]), label, from_w[0], 1));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(nconv[0] == nsteps && nconv[1] == nsteps && maxits[0] == maxits[1]),
+                     "... every step converges both ways, in the same Newton steps", maxits[0], maxits[1]));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(linear[0] == linear[1]), "... the same GMRES iterations", linear[0], linear[1]));
+  PetscCall(VelocityDifference(st[0], st[1], &diff, &scale));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-12 * scale), "... the same velocities (relative)", diff / scale, 1e-12));
+  for (PetscInt k = 0; k < 2; k++) PetscCall(KergsStepperDestroy(&st[k]));
+  PetscFunctionReturn(0);
+}
+
 /* Several ranks, GMRES with additive Schwarz (J above -solver_newton_redundant_max 0 rows) whose subdomains are
    factored by ILU(0) instead of LU: on confine500's first step 152 linear solves fail (the ILU of a nearly singular J),
    and each failure only makes the outer iteration raise sigma, the later solves succeeding on the better conditioned J:
@@ -665,6 +703,10 @@ int main(int argc, char **argv)
     PetscCall(TestRecovery());
     PetscCall(TestSortedSubdomains("-options_file cases/confine500.opts", 2, "confine500 with friction"));
     PetscCall(TestSortedSubdomains("-options_file cases/confine5.opts -friction 0", 3, "frictionless confine5"));
+    PetscCall(TestSubdomainsFromW("-options_file cases/confine500.opts", "", 2, "confine500 with friction"));
+    PetscCall(
+        TestSubdomainsFromW("-options_file cases/confine500.opts", "-gap_rule predictive -solver_tol 1e-8", 2, "confine500, working set"));
+    PetscCall(TestSubdomainsFromW("-options_file cases/confine5.opts -friction 0", "", 3, "frictionless confine5"));
   }
   {
     int code = Finish();

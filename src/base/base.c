@@ -11,6 +11,7 @@
 
 PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO, KERGS_Exchange;
 PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition, KERGS_Watch, KERGS_Macro;
+PetscLogEvent KERGS_Subdomain;
 
 static PetscBool PackageInitialized = PETSC_FALSE;
 static char     *RunOptions         = NULL; /* KergsProvenanceSetOptions: the options of the run as given (rank 0) */
@@ -48,6 +49,7 @@ PetscErrorCode KergsInitializePackage(void)
   PetscCall(PetscLogEventRegister("KergsPartition", classid, &KERGS_Partition));
   PetscCall(PetscLogEventRegister("KergsWatch", classid, &KERGS_Watch));
   PetscCall(PetscLogEventRegister("KergsMacro", classid, &KERGS_Macro));
+  PetscCall(PetscLogEventRegister("KergsSubdomain", classid, &KERGS_Subdomain));
   PetscFunctionReturn(0);
 }
 

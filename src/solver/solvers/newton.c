@@ -788,6 +788,10 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_max_sweeps",
                             "NLGS sweeps before Newton, at most (0: none), until -solver_newton_switch_tol", "", nt->max_sweeps,
                             &nt->max_sweeps, NULL));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-solver_newton_subdomains_from_w",
+                             "Several ranks, additive Schwarz: each subdomain's J computed from W's subdomain, extracted once per J, "
+                             "instead of extracted from J at every set-up",
+                             "", nt->subdomains_from_w, &nt->subdomains_from_w, NULL));
   PetscCall(
       KergsOptionsBool(PetscOptionsObject, "-solver_newton_working_set",
                        "Leave the contacts that the warm start leaves open out of J while they stay open (not with -solver_prox kernel)",
@@ -855,9 +859,11 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
 
 static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
 {
-  Newton *nt = (Newton *)s->data;
+  Newton     *nt = (Newton *)s->data;
+  PetscMPIInt size;
 
   PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
   PetscCall(PetscViewerASCIIPrintf(
       viewer,
       "Semismooth Newton on the Alart-Curnier function (rho = %g / W_nn), Armijo line search (%g, at most %" PetscInt_FMT
@@ -881,6 +887,11 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
         viewer,
         "Working set: contacts the warm start leaves open are left out of J until an iterate takes them off the law's open piece\n"));
   if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
+  if (nt->subdomains_from_w && size > 1 && !nt->user_pc)
+    PetscCall(PetscViewerASCIIPrintf(viewer,
+                                     "Additive Schwarz (several ranks, above %" PetscInt_FMT
+                                     " rows of J): each subdomain's J computed from W's subdomain, extracted once per J\n",
+                                     nt->redundant_max));
   if (nt->sorted_subdomains)
     PetscCall(PetscViewerASCIIPrintf(viewer,
                                      "Additive Schwarz (above %" PetscInt_FMT
@@ -915,29 +926,30 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&nt));
-  nt->rho_factor     = 1.0;
-  nt->shift          = 1e-8;
-  nt->armijo         = 1e-4;
-  nt->max_backtracks = 33;
-  nt->switch_tol     = 1e-2;
-  nt->max_sweeps     = 0;
-  nt->sweep_check    = 10;
-  nt->prox           = NEWTON_PROX_IDENTITY;
-  nt->alpha          = 10.0;
-  nt->alpha_min      = 1e-3;
-  nt->sigma_min      = 1e-8;
-  nt->sigma_max      = 1.0;
-  nt->inner_max      = 20;
-  nt->stall_steps    = 5;
-  nt->redundant_max  = 15000;
-  nt->inner_rtol     = 0.1;
-  nt->reuse_its      = 10;
-  nt->smooth_kappa   = 0.3;
-  nt->smoothing      = PETSC_TRUE;
-  nt->smooth_eps     = 4.0;
-  nt->smooth_raises  = 1;
-  nt->second_rho     = 0.1;
-  nt->second_window  = 250;
+  nt->rho_factor        = 1.0;
+  nt->shift             = 1e-8;
+  nt->armijo            = 1e-4;
+  nt->max_backtracks    = 33;
+  nt->switch_tol        = 1e-2;
+  nt->max_sweeps        = 0;
+  nt->sweep_check       = 10;
+  nt->prox              = NEWTON_PROX_IDENTITY;
+  nt->alpha             = 10.0;
+  nt->alpha_min         = 1e-3;
+  nt->sigma_min         = 1e-8;
+  nt->sigma_max         = 1.0;
+  nt->inner_max         = 20;
+  nt->stall_steps       = 5;
+  nt->redundant_max     = 15000;
+  nt->inner_rtol        = 0.1;
+  nt->reuse_its         = 10;
+  nt->smooth_kappa      = 0.3;
+  nt->smoothing         = PETSC_TRUE;
+  nt->subdomains_from_w = PETSC_TRUE;
+  nt->smooth_eps        = 4.0;
+  nt->smooth_raises     = 1;
+  nt->second_rho        = 0.1;
+  nt->second_window     = 250;
   PetscCall(NewtonCreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 1000; /* the cap of the tradeoff study's reference runs (docs/tradeoff.md) */

@@ -33,6 +33,12 @@ typedef struct {
   Mat        Wwork;       /* W over J's rows: J's template (NULL: W itself) */
   PetscInt   rebuilds;    /* times the last solve put contacts back into J and set it up again */
   PetscInt   left_out;    /* contacts left out of J at the end of the last solve (global) */
+  /* several ranks, kergs's additive Schwarz: its preconditioning matrix, a shell whose subdomain matrices are computed
+     from W's subdomain, extracted once per J, and the blocks of J's rows (newton_subdomain.c) */
+  PetscBool  subdomains_from_w; /* -solver_newton_subdomains_from_w */
+  Mat        Pschwarz;
+  Vec        blocks;   /* per row of J: A_k then B_k of the J last assembled */
+  PetscReal  eps_used; /* its eps (sigma_used: its sigma) */
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
   Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */
@@ -102,5 +108,7 @@ PETSC_INTERN PetscErrorCode NewtonWorkingSetGrow(KergsSolver, Newton *, PetscInt
 /* newton_subdomain.c */
 PETSC_INTERN PetscErrorCode NewtonSubdomainSetSortedLU(PC);
 PETSC_INTERN PetscErrorCode NewtonSubdomainReleaseSortedLU(PC);
+PETSC_INTERN PetscErrorCode NewtonSubdomainCreateSource(Newton *, Mat W, Mat *P);
+PETSC_INTERN PetscErrorCode NewtonSubdomainSetBlocks(Newton *, PetscInt nc);
 
 #endif

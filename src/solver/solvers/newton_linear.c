@@ -130,6 +130,7 @@ PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pet
   PetscCall(PetscArraycpy(nt->Aused, nt->A, n * nc * nc));
   PetscCall(PetscArraycpy(nt->Bused, nt->B, n * nc * nc));
   nt->sigma_used = sigma;
+  nt->eps_used   = eps;
   nt->jacobians++;
   nt->stale = PETSC_TRUE;
   PetscCall(GetParts(JacobianTemplate(nt), nc, &Wd, &Wo));
@@ -139,6 +140,7 @@ PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pet
   /* values changed through the arrays: assembling again tells PETSc (and the factorization) that J changed */
   PetscCall(MatAssemblyBegin(nt->J, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(nt->J, MAT_FINAL_ASSEMBLY));
+  PetscCall(NewtonSubdomainSetBlocks(nt, nc));
   PetscFunctionReturn(0);
 }
 
@@ -204,6 +206,10 @@ static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
    100k and biaxial 20k with 40-60 % of the GMRES iterations, a few more on pressure20k (184 against 164) and confine500
    (453 against 409) with half of them, and less time on all five (docs/solver.md) */
   PetscCall(KSPSetTolerances(nt->ksp, 1e-3, PETSC_DEFAULT, PETSC_DEFAULT, 200));
+  if (nt->subdomains_from_w) { /* J stays the operator; the subdomains come from W's (newton_subdomain.c) */
+    PetscCall(NewtonSubdomainCreateSource(nt, JacobianTemplate(nt), &nt->Pschwarz));
+    PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->Pschwarz));
+  }
   PetscCall(PCSetType(pc, PCASM));
   PetscCall(PCASMSetOverlap(pc, 1));
   PetscCall(KSPSetFromOptions(nt->ksp)); /* -solver_ksp_rtol, -solver_pc_asm_overlap and the like */
@@ -402,6 +408,8 @@ PetscErrorCode NewtonDestroyJacobian(Newton *nt)
   PetscCall(PetscFree(nt->order));
   PetscCall(VecDestroy(&nt->Fs));
   PetscCall(VecDestroy(&nt->ds));
+  PetscCall(MatDestroy(&nt->Pschwarz));
+  PetscCall(VecDestroy(&nt->blocks));
   PetscCall(MatDestroy(&nt->J));
   PetscFunctionReturn(0);
 }
