@@ -368,7 +368,9 @@ static PetscErrorCode TestConvergedResidual(void)
 /* W assembled body by body (each rank adds its own disks' terms, rows of other ranks' contacts through the stash,
    a free wall's terms from the gathered list of its contacts) equals PETSc's product H_f^T M^-1 H_f, entry by entry
    and with the same pattern. A frictional deposit pushed by a free wall under a constant force, guided (its rows of
-   H_f projected on its normal), on 1, 2 ranks. */
+   H_f projected on its normal), on 1, 2 ranks. W with both triangles (KergsOperatorsSetBothTriangles), assembled
+   directly on several ranks, equals the conversion of the upper triangle (to rounding: a diagonal block's two
+   bodies may add in another order). */
 static PetscErrorCode TestDelassusAssembly(void)
 {
   KergsStepper   st;
@@ -420,6 +422,24 @@ static PetscErrorCode TestDelassusAssembly(void)
   }
   PetscCall(Check((PetscBool)(ndiff <= 1e-14 * nref), "W by bodies = H_f^T M^-1 H_f (relative Frobenius)", ndiff / nref, 0));
   PetscCall(Check((PetscBool)(iw.nz_used == ir.nz_used), "W by bodies: same pattern as the product (nonzeros)", iw.nz_used, ir.nz_used));
+  { /* with both triangles (the readers of whole rows: newton, tresca, snesvi), assembled so on several ranks */
+    Mat         Wfull;
+    MatInfo     ib;
+    PetscMPIInt size;
+    PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+    PetscCall(KergsOperatorsSetBothTriangles(ops, PETSC_TRUE));
+    PetscCall(KergsOperatorsAssembleW(ops, st->scene, st->contacts, PETSC_FALSE));
+    PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
+    PetscCall(Check((PetscBool)((size > 1) == (Wfull == ops->Wboth)), "W with both triangles: assembled on several ranks, converted on one",
+                    (PetscReal)(Wfull == ops->Wboth), (PetscReal)(size > 1)));
+    PetscCall(MatGetInfo(Wfull, MAT_GLOBAL_SUM, &ib));
+    PetscCall(MatAXPY(Waij, -1.0, Wfull, DIFFERENT_NONZERO_PATTERN));
+    PetscCall(MatNorm(Waij, NORM_FROBENIUS, &ndiff));
+    PetscCall(Check((PetscBool)(ndiff <= 1e-15 * nref && ib.nz_used == iw.nz_used),
+                    "W with both triangles = W's upper triangle converted (relative Frobenius; the same nonzeros)", ndiff / nref, 1e-15));
+    PetscCall(MatDestroy(&Wfull));
+    PetscCall(KergsOperatorsSetBothTriangles(ops, PETSC_FALSE));
+  }
   PetscCall(MatDestroy(&MinvHf));
   PetscCall(MatDestroy(&Wref));
   PetscCall(MatDestroy(&Waij));

@@ -48,6 +48,10 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseW(KergsOperators);
 /* W with both triangles stored, (MPI)BAIJ with block size ncomp ((MPI)AIJ when ncomp = 1), for the users that need
    whole rows (a new matrix: MatDestroy it) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetFullW(KergsOperators, Mat *);
+/* Whether KergsOperatorsAssembleW also assembles W with both triangles on several ranks, for KergsOperatorsGetFullW:
+   PETSc's conversion of a parallel upper triangle goes entry by entry (0.4 s a step on 2 ranks at 160,000 contacts),
+   a second assembly costs a third of that. On one rank the conversion copies, and W is converted as before. */
+PETSC_EXTERN PetscErrorCode KergsOperatorsSetBothTriangles(KergsOperators, PetscBool);
 /* A contact problem given as data, not assembled from a scene (an FCLib file): W (symmetric, rows and columns ordered
    contact by contact, ncomp components each) in compressed rows over the whole problem, and q = v^d, both given whole on
    every rank; this rank takes nlocal contacts, rank after rank. Builds W (upper block triangle, as AssembleW), v^d, and

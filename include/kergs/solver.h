@@ -123,6 +123,8 @@ PETSC_EXTERN PetscErrorCode KergsSolverNeedsH(KergsSolver, PetscBool *);
 /* Whether the type works on W over all pairs of potential contacts (the kernel-regularised types): the time step then
    assembles the whole W; otherwise W couples the active contacts only. */
 PETSC_EXTERN PetscErrorCode KergsSolverNeedsFullW(KergsSolver, PetscBool *);
+/* Whether the type reads W with both triangles (KergsOperatorsGetFullW: newton, tresca, snesvi, nlkergs) */
+PETSC_EXTERN PetscErrorCode KergsSolverNeedsBothTriangles(KergsSolver, PetscBool *);
 /* -solver_max_it and -solver_tol */
 PETSC_EXTERN PetscErrorCode KergsSolverGetTolerances(KergsSolver, PetscReal *tol, PetscInt *max_it);
 PETSC_EXTERN PetscErrorCode KergsSolverGetIterationName(KergsSolver, const char **);

@@ -126,17 +126,19 @@ static PetscErrorCode WallContacts(KergsOperators ops, const StepData *sd, Petsc
   PetscFunctionReturn(0);
 }
 
-/* Upper block pattern counts of row alpha (global contact index `row`) from the contacts bc[0 .. m) at one of its
-   bodies: only the blocks W_alpha,beta with beta >= alpha are stored (and StoredBlock). Alpha is among them; when it
-   is counted twice (dup) it is taken off once. The diagonal part holds those of rank `owner`. */
-static void CountBlocks(const BodyContact *bc, PetscInt m, PetscInt row, PetscMPIInt owner, PetscBool dup, PetscInt *d, PetscInt *o)
+/* Block pattern counts of row alpha (global contact index `row`) from the contacts bc[0 .. m) at one of its bodies: the
+   blocks W_alpha,beta with beta >= alpha (and StoredBlock), or every beta for W stored with both triangles (`both`).
+   Alpha is among them; when it is counted twice (dup) it is taken off once. The diagonal part holds those of rank
+   `owner`. */
+static void CountBlocks(const BodyContact *bc, PetscInt m, PetscInt row, PetscMPIInt owner, PetscBool dup, PetscBool both, PetscInt *d,
+                        PetscInt *o)
 {
   const BodyContact *alpha = NULL;
 
   for (PetscInt j = 0; j < m && !alpha; j++)
     if (bc[j].index == row) alpha = &bc[j];
   for (PetscInt j = 0; j < m; j++) {
-    if (bc[j].index < row || !StoredBlock(alpha, &bc[j])) continue;
+    if ((!both && bc[j].index < row) || !StoredBlock(alpha, &bc[j])) continue;
     if (bc[j].owner == owner)
       (*d)++;
     else
@@ -147,7 +149,7 @@ static void CountBlocks(const BodyContact *bc, PetscInt m, PetscInt row, PetscMP
 
 /* The counts of the rows of foreign contacts at owned disks, sent to their owners, added to dnz/onz there. */
 static PetscErrorCode CountRemoteRows(KergsOperators ops, const StepData *sd, const PetscInt *start, const PetscInt *list, BodyContact *bc,
-                                      PetscInt *dnz, PetscInt *onz)
+                                      PetscBool both, PetscInt *dnz, PetscInt *onz)
 {
   PetscMPIInt size, *scount, *fill;
   PetscInt   *send, *recv, nrecv;
@@ -167,7 +169,7 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, const StepData *sd, co
       if (f < 0) continue;
       if (m < 0) m = DiskContacts(ops, sd, start, list, q, PETSC_FALSE, bc);
       p = (PetscMPIInt)sd->D.ghost_owner[sd->foreign[f].a - sd->D.nowned];
-      CountBlocks(bc, m, sd->foreign_index[f], p, PETSC_TRUE, &d, &o);
+      CountBlocks(bc, m, sd->foreign_index[f], p, PETSC_TRUE, both, &d, &o);
       r    = &send[3 * fill[p]++]; /* one record per foreign row: its index, then its counts */
       r[0] = sd->foreign_index[f];
       r[1] = d;
@@ -191,22 +193,28 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, const StepData *sd, co
 
 /* Add the blocks H_alpha,q M_q^-1 H_beta,q^T of body q (contacts bc[0 .. m), inverse masses minv on its nd DOFs)
    to the block rows of the contacts bc[rows[i]] (all of them when rows is NULL); only the upper blocks, beta >= alpha
-   (global contact indices), as W is stored by its upper block triangle (W_beta,alpha = W_alpha,beta^T). */
+   (global contact indices), as W is stored by its upper block triangle (W_beta,alpha = W_alpha,beta^T), or every
+   block (`both`), a lower one computed as the transpose of its upper one, operation for operation, so that the two
+   triangles are exact transposes as in PETSc's conversion of the upper triangle (the diagonal blocks too: their
+   entries below the diagonal are those above it). */
 static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const PetscReal *minv, const BodyContact *bc, PetscInt m,
-                                    const PetscInt *rows, PetscInt nrows, PetscInt *cols, PetscScalar *vals)
+                                    const PetscInt *rows, PetscInt nrows, PetscBool both, PetscInt *cols, PetscScalar *vals)
 {
   PetscFunctionBeginUser;
   for (PetscInt i = 0; i < (rows ? nrows : m); i++) {
     const BodyContact *a = &bc[rows ? rows[i] : i];
     PetscInt           n = 0;
     for (PetscInt j = 0; j < m; j++)
-      if (bc[j].index >= a->index && StoredBlock(a, &bc[j])) cols[n++] = j;
+      if ((both || bc[j].index >= a->index) && StoredBlock(a, &bc[j])) cols[n++] = j;
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt c = 0; c < nc; c++)
         for (PetscInt e = 0; e < nc; e++) {
           const BodyContact *b = &bc[cols[k]];
           PetscReal          w = 0.0;
-          for (PetscInt d = 0; d < nd; d++) w += a->h[c * nd + d] * minv[d] * b->h[e * nd + d];
+          if (b->index > a->index || (b == a && (!both || c <= e)))
+            for (PetscInt d = 0; d < nd; d++) w += a->h[c * nd + d] * minv[d] * b->h[e * nd + d];
+          else /* (W_beta,alpha)_ec, as computed in beta's row (or the diagonal block's upper entry) */
+            for (PetscInt d = 0; d < nd; d++) w += b->h[e * nd + d] * minv[d] * a->h[c * nd + d];
           vals[c * n * nc + k * nc + e] = w; /* row-major block row, as MatSetValuesBlocked takes it */
         }
     for (PetscInt k = 0; k < n; k++) cols[k] = bc[cols[k]].index;
@@ -215,9 +223,9 @@ static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const Petsc
   PetscFunctionReturn(0);
 }
 
-/* The free walls' terms: each rank adds the rows of its own contacts at each free wall; with the counts of those
+/* The free walls' terms: each rank adds the rows of its own contacts at each free wall to W; with the counts of those
    rows when dnz is given (then nothing is added). */
-static PetscErrorCode AddWallTerms(KergsOperators ops, const StepData *sd, PetscInt *dnz, PetscInt *onz)
+static PetscErrorCode AddWallTerms(KergsOperators ops, const StepData *sd, Mat W, PetscBool both, PetscInt *dnz, PetscInt *onz)
 {
   PetscMPIInt rank;
 
@@ -237,9 +245,10 @@ static PetscErrorCode AddWallTerms(KergsOperators ops, const StepData *sd, Petsc
     for (PetscInt d = 0; d < KERGS_DIM; d++) minv[d] = 1.0 / sd->walls[w].mass;
     if (dnz)
       for (PetscInt i = 0; i < nrows; i++)
-        CountBlocks(bc, m, bc[rows[i]].index, rank, PETSC_TRUE, &dnz[bc[rows[i]].index - sd->start], &onz[bc[rows[i]].index - sd->start]);
+        CountBlocks(bc, m, bc[rows[i]].index, rank, PETSC_TRUE, both, &dnz[bc[rows[i]].index - sd->start],
+                    &onz[bc[rows[i]].index - sd->start]);
     else
-      PetscCall(AddBodyBlocks(ops->W, ops->ncomp, KERGS_DIM, minv, bc, m, rows, nrows, cols, vals));
+      PetscCall(AddBodyBlocks(W, ops->ncomp, KERGS_DIM, minv, bc, m, rows, nrows, both, cols, vals));
     PetscCall(PetscFree3(rows, cols, vals));
     PetscCall(PetscFree(bc));
   }
@@ -249,7 +258,7 @@ static PetscErrorCode AddWallTerms(KergsOperators ops, const StepData *sd, Petsc
 /* Exact block counts of this rank's rows: the contacts at body a (owned here), plus those at body b (owned here,
    from b's owner for a ghost, or at a free wall), alpha itself once. */
 static PetscErrorCode CountPattern(KergsOperators ops, const StepData *sd, const PetscInt *start, const PetscInt *list, BodyContact *bc,
-                                   PetscInt *dnz, PetscInt *onz)
+                                   PetscBool both, PetscInt *dnz, PetscInt *onz)
 {
   PetscMPIInt rank;
 
@@ -262,15 +271,16 @@ static PetscErrorCode CountPattern(KergsOperators ops, const StepData *sd, const
       const PetscInt k = list[j];
       if (k >= sd->ncontacts) continue; /* a foreign row: counted by its owner, from CountRemoteRows */
       if (m < 0) m = DiskContacts(ops, sd, start, list, q, PETSC_FALSE, bc);
-      CountBlocks(bc, m, sd->start + k, rank, (PetscBool)(q != sd->c[k].a), &dnz[k], &onz[k]); /* at b: alpha is counted already */
+      CountBlocks(bc, m, sd->start + k, rank, (PetscBool)(q != sd->c[k].a), both, &dnz[k], &onz[k]); /* at b: alpha is counted already */
     }
   }
-  PetscCall(CountRemoteRows(ops, sd, start, list, bc, dnz, onz));
-  PetscCall(AddWallTerms(ops, sd, dnz, onz));
+  PetscCall(CountRemoteRows(ops, sd, start, list, bc, both, dnz, onz));
+  PetscCall(AddWallTerms(ops, sd, NULL, both, dnz, onz));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode ComputeDelassus(KergsOperators ops, const StepData *sd)
+/* W by its upper block triangle (SBAIJ), or with both triangles (BAIJ, or AIJ when frictionless: `both`). */
+static PetscErrorCode ComputeDelassus(KergsOperators ops, const StepData *sd, PetscBool both, Mat *W)
 {
   const PetscInt     nc = ops->ncomp, nd = ops->ndof_disk;
   PetscInt          *start, *list, *dnz, *onz, *cols, maxm = 1;
@@ -282,23 +292,33 @@ static PetscErrorCode ComputeDelassus(KergsOperators ops, const StepData *sd)
   PetscCall(DiskIncidence(sd, &start, &list));
   for (PetscInt q = 0; q < sd->D.nowned; q++) maxm = PetscMax(maxm, start[q + 1] - start[q]);
   PetscCall(PetscMalloc5(maxm, &bc, maxm, &cols, maxm * nc * nc, &vals, sd->ncontacts + 1, &dnz, sd->ncontacts + 1, &onz));
-  PetscCall(CountPattern(ops, sd, start, list, bc, dnz, onz));
-  PetscCall(MatCreate(ops->comm, &ops->W));
-  PetscCall(MatSetSizes(ops->W, sd->ncontacts * nc, sd->ncontacts * nc, PETSC_DETERMINE, PETSC_DETERMINE));
-  PetscCall(MatSetBlockSize(ops->W, nc));
-  PetscCall(MatSetType(ops->W, MATSBAIJ));
-  PetscCall(MatSeqSBAIJSetPreallocation(ops->W, nc, 0, dnz));
-  PetscCall(MatMPISBAIJSetPreallocation(ops->W, nc, 0, dnz, 0, onz));
-  PetscCall(MatSetOption(ops->W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
+  PetscCall(CountPattern(ops, sd, start, list, bc, both, dnz, onz));
+  PetscCall(MatCreate(ops->comm, W));
+  PetscCall(MatSetSizes(*W, sd->ncontacts * nc, sd->ncontacts * nc, PETSC_DETERMINE, PETSC_DETERMINE));
+  PetscCall(MatSetBlockSize(*W, nc));
+  if (!both) {
+    PetscCall(MatSetType(*W, MATSBAIJ));
+    PetscCall(MatSeqSBAIJSetPreallocation(*W, nc, 0, dnz));
+    PetscCall(MatMPISBAIJSetPreallocation(*W, nc, 0, dnz, 0, onz));
+  } else if (nc > 1) {
+    PetscCall(MatSetType(*W, MATBAIJ));
+    PetscCall(MatSeqBAIJSetPreallocation(*W, nc, 0, dnz));
+    PetscCall(MatMPIBAIJSetPreallocation(*W, nc, 0, dnz, 0, onz));
+  } else {
+    PetscCall(MatSetType(*W, MATAIJ));
+    PetscCall(MatSeqAIJSetPreallocation(*W, 0, dnz));
+    PetscCall(MatMPIAIJSetPreallocation(*W, 0, dnz, 0, onz));
+  }
+  PetscCall(MatSetOption(*W, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
   PetscCall(VecGetArrayRead(ops->Minv, &minv));
   for (PetscInt q = 0; q < sd->D.nowned; q++) {
     const PetscInt m = DiskContacts(ops, sd, start, list, q, PETSC_TRUE, bc);
-    PetscCall(AddBodyBlocks(ops->W, nc, nd, &minv[q * nd], bc, m, NULL, m, cols, vals));
+    PetscCall(AddBodyBlocks(*W, nc, nd, &minv[q * nd], bc, m, NULL, m, both, cols, vals));
   }
   PetscCall(VecRestoreArrayRead(ops->Minv, &minv));
-  PetscCall(AddWallTerms(ops, sd, NULL, NULL));
-  PetscCall(MatAssemblyBegin(ops->W, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(ops->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(AddWallTerms(ops, sd, *W, both, NULL, NULL));
+  PetscCall(MatAssemblyBegin(*W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*W, MAT_FINAL_ASSEMBLY));
   PetscCall(PetscFree5(bc, cols, vals, dnz, onz));
   PetscCall(PetscFree(start));
   PetscCall(PetscFree(list));
@@ -330,7 +350,8 @@ PetscErrorCode KergsOperatorsAssembleW(KergsOperators ops, KergsScene scene, Ker
   PetscCall(KergsOperatorsReleaseW(ops));
   ops->W_active_only = activeonly;
   PetscCall(KergsOperatorsGetStepData(ops, scene, contacts, &sd));
-  PetscCall(ComputeDelassus(ops, &sd));
+  PetscCall(ComputeDelassus(ops, &sd, PETSC_FALSE, &ops->W));
+  if (ops->both_triangles) PetscCall(ComputeDelassus(ops, &sd, PETSC_TRUE, &ops->Wboth));
   PetscCall(FullNonzerosW(ops->W, &ops->nnz_W));
   PetscCall(PetscLogEventEnd(KERGS_Assemble, 0, 0, 0, 0));
   PetscFunctionReturn(0);
@@ -340,5 +361,6 @@ PetscErrorCode KergsOperatorsReleaseW(KergsOperators ops)
 {
   PetscFunctionBeginUser;
   PetscCall(MatDestroy(&ops->W));
+  PetscCall(MatDestroy(&ops->Wboth));
   PetscFunctionReturn(0);
 }

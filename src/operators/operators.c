@@ -324,8 +324,23 @@ PetscErrorCode KergsOperatorsAssemble(KergsOperators ops, KergsScene scene, Kerg
 PetscErrorCode KergsOperatorsGetFullW(KergsOperators ops, Mat *Wfull)
 {
   PetscFunctionBeginUser;
+  if (ops->Wboth) { /* assembled with W (several ranks) */
+    PetscCall(PetscObjectReference((PetscObject)ops->Wboth));
+    *Wfull = ops->Wboth;
+    PetscFunctionReturn(0);
+  }
   /* from SBAIJ, PETSc's conversion writes W_beta,alpha = W_alpha,beta^T below the diagonal */
   PetscCall(MatConvert(ops->W, ops->ncomp > 1 ? MATBAIJ : MATAIJ, MAT_INITIAL_MATRIX, Wfull));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsOperatorsSetBothTriangles(KergsOperators ops, PetscBool both)
+{
+  PetscMPIInt size;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(ops->comm, &size));
+  ops->both_triangles = (PetscBool)(both && size > 1);
   PetscFunctionReturn(0);
 }
 

@@ -109,11 +109,12 @@ PetscErrorCode KergsSolverSetType(KergsSolver s, KergsSolverType type)
   PetscCheck(create, s->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "Unknown -solver_type %s (see -help for the registered types)", type);
   if (s->ops.destroy) PetscCall((*s->ops.destroy)(s));
   PetscCall(PetscMemzero(&s->ops, sizeof(s->ops)));
-  s->data            = NULL;
-  s->needs_H         = PETSC_FALSE;
-  s->needs_full_W    = PETSC_FALSE;
-  s->fixed_criterion = PETSC_FALSE;
-  s->iteration_name  = "sweeps";
+  s->data                 = NULL;
+  s->needs_H              = PETSC_FALSE;
+  s->needs_full_W         = PETSC_FALSE;
+  s->needs_both_triangles = PETSC_FALSE;
+  s->fixed_criterion      = PETSC_FALSE;
+  s->iteration_name       = "sweeps";
   PetscCall(PetscStrncpy(s->type, type, sizeof(s->type)));
   PetscCall((*create)(s));
   PetscFunctionReturn(0);
@@ -621,6 +622,13 @@ PetscErrorCode KergsSolverNeedsH(KergsSolver s, PetscBool *needs)
 {
   PetscFunctionBeginUser;
   *needs = s->needs_H;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsSolverNeedsBothTriangles(KergsSolver s, PetscBool *needs)
+{
+  PetscFunctionBeginUser;
+  *needs = s->needs_both_triangles;
   PetscFunctionReturn(0);
 }
 

@@ -272,7 +272,7 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
   KergsSolveStats ss;
   PetscLogDouble  t0, t1, t2;
   PetscReal      *vold, *wold, *wvold;
-  PetscBool       due, keepH, needsH, needsFullW, stop;
+  PetscBool       due, keepH, needsH, needsFullW, needsBoth, stop;
   PetscInt        step;
   PetscReal       vmax;
 
@@ -295,6 +295,8 @@ PetscErrorCode KergsStepperStep(KergsStepper st)
      it. W couples the active contacts only, unless the solver works on the whole W (the kernel-regularised types). */
   PetscCall(KergsSolverNeedsH(st->solver, &needsH));
   PetscCall(KergsSolverNeedsFullW(st->solver, &needsFullW));
+  PetscCall(KergsSolverNeedsBothTriangles(st->solver, &needsBoth));
+  PetscCall(KergsOperatorsSetBothTriangles(st->ops, needsBoth));
   keepH = (PetscBool)(st->keep_H || needsH);
   PetscCall(KergsOperatorsAssembleH(st->ops, sc, st->contacts, keepH));
   PetscCall(KergsOperatorsAssembleW(st->ops, sc, st->contacts, (PetscBool)!needsFullW));

@@ -15,6 +15,8 @@ struct _p_KergsOperators {
   Mat       HgT;                        /* H_g^T, NULL when the scene has no driven wall */
   Mat       W;                          /* H_f^T M^-1 H_f, (MPI)SBAIJ with block size ncomp: upper block triangle */
   PetscBool W_active_only;              /* W couples the active contacts only (KergsOperatorsAssembleW) */
+  PetscBool both_triangles;             /* several ranks: W with both triangles assembled too (KergsOperatorsSetBothTriangles) */
+  Mat       Wboth;                      /* that W, (MPI)BAIJ ((MPI)AIJ when ncomp = 1), or NULL */
   Vec       Minv;                       /* diagonal of M^-1 over free DOFs */
   Vec       Vf;                         /* free velocities V_f (V_f^- on entry of a step, V_f^+ after the update) */
   Vec       Rd;                         /* impulse of external forces over the step */

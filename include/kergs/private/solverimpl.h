@@ -41,6 +41,7 @@ struct _p_KergsSolver {
                                      keeps H alive from assembly to the velocity update */
   PetscBool needs_full_W;         /* the type works on W over all pairs of potential contacts (the kernel-regularised
                                      types); otherwise W couples the active contacts only */
+  PetscBool needs_both_triangles; /* the type reads W with both triangles (KergsOperatorsGetFullW) */
   /* monitors (KergsSolverMonitorSet); the last iteration's call is held back until the solve's exit, so that its residual
      is the one recorded (KergsSolverMonitor) */
   KergsSolverMonitorFn monitor[KERGS_SOLVER_MAXMONITORS];

@@ -121,7 +121,8 @@ PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver s)
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&nk));
-  nk->max_size = 6000;
+  s->needs_both_triangles = PETSC_TRUE; /* KergsOperatorsGetFullW */
+  nk->max_size            = 6000;
   PetscCall(KergsRegularisedCreate(s->comm, &nk->reg));
   PetscCall(KergsSweepCreate(s->comm, &nk->sweep));
   s->needs_H            = PETSC_TRUE; /* the kernel projector factors H_f H_f^T */

@@ -479,18 +479,19 @@ PetscErrorCode KergsSolverCreate_SnesVI(KergsSolver s)
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&vi));
-  vi->shift             = 1e-8;
-  s->data               = vi;
-  s->max_it             = 1000;
-  s->tol                = 1e-10;
-  s->criterion          = KERGS_CRITERION_NATURAL;
-  s->fixed_criterion    = PETSC_TRUE;
-  s->iteration_name     = "SNES iterations";
-  s->ops.setfromoptions = SolverSetFromOptions_SnesVI;
-  s->ops.setup          = SolverSetUp_SnesVI;
-  s->ops.solve          = SolverSolve_SnesVI;
-  s->ops.stats          = SolverStats_SnesVI;
-  s->ops.view           = SolverView_SnesVI;
-  s->ops.destroy        = SolverDestroy_SnesVI;
+  s->needs_both_triangles = PETSC_TRUE; /* KergsOperatorsGetFullW */
+  vi->shift               = 1e-8;
+  s->data                 = vi;
+  s->max_it               = 1000;
+  s->tol                  = 1e-10;
+  s->criterion            = KERGS_CRITERION_NATURAL;
+  s->fixed_criterion      = PETSC_TRUE;
+  s->iteration_name       = "SNES iterations";
+  s->ops.setfromoptions   = SolverSetFromOptions_SnesVI;
+  s->ops.setup            = SolverSetUp_SnesVI;
+  s->ops.solve            = SolverSolve_SnesVI;
+  s->ops.stats            = SolverStats_SnesVI;
+  s->ops.view             = SolverView_SnesVI;
+  s->ops.destroy          = SolverDestroy_SnesVI;
   PetscFunctionReturn(0);
 }

@@ -365,6 +365,7 @@ PetscErrorCode KergsSolverCreate_Tresca(KergsSolver s)
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&tr));
+  s->needs_both_triangles = PETSC_TRUE; /* KergsOperatorsGetFullW */
   PetscCall(PetscStrncpy(tr->taotype, TAOTRON, sizeof(tr->taotype)));
   tr->sigma_factor      = 1e-6;
   tr->inner_rtol        = 0.1;
