@@ -508,84 +508,75 @@ static PetscErrorCode TestRanks(const char *linear, const char *what)
   PetscFunctionReturn(0);
 }
 
-/* Several ranks, additive Schwarz (J above -solver_newton_redundant_max 0 rows): each subdomain is copied into its AMD
-   order and factored there (newton_subdomain.c), unless an ordering is chosen for the subdomains by option. `scene`'s
-   `nsteps` both ways: the views say which applies (the sorted LU's name appears in the subdomain solver's view), and
-   the factors being the same (measured: bitwise), so are the GMRES iterations, the Newton steps and the velocities (a
-   wrong copy or permutation changes the preconditioner and the GMRES iterations at once). confine500 with friction
-   has 2 x 2-block (BAIJ) subdomains; frictionless confine5, one component per contact (AIJ), whose rows of one pattern
-   MatGetRowIJ merges when asked to compress them (a crash before the sorted LU read AIJ rows uncompressed). */
-static PetscErrorCode TestSortedSubdomains(const char *scene, PetscInt nsteps, const char *what)
+/* Several ranks, additive Schwarz (J above -solver_newton_redundant_max 0 rows): `scene` (then `extra`) for `nsteps`
+   steps as kergs sets it up, and with `option` `value`, given with the run's options, or once the stepper exists
+   (`late`: an option of the subdomain solvers, read at the first Newton solve, after the stepper's options were
+   checked). The view says `phrase` for the first run only, and both runs converge in the same Newton steps and GMRES
+   iterations, to the same velocities (relative `veltol`): a wrong block, row, copy or permutation changes the
+   preconditioner and the GMRES iterations at once. */
+static PetscErrorCode CompareSchwarzVariants(const char *scene, const char *extra, PetscInt nsteps, const char *option, const char *value,
+                                             PetscBool late, const char *phrase, const char *label, PetscReal veltol)
 {
   KergsStepper st[2];
   PetscInt     maxits[2], nconv[2];
   PetscReal    maxres[2], linear[2] = {0, 0}, l, diff, scale;
-  PetscBool    sorted[2];
-  char         opts[PETSC_MAX_PATH_LEN], label[256];
+  PetscBool    says[2];
+  char         opts[PETSC_MAX_PATH_LEN];
 
   PetscFunctionBeginUser;
   for (PetscInt k = 0; k < 2; k++) {
     PetscCall(PetscSNPrintf(opts, sizeof(opts),
-                            "%s -steps %" PetscInt_FMT " -solver_type newton -solver_tol 1e-10 -solver_newton_redundant_max 0", scene,
-                            nsteps));
+                            "%s -steps %" PetscInt_FMT " -solver_type newton -solver_tol 1e-10 -solver_newton_redundant_max 0 %s %s %s",
+                            scene, nsteps, extra, k && !late ? option : "", k && !late ? value : ""));
     PetscCall(MakeStepper(opts, &st[k]));
-    /* read by the subdomain solvers at the first Newton solve, after the stepper's options were checked */
-    if (k == 1) PetscCall(PetscOptionsSetValue(NULL, "-solver_sub_pc_factor_mat_ordering_type", "amd"));
+    if (k && late) PetscCall(PetscOptionsSetValue(NULL, option, value));
     PetscCall(StepAndSummarize(st[k], nsteps, &maxits[k], &maxres[k], &nconv[k]));
-    PetscCall(ViewSays(PETSC_COMM_WORLD, st[k]->solver, "the subdomain copied into that order", &sorted[k]));
-    if (k == 1) PetscCall(PetscOptionsClearValue(NULL, "-solver_sub_pc_factor_mat_ordering_type"));
+    PetscCall(ViewSays(PETSC_COMM_WORLD, st[k]->solver, phrase, &says[k]));
+    if (k && late) PetscCall(PetscOptionsClearValue(NULL, option));
     for (PetscInt s = 0; s < nsteps; s++) {
       PetscCall(StatAt(st[k]->results, "linear_iterations", s, &l));
       linear[k] += l;
     }
   }
-  PetscCall(PetscSNPrintf(label, sizeof(label), "%s, additive Schwarz: the subdomain solver is the sorted LU (not with an ordering option)",
-                          what));
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(sorted[0] && !sorted[1]), label, sorted[0], 1));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(says[0] && !says[1]), label, says[0], 1));
   PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(nconv[0] == nsteps && nconv[1] == nsteps && maxits[0] == maxits[1]),
                      "... every step converges both ways, in the same Newton steps", maxits[0], maxits[1]));
   PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(linear[0] == linear[1]), "... the same GMRES iterations", linear[0], linear[1]));
   PetscCall(VelocityDifference(st[0], st[1], &diff, &scale));
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-10 * scale), "... the same velocities (relative)", diff / scale, 1e-10));
+  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= veltol * scale), "... the same velocities (relative)", diff / scale, veltol));
   for (PetscInt k = 0; k < 2; k++) PetscCall(KergsStepperDestroy(&st[k]));
   PetscFunctionReturn(0);
 }
 
-/* Several ranks, additive Schwarz: each subdomain's J is computed from W's subdomain, extracted once per J, and the A
-   and B blocks of its rows (newton_subdomain.c), instead of extracted from J at every set-up
-   (-solver_newton_subdomains_from_w 0). The arithmetic is J's own, entry for entry, so the subdomain matrices, hence
-   the GMRES iterations, the Newton steps and the velocities, are the same both ways (measured: bitwise); a wrong block,
-   row or sigma changes the preconditioner and the GMRES iterations at once. With the predictive gap rule the working
-   set sets J up again within a step (9 times over those 2 steps), and the subdomains are built again with it. */
-static PetscErrorCode TestSubdomainsFromW(const char *scene, const char *extra, PetscInt nsteps, const char *what)
+/* Each subdomain is copied into its AMD order and factored there (newton_subdomain.c), unless an ordering is chosen
+   for the subdomains by option: the factors are the same (measured: bitwise). confine500 with friction has 2 x 2-block
+   (BAIJ) subdomains; frictionless confine5, one component per contact (AIJ), whose rows of one pattern MatGetRowIJ
+   merges when asked to compress them (a crash before the sorted LU read AIJ rows uncompressed). */
+static PetscErrorCode TestSortedSubdomains(const char *scene, PetscInt nsteps, const char *what)
 {
-  KergsStepper st[2];
-  PetscInt     maxits[2], nconv[2];
-  PetscReal    maxres[2], linear[2] = {0, 0}, l, diff, scale;
-  PetscBool    from_w[2];
-  char         opts[PETSC_MAX_PATH_LEN], label[256];
+  char label[256];
 
   PetscFunctionBeginUser;
-  for (PetscInt k = 0; k < 2; k++) {
-    PetscCall(PetscSNPrintf(opts, sizeof(opts),
-                            "%s -steps %" PetscInt_FMT " -solver_type newton -solver_tol 1e-10 -solver_newton_redundant_max 0 %s%s", scene,
-                            nsteps, extra, k ? " -solver_newton_subdomains_from_w 0" : ""));
-    PetscCall(MakeStepper(opts, &st[k]));
-    PetscCall(StepAndSummarize(st[k], nsteps, &maxits[k], &maxres[k], &nconv[k]));
-    PetscCall(ViewSays(PETSC_COMM_WORLD, st[k]->solver, "computed from W's subdomain", &from_w[k]));
-    for (PetscInt s = 0; s < nsteps; s++) {
-      PetscCall(StatAt(st[k]->results, "linear_iterations", s, &l));
-      linear[k] += l;
-    }
-  }
+  PetscCall(PetscSNPrintf(label, sizeof(label), "%s, additive Schwarz: the subdomain solver is the sorted LU (not with an ordering option)",
+                          what));
+  PetscCall(CompareSchwarzVariants(scene, "", nsteps, "-solver_sub_pc_factor_mat_ordering_type", "amd", PETSC_TRUE,
+                                   "the subdomain copied into that order", label, 1e-10));
+  PetscFunctionReturn(0);
+}
+
+/* Each subdomain's J is computed from W's subdomain, extracted once per J, and the A and B blocks of its rows
+   (newton_subdomain.c), instead of extracted from J at every set-up (-solver_newton_subdomains_from_w 0). The
+   arithmetic is J's own (NewtonJacobianBlock), so the subdomain matrices, hence the GMRES iterations, the Newton steps
+   and the velocities, are the same (measured: bitwise). With the predictive gap rule the working set sets J up again
+   within a step (9 times over confine500's first 2 steps), and the subdomains are built again with it. */
+static PetscErrorCode TestSubdomainsFromW(const char *scene, const char *extra, PetscInt nsteps, const char *what)
+{
+  char label[256];
+
+  PetscFunctionBeginUser;
   PetscCall(PetscSNPrintf(label, sizeof(label), "%s, additive Schwarz: subdomains computed from W's (not with the option off)", what));
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(from_w[0] && !from_w[1]), label, from_w[0], 1));
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(nconv[0] == nsteps && nconv[1] == nsteps && maxits[0] == maxits[1]),
-                     "... every step converges both ways, in the same Newton steps", maxits[0], maxits[1]));
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(linear[0] == linear[1]), "... the same GMRES iterations", linear[0], linear[1]));
-  PetscCall(VelocityDifference(st[0], st[1], &diff, &scale));
-  PetscCall(CheckAll(PETSC_COMM_WORLD, (PetscBool)(diff <= 1e-12 * scale), "... the same velocities (relative)", diff / scale, 1e-12));
-  for (PetscInt k = 0; k < 2; k++) PetscCall(KergsStepperDestroy(&st[k]));
+  PetscCall(CompareSchwarzVariants(scene, extra, nsteps, "-solver_newton_subdomains_from_w", "0", PETSC_FALSE,
+                                   "computed from W's subdomain", label, 1e-12));
   PetscFunctionReturn(0);
 }
 

@@ -52,27 +52,8 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt nc, 
   for (PetscInt a = 0; a < nrow; a++) {
     const PetscInt   contact = nt->order ? nt->order[a] : a;
     const PetscReal *Ba = nt->B + contact * nc * nc, *Aa = nt->A + contact * nc * nc;
-    for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
-      const PetscScalar *wb  = w + j * nc * nc;
-      PetscScalar       *out = v + j * nc * nc;
-      if (nc == 2) { /* the 2D case, written out: most of the time goes here */
-        out[0] = Ba[0] * wb[0] + Ba[1] * wb[1];
-        out[1] = Ba[2] * wb[0] + Ba[3] * wb[1];
-        out[2] = Ba[0] * wb[2] + Ba[1] * wb[3];
-        out[3] = Ba[2] * wb[2] + Ba[3] * wb[3];
-      } else
-        for (PetscInt c = 0; c < nc; c++)
-          for (PetscInt e = 0; e < nc; e++) {
-            PetscScalar sum = 0.0;
-            for (PetscInt k = 0; k < nc; k++) sum += Ba[c * nc + k] * wb[k + e * nc];
-            out[c + e * nc] = sum;
-          }
-      if (diagonal && j == nt->diagblock[a])
-        for (PetscInt c = 0; c < nc; c++) {
-          for (PetscInt e = 0; e < nc; e++) out[c + e * nc] += Aa[c * nc + e] + sigma * Ba[c * nc + e];
-          out[c + c * nc] += eps;
-        }
-    }
+    for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
+      NewtonJacobianBlock(nc, Ba, Aa, w + j * nc * nc, (PetscBool)(diagonal && j == nt->diagblock[a]), sigma, eps, v + j * nc * nc);
   }
   if (nc > 1) {
     PetscCall(MatSeqBAIJRestoreArray(P, &v));

@@ -355,28 +355,9 @@ static PetscErrorCode SourceFill(SubdomainSource *src, Mat sub)
   }
   PetscCall(VecGetArrayRead(src->blocks, &ab));
   for (PetscInt a = 0; a < nrow; a++) {
-    const PetscScalar *Aa = ab + a * 2 * nc * nc, *Ba = Aa + nc * nc;
-    for (PetscInt j = ia[a]; j < ia[a + 1]; j++) { /* the arithmetic of J's own assembly (ScaleBlockRows), entry for entry */
-      const PetscScalar *wb  = w + j * nc * nc;
-      PetscScalar       *out = v + j * nc * nc;
-      if (nc == 2) {
-        out[0] = Ba[0] * wb[0] + Ba[1] * wb[1];
-        out[1] = Ba[2] * wb[0] + Ba[3] * wb[1];
-        out[2] = Ba[0] * wb[2] + Ba[1] * wb[3];
-        out[3] = Ba[2] * wb[2] + Ba[3] * wb[3];
-      } else
-        for (PetscInt c = 0; c < nc; c++)
-          for (PetscInt e = 0; e < nc; e++) {
-            PetscScalar sum = 0.0;
-            for (PetscInt k = 0; k < nc; k++) sum += Ba[c * nc + k] * wb[k + e * nc];
-            out[c + e * nc] = sum;
-          }
-      if (j == src->diag[a])
-        for (PetscInt c = 0; c < nc; c++) {
-          for (PetscInt e = 0; e < nc; e++) out[c + e * nc] += Aa[c * nc + e] + nt->sigma_used * Ba[c * nc + e];
-          out[c + c * nc] += nt->eps_used;
-        }
-    }
+    const PetscReal *Aa = ab + a * 2 * nc * nc, *Ba = Aa + nc * nc; /* real scalars: kergs is built on real PETSc */
+    for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
+      NewtonJacobianBlock(nc, Ba, Aa, w + j * nc * nc, (PetscBool)(j == src->diag[a]), nt->sigma_used, nt->eps_used, v + j * nc * nc);
   }
   PetscCall(VecRestoreArrayRead(src->blocks, &ab));
   if (blocked) {
