@@ -24,6 +24,10 @@ foreach(type newton snesvi tresca)
   kergs_test(NAME malloc_dump_confine5_${type} NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
              ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type ${type})
 endforeach()
+# newton's additive Schwarz (J not gathered): the shell whose subdomain matrices come from W's, W's subdomain, the scatter
+kergs_test(NAME malloc_dump_confine5_newton_schwarz NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
+           ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type newton
+                -solver_newton_redundant_max 0)
 # newton's working set: J rebuilt over a subset of the contacts when the answer closes a deferred one
 kergs_test(NAME malloc_dump_confine5_newton_working_set NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type newton

@@ -46,7 +46,7 @@ PETSC_EXTERN PetscErrorCode KergsOperatorsBuildHf(KergsOperators, KergsScene, Ke
 PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseH(KergsOperators);
 PETSC_EXTERN PetscErrorCode KergsOperatorsReleaseW(KergsOperators);
 /* W with both triangles stored, (MPI)BAIJ with block size ncomp ((MPI)AIJ when ncomp = 1), for the users that need
-   whole rows (a new matrix: MatDestroy it) */
+   whole rows: a new reference (MatDestroy it), shared on several ranks with the operators (do not modify it) */
 PETSC_EXTERN PetscErrorCode KergsOperatorsGetFullW(KergsOperators, Mat *);
 /* Whether KergsOperatorsAssembleW also assembles W with both triangles on several ranks, for KergsOperatorsGetFullW:
    PETSc's conversion of a parallel upper triangle goes entry by entry (0.4 s a step on 2 ranks at 160,000 contacts),

@@ -13,7 +13,8 @@
    b, alpha itself in both; for a ghost b the counts come from b's owner. W is symmetric: only its upper block
    triangle is stored (SBAIJ, blocks W_alpha,beta with beta >= alpha, diagonal blocks whole), by ncomp x ncomp
    blocks, one block row per contact (block size 1 when frictionless), as the sweep reads it. Only those blocks are
-   computed and counted. Nothing of the size of W or H_f is built on the side.
+   computed and counted. Nothing of the size of W or H_f is built on the side, except, on several ranks and for the
+   solver types that read whole rows, W with both triangles (KergsOperatorsSetBothTriangles), assembled the same way.
 */
 
 /* A contact at one body: global index, owning rank, whether it is coupled to the others (active, or W over all
@@ -195,8 +196,10 @@ static PetscErrorCode CountRemoteRows(KergsOperators ops, const StepData *sd, co
    to the block rows of the contacts bc[rows[i]] (all of them when rows is NULL); only the upper blocks, beta >= alpha
    (global contact indices), as W is stored by its upper block triangle (W_beta,alpha = W_alpha,beta^T), or every
    block (`both`), a lower one computed as the transpose of its upper one, operation for operation, so that the two
-   triangles are exact transposes as in PETSc's conversion of the upper triangle (the diagonal blocks too: their
-   entries below the diagonal are those above it). */
+   triangles are exact transposes (the diagonal blocks too: their entries below the diagonal are those above it). On
+   one rank this is PETSc's conversion of the upper triangle to the bit; on several, the parallel upper triangle's
+   diagonal blocks that receive another rank's term differ from it in rounding (measured: 1e-18 relative, in their
+   off-diagonal entries only; tests/test_physics.c). */
 static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const PetscReal *minv, const BodyContact *bc, PetscInt m,
                                     const PetscInt *rows, PetscInt nrows, PetscBool both, PetscInt *cols, PetscScalar *vals)
 {
@@ -211,7 +214,7 @@ static PetscErrorCode AddBodyBlocks(Mat W, PetscInt nc, PetscInt nd, const Petsc
         for (PetscInt e = 0; e < nc; e++) {
           const BodyContact *b = &bc[cols[k]];
           PetscReal          w = 0.0;
-          if (b->index > a->index || (b == a && (!both || c <= e)))
+          if (b->index > a->index || (b->index == a->index && (!both || c <= e)))
             for (PetscInt d = 0; d < nd; d++) w += a->h[c * nd + d] * minv[d] * b->h[e * nd + d];
           else /* (W_beta,alpha)_ec, as computed in beta's row (or the diagonal block's upper entry) */
             for (PetscInt d = 0; d < nd; d++) w += b->h[e * nd + d] * minv[d] * a->h[c * nd + d];

@@ -677,6 +677,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = nt->second_attempts = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   nt->smooth_steps                           = 0;
+  nt->subdomains_computed                    = 0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
@@ -859,11 +860,10 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
 
 static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
 {
-  Newton     *nt = (Newton *)s->data;
-  PetscMPIInt size;
+  Newton   *nt = (Newton *)s->data;
+  PetscBool from_w;
 
   PetscFunctionBeginUser;
-  PetscCallMPI(MPI_Comm_size(s->comm, &size));
   PetscCall(PetscViewerASCIIPrintf(
       viewer,
       "Semismooth Newton on the Alart-Curnier function (rho = %g / W_nn), Armijo line search (%g, at most %" PetscInt_FMT
@@ -887,11 +887,15 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
         viewer,
         "Working set: contacts the warm start leaves open are left out of J until an iterate takes them off the law's open piece\n"));
   if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
-  if (nt->subdomains_from_w && size > 1 && !nt->user_pc)
+  PetscCall(NewtonSubdomainsFromW(nt, &from_w));
+  if (from_w)
     PetscCall(PetscViewerASCIIPrintf(viewer,
                                      "Additive Schwarz (several ranks, above %" PetscInt_FMT
                                      " rows of J): each subdomain's J computed from W's subdomain, extracted once per J\n",
                                      nt->redundant_max));
+  if (nt->subdomains_computed > 0)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  %" PetscInt_FMT " subdomain matrices built through W's subdomain in the last solve\n",
+                                     nt->subdomains_computed));
   if (nt->sorted_subdomains)
     PetscCall(PetscViewerASCIIPrintf(viewer,
                                      "Additive Schwarz (above %" PetscInt_FMT

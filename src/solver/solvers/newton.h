@@ -37,8 +37,9 @@ typedef struct {
      from W's subdomain, extracted once per J, and the blocks of J's rows (newton_subdomain.c) */
   PetscBool  subdomains_from_w; /* -solver_newton_subdomains_from_w */
   Mat        Pschwarz;
-  Vec        blocks;   /* per row of J: A_k then B_k of the J last assembled */
-  PetscReal  eps_used; /* its eps (sigma_used: its sigma) */
+  Vec        row_AB;              /* per row of J: A_k then B_k of the J last assembled */
+  PetscInt   subdomains_computed; /* subdomain matrices built through W's subdomain in the last solve */
+  PetscReal  eps_used;            /* its eps (sigma_used: its sigma) */
   Vec        F, d, Wd, rtry, utry, Ftry;
   Vec        rc, ueff;      /* the proximal centre, and the proximal problem's velocity */
   Vec        rplain;        /* the end of the plain attempt, kept while the smoothing phase runs */
@@ -136,5 +137,6 @@ PETSC_INTERN PetscErrorCode NewtonSubdomainSetSortedLU(PC);
 PETSC_INTERN PetscErrorCode NewtonSubdomainReleaseSortedLU(PC);
 PETSC_INTERN PetscErrorCode NewtonSubdomainCreateSource(Newton *, Mat W, Mat *P);
 PETSC_INTERN PetscErrorCode NewtonSubdomainSetBlocks(Newton *, PetscInt nc);
+PETSC_INTERN PetscErrorCode NewtonSubdomainsFromW(Newton *, PetscBool *);
 
 #endif

@@ -156,7 +156,9 @@ static PetscErrorCode EnableNullPivots(Newton *nt)
      crosses the cut).
    - above, GMRES preconditioned by additive Schwarz with an overlap of one layer, one subdomain per rank factored by
      LU with AMD (ConfigureSubdomainSolvers): nothing of the size of the whole J on one rank; faster than the
-     gathered LU and than block Jacobi (overlap 0) from 5,000 disks on (docs/solver.md, "Linear algebra").
+     gathered LU and than block Jacobi (overlap 0) from 5,000 disks on (docs/solver.md, "Linear algebra"). Its
+     preconditioning matrix is then a shell whose subdomain matrices are computed from W's (NewtonSubdomainsFromW,
+     newton_subdomain.c); J stays the operator.
    -solver_redundant_* options, read last, win; the subdomain solvers are chosen by ConfigureSubdomainSolvers. */
 static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
 {
@@ -164,6 +166,7 @@ static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
   KSP         inner;
   PetscInt    rows;
   PetscMPIInt size;
+  PetscBool   from_w;
 
   PetscFunctionBeginUser;
   nt->configure_subs = PETSC_FALSE;
@@ -187,7 +190,8 @@ static PetscErrorCode ChooseLinearSolver(KergsSolver s, Newton *nt)
    100k and biaxial 20k with 40-60 % of the GMRES iterations, a few more on pressure20k (184 against 164) and confine500
    (453 against 409) with half of them, and less time on all five (docs/solver.md) */
   PetscCall(KSPSetTolerances(nt->ksp, 1e-3, PETSC_DEFAULT, PETSC_DEFAULT, 200));
-  if (nt->subdomains_from_w) { /* J stays the operator; the subdomains come from W's (newton_subdomain.c) */
+  PetscCall(NewtonSubdomainsFromW(nt, &from_w));
+  if (from_w) { /* J stays the operator; the subdomains come from W's (newton_subdomain.c) */
     PetscCall(NewtonSubdomainCreateSource(nt, JacobianTemplate(nt), &nt->Pschwarz));
     PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->Pschwarz));
   }
@@ -390,7 +394,7 @@ PetscErrorCode NewtonDestroyJacobian(Newton *nt)
   PetscCall(VecDestroy(&nt->Fs));
   PetscCall(VecDestroy(&nt->ds));
   PetscCall(MatDestroy(&nt->Pschwarz));
-  PetscCall(VecDestroy(&nt->blocks));
+  PetscCall(VecDestroy(&nt->row_AB));
   PetscCall(MatDestroy(&nt->J));
   PetscFunctionReturn(0);
 }

@@ -1,4 +1,4 @@
-/* The subdomain solver of solver type "newton"'s additive Schwarz (several ranks, newton_linear.c): the subdomain's
+/* Additive Schwarz for solver type "newton" (several ranks, newton_linear.c). First its subdomain solver: the subdomain's
    matrix, as PCASM extracts it (its rows in increasing order), copied block by block into the subdomain's own AMD order
    and factored there by PETSc's LU with the natural ordering, as one rank's J is (PresortContacts). PETSc's kernel for
    a permuted 2 x 2-block matrix copies and zeroes every block through a library call, its natural-ordering kernel
@@ -6,7 +6,8 @@
    extraction take the unsorted path of MatCreateSubMatrices: on the 100,000-disk strip, 2 ranks, the factorizations
    and triangular solves took 16 % and 22 % less time and the extractions 125 % more, no gain at all. The order, the
    permuted pattern and the map between the two value arrays are built once per step (the pattern is the step's);
-   each factorization then costs one pass over the blocks more. */
+   each factorization then costs one pass over the blocks more. Then its subdomain matrices, computed from W's (second
+   half of this file). */
 #include "newton.h"
 
 #define SORTED_LU_NAME "LU with AMD, the subdomain copied into that order (natural-ordering kernel)"
@@ -254,9 +255,10 @@ PetscErrorCode NewtonSubdomainReleaseSortedLU(PC subpc)
 typedef struct {
   Newton    *nt;
   Mat        W;      /* J's template: W over J's rows, in J's order */
+  IS         rows;   /* the subdomain's rows, as PCASM gave them at the first extraction */
   Mat       *Wsub;   /* W over the subdomain (one, as PCASM extracts it) */
   Vec        blocks; /* the subdomain rows' A and B blocks */
-  VecScatter gather; /* nt->blocks -> blocks */
+  VecScatter gather; /* nt->row_AB -> blocks */
   PetscInt  *diag;   /* per subdomain block row: position of its own block */
   PetscInt   nrows;  /* subdomain block rows */
 } SubdomainSource;
@@ -265,6 +267,7 @@ static PetscErrorCode SourceClear(SubdomainSource *src)
 {
   PetscFunctionBeginUser;
   if (src->Wsub) PetscCall(MatDestroySubMatrices(1, &src->Wsub));
+  PetscCall(ISDestroy(&src->rows));
   PetscCall(VecDestroy(&src->blocks));
   PetscCall(VecScatterDestroy(&src->gather));
   PetscCall(PetscFree(src->diag));
@@ -306,6 +309,8 @@ static PetscErrorCode SourceBuild(SubdomainSource *src, Mat sub, IS rows)
   PetscFunctionBeginUser;
   PetscCall(SourceClear(src));
   PetscCall(MatCreateSubMatrices(src->W, 1, &rows, &rows, MAT_INITIAL_MATRIX, &src->Wsub));
+  PetscCall(PetscObjectReference((PetscObject)rows));
+  src->rows = rows;
   PetscCall(MatGetBlockSize(src->W, &nc));
   PetscCall(ISGetLocalSize(rows, &npoints));
   src->nrows = npoints / nc;
@@ -315,7 +320,7 @@ static PetscErrorCode SourceBuild(SubdomainSource *src, Mat sub, IS rows)
   PetscCall(ISRestoreIndices(rows, &points));
   PetscCall(ISCreateBlock(PETSC_COMM_SELF, 2 * nc * nc, src->nrows, block_rows, PETSC_OWN_POINTER, &from));
   PetscCall(VecCreateSeq(PETSC_COMM_SELF, src->nrows * 2 * nc * nc, &src->blocks));
-  PetscCall(VecScatterCreate(src->nt->blocks, from, src->blocks, NULL, &src->gather));
+  PetscCall(VecScatterCreate(src->nt->row_AB, from, src->blocks, NULL, &src->gather));
   PetscCall(ISDestroy(&from));
   PetscCall(PetscMalloc1(src->nrows, &src->diag));
   PetscCall(MatGetRowIJ(sub, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
@@ -341,11 +346,12 @@ static PetscErrorCode SourceFill(SubdomainSource *src, Mat sub)
   PetscBool          done, blocked = PETSC_TRUE;
 
   PetscFunctionBeginUser;
-  PetscCall(VecScatterBegin(src->gather, nt->blocks, src->blocks, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(src->gather, nt->blocks, src->blocks, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterBegin(src->gather, nt->row_AB, src->blocks, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(src->gather, nt->row_AB, src->blocks, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(MatGetBlockSize(src->W, &nc));
   if (nc == 1) blocked = PETSC_FALSE;
   PetscCall(MatGetRowIJ(sub, 0, PETSC_FALSE, blocked, &nrow, &ia, &ja, &done));
+  PetscCheck(done && nrow == src->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the subdomain's rows");
   if (blocked) {
     PetscCall(MatSeqBAIJGetArray(src->Wsub[0], &w)); /* only read */
     PetscCall(MatSeqBAIJGetArray(sub, &v));
@@ -373,8 +379,9 @@ static PetscErrorCode SourceFill(SubdomainSource *src, Mat sub)
   PetscFunctionReturn(0);
 }
 
-/* PCASM's extraction: the first from J itself (and W's subdomain kept), the later ones computed (SourceFill). Several
-   subdomains on a rank (-solver_pc_asm_local_blocks) are extracted from J every time. */
+/* PCASM's extraction: the first from J itself (and W's subdomain kept), the later ones computed (SourceFill). The shell
+   exists only with one subdomain per rank (NewtonSubdomainsFromW); anything else, on any rank, is extracted from J
+   (decided by all ranks together: the scatter is collective). */
 static PetscErrorCode SourceCreateSubMatrices(Mat P, PetscInt n, const IS irow[], const IS icol[], MatReuse scall, Mat *sub[])
 {
   SubdomainSource *src;
@@ -383,7 +390,9 @@ static PetscErrorCode SourceCreateSubMatrices(Mat P, PetscInt n, const IS irow[]
   PetscFunctionBeginUser;
   PetscCall(MatShellGetContext(P, &src));
   same = (PetscBool)(n == 1);
-  if (same) PetscCall(ISEqual(irow[0], icol[0], &same));
+  if (same && irow[0] != icol[0]) PetscCall(ISEqual(irow[0], icol[0], &same));
+  if (same && src->rows && scall == MAT_REUSE_MATRIX && irow[0] != src->rows) PetscCall(ISEqual(irow[0], src->rows, &same));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &same, 1, MPIU_BOOL, MPI_LAND, PetscObjectComm((PetscObject)P)));
   if (!same) {
     PetscCall(MatCreateSubMatrices(src->nt->J, n, irow, icol, scall, sub));
     PetscFunctionReturn(0);
@@ -395,12 +404,37 @@ static PetscErrorCode SourceCreateSubMatrices(Mat P, PetscInt n, const IS irow[]
     PetscCall(SourceBuild(src, (*sub)[0], irow[0]));
   } else
     PetscCall(SourceFill(src, (*sub)[0]));
+  src->nt->subdomains_computed++;
   PetscCall(PetscLogEventEnd(KERGS_Subdomain, P, 0, 0, 0));
   PetscFunctionReturn(0);
 }
 
+/* Whether kergs's additive Schwarz takes its subdomain matrices from W's: -solver_newton_subdomains_from_w, several
+   ranks, kergs's choice of linear solver, and one subdomain per rank, each used as PCASM extracts it (not with
+   -solver_pc_asm_blocks, -solver_pc_asm_local_blocks, which make PCASM partition each rank's rows through the
+   matrix's diagonal block, nor -solver_pc_asm_sub_mat_type, which converts every extraction anew). */
+PetscErrorCode NewtonSubdomainsFromW(Newton *nt, PetscBool *apply)
+{
+  PetscMPIInt size;
+  const char *prefix;
+  const char *names[] = {"pc_asm_blocks", "pc_asm_local_blocks", "pc_asm_sub_mat_type"};
+  char        name[256];
+  PetscBool   given;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)nt->ksp), &size));
+  *apply = (PetscBool)(nt->subdomains_from_w && size > 1 && !nt->user_pc);
+  PetscCall(KSPGetOptionsPrefix(nt->ksp, &prefix));
+  for (size_t k = 0; k < sizeof(names) / sizeof(names[0]) && *apply; k++) {
+    PetscCall(PetscSNPrintf(name, sizeof(name), "-%s%s", prefix ? prefix : "", names[k]));
+    PetscCall(PetscOptionsHasName(NULL, NULL, name, &given));
+    if (given) *apply = PETSC_FALSE;
+  }
+  PetscFunctionReturn(0);
+}
+
 /* The preconditioning matrix of kergs's additive Schwarz for nt->J (J's template W over J's rows, in J's order), and
-   nt->blocks, which NewtonSubdomainSetBlocks fills at every assembly of J. */
+   nt->row_AB, which NewtonSubdomainSetBlocks fills at every assembly of J. */
 PetscErrorCode NewtonSubdomainCreateSource(Newton *nt, Mat W, Mat *P)
 {
   SubdomainSource *src;
@@ -420,9 +454,9 @@ PetscErrorCode NewtonSubdomainCreateSource(Newton *nt, Mat W, Mat *P)
   PetscCall(MatShellSetOperation(*P, MATOP_INCREASE_OVERLAP, (void (*)(void))SourceIncreaseOverlap));
   PetscCall(MatShellSetOperation(*P, MATOP_DESTROY, (void (*)(void))SourceDestroy));
   PetscCall(MatSetUp(*P));
-  PetscCall(VecDestroy(&nt->blocks));
-  PetscCall(VecCreateMPI(PetscObjectComm((PetscObject)nt->J), (m / nc) * 2 * nc * nc, PETSC_DETERMINE, &nt->blocks));
-  PetscCall(VecSetBlockSize(nt->blocks, 2 * nc * nc));
+  PetscCall(VecDestroy(&nt->row_AB));
+  PetscCall(VecCreateMPI(PetscObjectComm((PetscObject)nt->J), (m / nc) * 2 * nc * nc, PETSC_DETERMINE, &nt->row_AB));
+  PetscCall(VecSetBlockSize(nt->row_AB, 2 * nc * nc));
   PetscFunctionReturn(0);
 }
 
@@ -433,7 +467,7 @@ PetscErrorCode NewtonSubdomainSetBlocks(Newton *nt, PetscInt nc)
 
   PetscFunctionBeginUser;
   if (!nt->Pschwarz) PetscFunctionReturn(0);
-  PetscCall(VecGetArray(nt->blocks, &ab));
+  PetscCall(VecGetArray(nt->row_AB, &ab));
   for (PetscInt a = 0; a < nt->nrows; a++) {
     const PetscInt contact = nt->order ? nt->order[a] : a;
     for (PetscInt k = 0; k < nc * nc; k++) {
@@ -441,7 +475,7 @@ PetscErrorCode NewtonSubdomainSetBlocks(Newton *nt, PetscInt nc)
       ab[a * 2 * nc * nc + nc * nc + k] = nt->Bused[contact * nc * nc + k];
     }
   }
-  PetscCall(VecRestoreArray(nt->blocks, &ab));
+  PetscCall(VecRestoreArray(nt->row_AB, &ab));
   PetscCall(MatAssemblyBegin(nt->Pschwarz, MAT_FINAL_ASSEMBLY)); /* a new state: PCSetUp sets the preconditioner up again */
   PetscCall(MatAssemblyEnd(nt->Pschwarz, MAT_FINAL_ASSEMBLY));
   PetscFunctionReturn(0);
