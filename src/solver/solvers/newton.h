@@ -95,33 +95,10 @@ typedef struct {
   PetscReal enorm; /* |e| of the last natural residual computed (NaturalResidual) */
 } Newton;
 
-/* J's block (alpha, beta) from W's, the arithmetic of every assembly of J (newton_linear.c) and of its subdomains
-   (newton_subdomain.c), so that both give the same values to the bit: out = B w, and on alpha's own block (own)
-   A + sigma B + eps I added. B and A are row-major (nc x nc); w and out are stored as BAIJ stores a block, column by
-   column (entry (c, e) at c + e nc). */
-static inline void NewtonJacobianBlock(PetscInt nc, const PetscReal *Ba, const PetscReal *Aa, const PetscScalar *w, PetscBool own,
-                                       PetscReal sigma, PetscReal eps, PetscScalar *out)
-{
-  if (nc == 2) { /* the 2D case, written out: most of the time goes here */
-    out[0] = Ba[0] * w[0] + Ba[1] * w[1];
-    out[1] = Ba[2] * w[0] + Ba[3] * w[1];
-    out[2] = Ba[0] * w[2] + Ba[1] * w[3];
-    out[3] = Ba[2] * w[2] + Ba[3] * w[3];
-  } else
-    for (PetscInt c = 0; c < nc; c++)
-      for (PetscInt e = 0; e < nc; e++) {
-        PetscScalar sum = 0.0;
-        for (PetscInt k = 0; k < nc; k++) sum += Ba[c * nc + k] * w[k + e * nc];
-        out[c + e * nc] = sum;
-      }
-  if (own)
-    for (PetscInt c = 0; c < nc; c++) {
-      for (PetscInt e = 0; e < nc; e++) out[c + e * nc] += Aa[c * nc + e] + sigma * Ba[c * nc + e];
-      out[c + c * nc] += eps;
-    }
-}
-
 /* newton_linear.c */
+PETSC_INTERN PetscErrorCode NewtonScaleRows(Mat Wpart, Mat P, PetscInt nrows, PetscInt nc, const PetscReal *A, const PetscReal *B,
+                                            PetscInt stride, const PetscInt *order, const PetscInt *own, PetscReal sigma, PetscReal eps);
+PETSC_INTERN PetscErrorCode NewtonLocateOwnBlocks(Mat, PetscInt nc, PetscInt *own);
 PETSC_INTERN PetscErrorCode NewtonCreateLinearSolver(KergsSolver, Newton *);
 PETSC_INTERN PetscErrorCode NewtonChoosePresorting(KergsSolver, Newton *);
 PETSC_INTERN PetscErrorCode NewtonChooseSortedSubdomains(Newton *);

@@ -28,11 +28,38 @@ static PetscErrorCode GetParts(Mat M, PetscInt nc, Mat *Ad, Mat *Ao)
 /* J's template: W over J's rows (the working contacts, or all), in W's AMD order when presorted. */
 static Mat JacobianTemplate(const Newton *nt) { return nt->Wsorted ? nt->Wsorted : (nt->Wwork ? nt->Wwork : nt->Wfull); }
 
-/* Block row a of a sequential (B)AIJ part of J is B_k (nc x nc) times block row a of the same part of W (the same
-   pattern, W being J's template), k the contact of that row (order[a], or a); in the diagonal part, A_k + sigma B_k +
-   eps I is also added to the own block, found at diagblock[a]. BAIJ stores each block column by column: entry (c, e) at c + e nc. Reading W
-   and writing J in one pass spares copying W into J first. */
-static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt nc, PetscBool diagonal, PetscReal eps, PetscReal sigma)
+/* J's block (alpha, beta) from W's: out = B w, and on alpha's own block (own) A + sigma B + eps I added. B and A are row-major (nc x nc); w
+   and out are stored as BAIJ stores a block, column by column (entry (c, e) at c + e nc). */
+static inline void JacobianBlock(PetscInt nc, const PetscReal *Ba, const PetscReal *Aa, const PetscScalar *w, PetscBool own,
+                                 PetscReal sigma, PetscReal eps, PetscScalar *out)
+{
+  if (nc == 2) { /* the 2D case, written out: most of the time goes here */
+    out[0] = Ba[0] * w[0] + Ba[1] * w[1];
+    out[1] = Ba[2] * w[0] + Ba[3] * w[1];
+    out[2] = Ba[0] * w[2] + Ba[1] * w[3];
+    out[3] = Ba[2] * w[2] + Ba[3] * w[3];
+  } else
+    for (PetscInt c = 0; c < nc; c++)
+      for (PetscInt e = 0; e < nc; e++) {
+        PetscScalar sum = 0.0;
+        for (PetscInt k = 0; k < nc; k++) sum += Ba[c * nc + k] * w[k + e * nc];
+        out[c + e * nc] = sum;
+      }
+  if (own)
+    for (PetscInt c = 0; c < nc; c++) {
+      for (PetscInt e = 0; e < nc; e++) out[c + e * nc] += Aa[c * nc + e] + sigma * Ba[c * nc + e];
+      out[c + c * nc] += eps;
+    }
+}
+
+/* Block row a of a sequential (B)AIJ matrix P of nrows block rows on W's pattern (Wpart) is B_k (nc x nc) times block row a of Wpart,
+   and, where own is given, A_k + sigma B_k + eps I is also added to the row's own block, at own[a]. Row a's blocks are
+   A + k stride and B + k stride, k = order[a] (or a). BAIJ stores each block column by column: entry (c, e) at
+   c + e nc. Reading W and writing P in one pass spares copying W into P first. J's parts (NewtonAssembleJacobian) and
+   additive Schwarz's subdomains (newton_subdomain.c) are both computed here, so that both hold the same values to the
+   bit. */
+PetscErrorCode NewtonScaleRows(Mat Wpart, Mat P, PetscInt nrows, PetscInt nc, const PetscReal *A, const PetscReal *B, PetscInt stride,
+                               const PetscInt *order, const PetscInt *own, PetscReal sigma, PetscReal eps)
 {
   const PetscInt *ia, *ja;
   PetscInt        nrow;
@@ -41,7 +68,7 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt nc, 
 
   PetscFunctionBeginUser;
   PetscCall(MatGetRowIJ(P, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
-  PetscCheck(done && nrow == nt->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the Jacobian's rows");
+  PetscCheck(done && nrow == nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the rows of J or of a subdomain");
   if (nc > 1) {
     PetscCall(MatSeqBAIJGetArray(Wpart, &w));
     PetscCall(MatSeqBAIJGetArray(P, &v));
@@ -50,10 +77,10 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt nc, 
     PetscCall(MatSeqAIJGetArray(P, &v));
   }
   for (PetscInt a = 0; a < nrow; a++) {
-    const PetscInt   contact = nt->order ? nt->order[a] : a;
-    const PetscReal *Ba = nt->B + contact * nc * nc, *Aa = nt->A + contact * nc * nc;
+    const PetscInt   k  = order ? order[a] : a;
+    const PetscReal *Aa = A + k * stride, *Ba = B + k * stride;
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
-      NewtonJacobianBlock(nc, Ba, Aa, w + j * nc * nc, (PetscBool)(diagonal && j == nt->diagblock[a]), sigma, eps, v + j * nc * nc);
+      JacobianBlock(nc, Ba, Aa, w + j * nc * nc, (PetscBool)(own && j == own[a]), sigma, eps, v + j * nc * nc);
   }
   if (nc > 1) {
     PetscCall(MatSeqBAIJRestoreArray(P, &v));
@@ -66,23 +93,24 @@ static PetscErrorCode ScaleBlockRows(Newton *nt, Mat Wpart, Mat P, PetscInt nc, 
   PetscFunctionReturn(0);
 }
 
-/* Position of each block row's own block in the diagonal part (its local block column is the row). */
-static PetscErrorCode LocateDiagonalBlocks(Newton *nt, Mat Ad, PetscInt nc)
+/* Position of each block row's own block in a sequential (B)AIJ matrix whose row a's own block is in column a (J's
+   diagonal part, a subdomain's matrix). */
+PetscErrorCode NewtonLocateOwnBlocks(Mat M, PetscInt nc, PetscInt *own)
 {
   const PetscInt *ia, *ja;
   PetscInt        nrow;
   PetscBool       done;
 
   PetscFunctionBeginUser;
-  PetscCall(MatGetRowIJ(Ad, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscCall(MatGetRowIJ(M, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the rows of J or of a subdomain");
   for (PetscInt a = 0; a < nrow; a++) {
-    nt->diagblock[a] = -1;
+    own[a] = -1;
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
-      if (ja[j] == a) nt->diagblock[a] = j;
-    PetscCheck(nt->diagblock[a] >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
-               "newton: W's diagonal block of local contact %" PetscInt_FMT " is not stored", a);
+      if (ja[j] == a) own[a] = j;
+    PetscCheck(own[a] >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: the own block of row %" PetscInt_FMT " is not stored", a);
   }
-  PetscCall(MatRestoreRowIJ(Ad, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscCall(MatRestoreRowIJ(M, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
   PetscFunctionReturn(0);
 }
 
@@ -116,8 +144,8 @@ PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pet
   nt->stale = PETSC_TRUE;
   PetscCall(GetParts(JacobianTemplate(nt), nc, &Wd, &Wo));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
-  PetscCall(ScaleBlockRows(nt, Wd, Ad, nc, PETSC_TRUE, eps, sigma));
-  if (Ao) PetscCall(ScaleBlockRows(nt, Wo, Ao, nc, PETSC_FALSE, 0.0, 0.0));
+  PetscCall(NewtonScaleRows(Wd, Ad, nt->nrows, nc, nt->A, nt->B, nc * nc, nt->order, nt->diagblock, sigma, eps));
+  if (Ao) PetscCall(NewtonScaleRows(Wo, Ao, nt->nrows, nc, nt->A, nt->B, nc * nc, nt->order, NULL, 0.0, 0.0));
   /* values changed through the arrays: assembling again tells PETSc (and the factorization) that J changed */
   PetscCall(MatAssemblyBegin(nt->J, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(nt->J, MAT_FINAL_ASSEMBLY));
@@ -412,7 +440,7 @@ PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscI
   PetscCall(MatDuplicate(JacobianTemplate(nt), MAT_COPY_VALUES, &nt->J));
   if (nt->order) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
-  PetscCall(LocateDiagonalBlocks(nt, Ad, nc));
+  PetscCall(NewtonLocateOwnBlocks(Ad, nc, nt->diagblock));
   nt->sigma_used = -1.0;
   PetscCall(KSPSetOperators(nt->ksp, nt->J, nt->J)); /* reset by NewtonDestroyJacobian: J's sizes and pattern are new */
   PetscCall(KSPSetOperators(nt->kreuse, nt->J, nt->J));

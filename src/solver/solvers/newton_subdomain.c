@@ -301,9 +301,8 @@ static PetscErrorCode SourceIncreaseOverlap(Mat P, PetscInt n, IS is[], PetscInt
    position of each row's own block. */
 static PetscErrorCode SourceBuild(SubdomainSource *src, Mat sub, IS rows)
 {
-  const PetscInt *points, *ia, *ja;
-  PetscInt        npoints, nc, nrow, *block_rows;
-  PetscBool       done;
+  const PetscInt *points;
+  PetscInt        npoints, nc, *block_rows;
   IS              from;
 
   PetscFunctionBeginUser;
@@ -323,15 +322,7 @@ static PetscErrorCode SourceBuild(SubdomainSource *src, Mat sub, IS rows)
   PetscCall(VecScatterCreate(src->nt->row_AB, from, src->blocks, NULL, &src->gather));
   PetscCall(ISDestroy(&from));
   PetscCall(PetscMalloc1(src->nrows, &src->diag));
-  PetscCall(MatGetRowIJ(sub, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
-  PetscCheck(done && nrow == src->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the subdomain's rows");
-  for (PetscInt a = 0; a < nrow; a++) {
-    src->diag[a] = -1;
-    for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
-      if (ja[j] == a) src->diag[a] = j;
-    PetscCheck(src->diag[a] >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: the subdomain's row %" PetscInt_FMT " has no own block", a);
-  }
-  PetscCall(MatRestoreRowIJ(sub, 0, PETSC_FALSE, (PetscBool)(nc > 1), &nrow, &ia, &ja, &done));
+  PetscCall(NewtonLocateOwnBlocks(sub, nc, src->diag));
   PetscFunctionReturn(0);
 }
 
@@ -339,41 +330,17 @@ static PetscErrorCode SourceBuild(SubdomainSource *src, Mat sub, IS rows)
 static PetscErrorCode SourceFill(SubdomainSource *src, Mat sub)
 {
   const Newton      *nt = src->nt;
-  const PetscInt    *ia, *ja;
-  const PetscScalar *ab;
-  PetscScalar       *w, *v;
-  PetscInt           nc, nrow;
-  PetscBool          done, blocked = PETSC_TRUE;
+  const PetscScalar *ab; /* real scalars: kergs is built on real PETSc */
+  PetscInt           nc;
 
   PetscFunctionBeginUser;
   PetscCall(VecScatterBegin(src->gather, nt->row_AB, src->blocks, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterEnd(src->gather, nt->row_AB, src->blocks, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(MatGetBlockSize(src->W, &nc));
-  if (nc == 1) blocked = PETSC_FALSE;
-  PetscCall(MatGetRowIJ(sub, 0, PETSC_FALSE, blocked, &nrow, &ia, &ja, &done));
-  PetscCheck(done && nrow == src->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the subdomain's rows");
-  if (blocked) {
-    PetscCall(MatSeqBAIJGetArray(src->Wsub[0], &w)); /* only read */
-    PetscCall(MatSeqBAIJGetArray(sub, &v));
-  } else {
-    PetscCall(MatSeqAIJGetArrayRead(src->Wsub[0], (const PetscScalar **)&w));
-    PetscCall(MatSeqAIJGetArray(sub, &v));
-  }
   PetscCall(VecGetArrayRead(src->blocks, &ab));
-  for (PetscInt a = 0; a < nrow; a++) {
-    const PetscReal *Aa = ab + a * 2 * nc * nc, *Ba = Aa + nc * nc; /* real scalars: kergs is built on real PETSc */
-    for (PetscInt j = ia[a]; j < ia[a + 1]; j++)
-      NewtonJacobianBlock(nc, Ba, Aa, w + j * nc * nc, (PetscBool)(j == src->diag[a]), nt->sigma_used, nt->eps_used, v + j * nc * nc);
-  }
+  PetscCall(
+      NewtonScaleRows(src->Wsub[0], sub, src->nrows, nc, ab, ab + nc * nc, 2 * nc * nc, NULL, src->diag, nt->sigma_used, nt->eps_used));
   PetscCall(VecRestoreArrayRead(src->blocks, &ab));
-  if (blocked) {
-    PetscCall(MatSeqBAIJRestoreArray(sub, &v));
-    PetscCall(MatSeqBAIJRestoreArray(src->Wsub[0], &w));
-  } else {
-    PetscCall(MatSeqAIJRestoreArray(sub, &v));
-    PetscCall(MatSeqAIJRestoreArrayRead(src->Wsub[0], (const PetscScalar **)&w));
-  }
-  PetscCall(MatRestoreRowIJ(sub, 0, PETSC_FALSE, blocked, &nrow, &ia, &ja, &done));
   PetscCall(MatAssemblyBegin(sub, MAT_FINAL_ASSEMBLY)); /* values changed through the array */
   PetscCall(MatAssemblyEnd(sub, MAT_FINAL_ASSEMBLY));
   PetscFunctionReturn(0);
