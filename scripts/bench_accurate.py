@@ -19,6 +19,13 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
               friction) against newton, one rank: confine500 (10 steps, 1e-10) and the pressure20k packing tiled 10
               times (5,000 disks, 5 steps, 1e-8), without friction and with (SNESVI capped at 300 iterations a step
               there); steps converged and solve times side by side (docs/solver.md, "PETSc's SNESVI").
+  rest10k     (not run by default; about 7 minutes) a dense frictional packing at rest: cases/rest_10k.opts, the
+              10,000-disk sample under its pressure with friction 0.5, one step from zero impulses, a problem with a
+              solution. newton to 1e-6 (capped at 300 Newton steps) from zero and from the sample's forces, NLGS to
+              natural 1e-6 (capped at 30,000 sweeps), and newton without friction as the control; residuals, times, and
+              the Love-Weber stress of each answer against the walls'. Then the same step of newton at 300 disks
+              (cases/compact_small.h5), its 2 x 2 and 3 x 3 mirrored tilings (scripts/tile_sample.py) and 5,000 disks:
+              Newton steps against size (docs/solver.md, "A dense frictional packing at rest").
   big         (--big only) biaxial 10^6 disks on 2 ranks, first step, newton to 1e-6: time, peak memory per grain.
 
 Usage: bench_accurate.py [--kergs build/kergs] [--parts confine500,biaxial20k,pressure20k,siconos,ranks100k] [--big] [--quick]
@@ -208,6 +215,37 @@ if "ranks100k" in parts:
         emit({"bench": "ranks100k_pressure", "residual_max_1": float(np.max(one["residual"])),
               "residual_max_2": float(np.max(two["residual"])), "newton_steps_1": [int(x) for x in one["iterations"]],
               "newton_steps_2": [int(x) for x in two["iterations"]], "seconds_1": t1, "seconds_2": t2, "speedup": t1 / t2})
+
+if "rest10k" in parts:
+    # a capped answer injects energy (docs/solver.md): the blow-up check would end the run with no figures
+    REST = ["-options_file", "cases/rest_10k.opts", "-output_every", "1000", "-blowup_energy", "0"]
+    rows = {"newton": run("rest10k_newton_1e-6", 1, REST),
+            "newton_from_sample_forces": run("rest10k_newton_1e-6_sample_forces", 1, REST + ["-sample_forces", "true"]),
+            "nlgs": run("rest10k_nlgs_natural_1e-6", 1, REST + ["-solver_type", "nlgs", "-solver_criterion", "natural",
+                                                               "-solver_max_it", "30000"]),
+            "newton_frictionless": run("rest10k_newton_1e-6_frictionless", 1, REST + ["-friction", "0"])}
+    if all(r is not None for r in rows.values()):
+        emit({"bench": "rest10k", "residual": {k: float(r["residual"][0]) for k, r in rows.items()},
+              "converged": {k: bool(r["converged"][0]) for k, r in rows.items()},
+              "iterations": {k: int(r["iterations"][0]) for k, r in rows.items()},
+              "solve_seconds": {k: round(float(r["solve_seconds"][0]), 2) for k, r in rows.items()},
+              "kinetic_energy_after": {k: float(r["kinetic_energy"][0]) for k, r in rows.items()},
+              "love_weber_over_walls": {k: [round(float(r["sxx"][0] / r["wall_sxx"][0]), 4), round(float(r["syy"][0] / r["wall_syy"][0]), 4)]
+                                        for k, r in rows.items()},
+              "target": "newton converges (1e-6) with friction as without", "met": bool(rows["newton"]["converged"][0])})
+    samples = {"300": "cases/compact_small.h5", "5000": "cases/compact_5k.h5"}
+    for t in (2, 3):
+        tiled = os.path.join(tmp, f"compact_small_{t}x{t}.h5")
+        subprocess.run(["/usr/bin/python3", "scripts/tile_sample.py", "cases/compact_small.h5", tiled, "--tiles", f"{t},{t}"],
+                       check=True, stdout=subprocess.DEVNULL, env=env)
+        samples[str(300 * t * t)] = tiled
+    sizes = {n: run(f"rest{n}_newton_1e-6", 1, REST + ["-sample_input", path]) for n, path in samples.items()}
+    sizes["10000"] = rows["newton"]
+    sizes = dict(sorted(sizes.items(), key=lambda kv: int(kv[0])))
+    if all(r is not None for r in sizes.values()):
+        emit({"bench": "rest_sizes", "disks": [int(n) for n in sizes], "newton_steps": [int(r["iterations"][0]) for r in sizes.values()],
+              "residual": [float(r["residual"][0]) for r in sizes.values()],
+              "solve_seconds": [round(float(r["solve_seconds"][0]), 2) for r in sizes.values()]})
 
 if "big" in parts:
     s = run("biaxial1M_newton_2ranks", 2, B1M + ["-steps", "1"] + NEWTON + ["-solver_tol", "1e-6"])
