@@ -26,6 +26,10 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
               the Love-Weber stress of each answer against the boundary's (the walls' tractions, friction included). Then the same step of newton at 300 disks
               (cases/compact_small.h5), its 2 x 2 and 3 x 3 mirrored tilings (scripts/tile_sample.py) and 5,000 disks:
               Newton steps against size (docs/solver.md, "A dense frictional packing at rest").
+  ranks40k    (not run by default; about 4 minutes) 1 against 2 ranks on a square polydisperse packing:
+              cases/compact_10k.h5 mirrored 2 x 2 (40,000 disks, scripts/tile_sample.py) at rest under its pressure
+              walls without friction (cases/rest_10k.opts -friction 0), one step from zero impulses, newton to 1e-6:
+              residuals, Newton steps and speed-up (docs/solver.md, "A dense frictional packing at rest").
   big         (--big only) biaxial 10^6 disks on 2 ranks, first step, newton to 1e-6: time, peak memory per grain.
 
 Usage: bench_accurate.py [--kergs build/kergs] [--parts confine500,biaxial20k,pressure20k,siconos,ranks100k] [--big] [--quick]
@@ -249,6 +253,20 @@ if "rest10k" in parts:
               "solve_seconds": [round(float(r["solve_seconds"][0]), 2) for r in sizes.values()],
               "love_weber_over_boundary": [[round(float(r[c][0] / r["boundary_" + c][0]), 4) for c in ("sxx", "syy")]
                                            for r in sizes.values()]})
+
+if "ranks40k" in parts:
+    square = os.path.join(tmp, "compact_10k_2x2.h5")
+    subprocess.run(["/usr/bin/python3", "scripts/tile_sample.py", "cases/compact_10k.h5", square, "--tiles", "2,2"], check=True,
+                   stdout=subprocess.DEVNULL, env=env)
+    SQUARE = ["-options_file", "cases/rest_10k.opts", "-sample_input", square, "-friction", "0", "-output_every", "1000"]
+    one = run("square40k_newton_1rank", 1, SQUARE)
+    two = run("square40k_newton_2ranks", 2, SQUARE)
+    if one is not None and two is not None:
+        emit({"bench": "ranks40k", "residual_1": float(one["residual"][0]), "residual_2": float(two["residual"][0]),
+              "newton_steps_1": int(one["iterations"][0]), "newton_steps_2": int(two["iterations"][0]),
+              "seconds_1": float(one["solve_seconds"][0]), "seconds_2": float(two["solve_seconds"][0]),
+              "speedup": float(one["solve_seconds"][0] / two["solve_seconds"][0]), "target": "speed-up >= 1.7 at the same residual",
+              "met": bool(one["converged"][0] and two["converged"][0] and one["solve_seconds"][0] >= 1.7 * two["solve_seconds"][0])})
 
 if "big" in parts:
     s = run("biaxial1M_newton_2ranks", 2, B1M + ["-steps", "1"] + NEWTON + ["-solver_tol", "1e-6"])
