@@ -1,10 +1,12 @@
 #!/usr/bin/python3
-"""Two exact methods for the 2D frictional contact problem, prototyped on kergs's FCLib exports before any C is
-written, and not kept (docs/solver.md, "Prototypes measured and not kept"). Both are judged by kergs's own natural
-residual (scripts/siconos_solve.py's, recomputed from r).
+"""Three exact methods for the 2D frictional contact problem, prototyped on kergs's FCLib exports before any C is
+written, and not kept, and one diagnosis of a stored answer (docs/solver.md, "Prototypes measured and not kept"). All
+are judged by kergs's own natural residual (scripts/siconos_solve.py's, recomputed from r).
 
   proto_fixed_points.py desaxce PROBLEM.fclib.h5 [--outer 40] [--theta 1.0]
   proto_fixed_points.py fb-lcp  PROBLEM.fclib.h5 [--max-it 200]
+  proto_fixed_points.py lm      PROBLEM.fclib.h5 [--max-it 200] [--start zero|stored]
+  proto_fixed_points.py pieces  PROBLEM.fclib.h5 [--perturb 0] [--max-it 5000]
 
 desaxce: the De Saxce fixed point of Acary, Cadoux, Lemarechal and Malick (2011). With the shift s = mu |u_t| fixed, the
 problem is a convex QP: r in the Coulomb cone K (in 2D the cone of its two edges e+- = (1, +-mu), so r = a e+ + b e-
@@ -18,6 +20,17 @@ fb-lcp: the 2D law as the linear complementarity problem of Stewart and Trinkle 
 contact (r_t = beta+ - beta-, lambda the sliding speed), every pair scaled to impulse units by rho = 1 / W_nn, solved
 by a semismooth Newton method on the Fischer-Burmeister function with an Armijo search on its C^1 merit (De Luca,
 Facchinei and Kanzow 1996), and a gradient step where the Newton direction does not descend.
+
+lm: Levenberg-Marquardt on kergs's Alart-Curnier function F (rho = 1 / W_nn, its generalized Jacobian J = A + B W),
+lambda = |F| (Yamashita and Fukushima), the step from the augmented system [[-I, J], [J^T, lambda I]] (J^T J is denser),
+an Armijo search on 1/2 |F|^2; from r = 0 or from the solution stored in the file (kergs's answer).
+
+pieces: whether the stored answer's contact states admit a solution. With the states of F at r (open, stick, slip and
+its sign), the step dr that makes them hold exactly (open: r + dr = 0; stick: u + W dr = 0; slip: u_n + (W dr)_n = 0
+with r_t + dr_t = +-mu (r_n + dr_n)) solves a linear system, singular where W is. LSQR's least-squares solution says
+how much of its right-hand side no dr reaches: near 0 when the states are those of a solution nearby, large when they
+are not. --perturb e multiplies r by 1 + e N(0, 1) first (a control: a solution perturbed keeps most of its states).
+Reports the natural residual after the best of the steps 1, 1/2, ..., 1/16 along dr.
 
 Each prints one line per outer iteration (desaxce) or per 10 Newton steps (fb-lcp) and a last JSON line.
 """
@@ -155,16 +168,113 @@ def fb_lcp(prob, max_it):
     return {"method": "fb-lcp", "newton_steps": it, "residual": res}
 
 
+def alart_curnier(W, q, mu, rho, r, jacobian):
+    """F(r) contact by contact, the contact states, and with `jacobian` J = A + B W (sparse)."""
+    u = W @ r + q
+    rn, rt, un, ut = r[0::2], r[1::2], u[0::2], u[1::2]
+    xi, zeta = rn - rho * un, rt - rho * ut
+    tau = mu * np.maximum(0, xi)
+    F = np.empty_like(r)
+    F[0::2], F[1::2] = rn - np.maximum(0, xi), rt - np.clip(zeta, -tau, tau)
+    opened = xi <= 0
+    stick = ~opened & (np.abs(zeta) <= tau)
+    sign = np.where(zeta > tau, 1.0, -1.0)
+    states = {"u": u, "open": opened, "stick": stick, "slip": ~opened & ~stick, "sign": sign}
+    if not jacobian:
+        return F, states, None
+    A, B = np.zeros((mu.size, 2, 2)), np.zeros((mu.size, 2, 2))
+    A[opened, 0, 0] = A[opened, 1, 1] = 1
+    B[~opened, 0, 0] = rho[~opened]
+    B[stick, 1, 1] = rho[stick]
+    slip = states["slip"]
+    A[slip, 1, 0], A[slip, 1, 1] = -sign[slip] * mu[slip], 1
+    B[slip, 1, 0] = sign[slip] * mu[slip] * rho[slip]
+    return F, states, (block_diagonal(A) + block_diagonal(B) @ W).tocsr()
+
+
+def rho_of(W):
+    wnn = W.diagonal()[0::2]
+    return np.where(wnn > 0, 1.0 / np.where(wnn > 0, wnn, 1.0), 1.0)
+
+
+def levenberg_marquardt(prob, max_it, start):
+    W, q, mu = prob["W"].tocsr(), prob["q"], prob["mu"]
+    rho, m = rho_of(W), prob["m"]
+    r = prob["r_kergs"].copy() if start == "stored" and prob["r_kergs"] is not None else np.zeros(m)
+    res = natural_residual(prob, r)[0]
+    for it in range(max_it + 1):
+        F, _, J = alart_curnier(W, q, mu, rho, r, True)
+        res = natural_residual(prob, r)[0]
+        if it % 10 == 0:
+            print(f"Levenberg-Marquardt step {it}: natural residual {res:.3e}, |F| {np.linalg.norm(F):.3e}", flush=True)
+        if res < 1e-10 or it == max_it:
+            break
+        lam = float(np.linalg.norm(F))
+        K = sp.bmat([[-sp.identity(m), J], [J.T, lam * sp.identity(m)]], format="csc")
+        d = spla.splu(K, permc_spec="COLAMD").solve(np.concatenate([-F, np.zeros(m)]))[m:]
+        merit, slope, t = 0.5 * F @ F, float((J.T @ F) @ d), 1.0
+        for _ in range(40):
+            Ft = alart_curnier(W, q, mu, rho, r + t * d, False)[0]
+            if 0.5 * Ft @ Ft <= merit + 1e-4 * t * slope:
+                break
+            t *= 0.5
+        r = r + t * d
+    return {"method": "lm", "steps": it, "residual": res}
+
+
+def piece_equations(W, r, st, mu):
+    """A y = b for dr = E y + f: the contact states of `st` made to hold exactly (see the module's docstring)."""
+    nc = mu.size
+    stick, slip, sign = np.flatnonzero(st["stick"]), np.flatnonzero(st["slip"]), st["sign"]
+    f = np.zeros(2 * nc)
+    opened = np.flatnonzero(st["open"])
+    f[2 * opened], f[2 * opened + 1] = -r[2 * opened], -r[2 * opened + 1]
+    f[2 * slip + 1] = sign[slip] * mu[slip] * r[2 * slip] - r[2 * slip + 1]
+    ns = stick.size
+    rows = np.concatenate([2 * stick, 2 * stick + 1, 2 * slip, 2 * slip + 1])
+    cols = np.concatenate([2 * np.arange(ns), 2 * np.arange(ns) + 1, 2 * ns + np.arange(slip.size), 2 * ns + np.arange(slip.size)])
+    vals = np.concatenate([np.ones(2 * ns), np.ones(slip.size), sign[slip] * mu[slip]])
+    E = sp.csr_matrix((vals, (rows, cols)), shape=(2 * nc, 2 * ns + slip.size))
+    picked = np.concatenate([np.stack([2 * stick, 2 * stick + 1], 1).ravel(), 2 * slip])
+    P = sp.csr_matrix((np.ones(picked.size), (np.arange(picked.size), picked)), shape=(picked.size, 2 * nc))
+    return (P @ W @ E).tocsr(), -(P @ (st["u"] + W @ f)), E, f
+
+
+def pieces(prob, perturb, max_it):
+    W, q, mu = prob["W"].tocsr(), prob["q"], prob["mu"]
+    if prob["r_kergs"] is None:
+        raise InputError(f"{prob['path']}: no stored solution (/solution/r) to check")
+    r = prob["r_kergs"] * (1 + perturb * np.random.default_rng(2013).standard_normal(prob["m"]))
+    _, st, _ = alart_curnier(W, q, mu, rho_of(W), r, False)
+    A, b, E, f = piece_equations(W, r, st, mu)
+    y, _, its, rnorm, _, anorm, _, arnorm = spla.lsqr(A, b, atol=1e-14, btol=1e-14, iter_lim=max_it)[:8]
+    d = E @ y + f
+    start = natural_residual(prob, r)[0]
+    after = min([start] + [natural_residual(prob, r + d / 2**k)[0] for k in range(5)])
+    out = {"method": "pieces", "residual": start, "residual_after_step": after, "lsqr_iterations": int(its),
+           "unreached_fraction": float(rnorm / max(np.linalg.norm(b), 1e-300)),
+           "lsqr_optimality": float(arnorm / max(anorm * rnorm, 1e-300)), "open": int(st["open"].sum()),
+           "stick": int(st["stick"].sum()), "slip": int(st["slip"].sum())}
+    print(f"states open {out['open']} stick {out['stick']} slip {out['slip']}; LSQR leaves {out['unreached_fraction']:.2e} of "
+          f"the right-hand side; natural residual {start:.3e} -> {after:.3e}", flush=True)
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("method", choices=("desaxce", "fb-lcp"))
+    ap.add_argument("method", choices=("desaxce", "fb-lcp", "lm", "pieces"))
     ap.add_argument("problem")
     ap.add_argument("--outer", type=int, default=40, help="desaxce: outer iterations (default 40)")
     ap.add_argument("--theta", type=float, default=1.0, help="desaxce: relaxation of the shift's update, in (0, 1] (default 1)")
-    ap.add_argument("--max-it", type=int, default=200, help="fb-lcp: Newton steps (default 200)")
+    ap.add_argument("--max-it", type=int, default=None, help="fb-lcp, lm: Newton steps (default 200); pieces: LSQR iterations (5000)")
+    ap.add_argument("--start", choices=("zero", "stored"), default="zero", help="lm: from r = 0 or from the file's solution")
+    ap.add_argument("--perturb", type=float, default=0.0, help="pieces: relative random perturbation of the stored r (default 0)")
     a = ap.parse_args(argv)
-    if not (0 < a.theta <= 1) or a.outer < 1 or a.max_it < 1:
-        print("proto_fixed_points.py: --theta must lie in (0, 1], --outer and --max-it be positive", file=sys.stderr)
+    if a.max_it is None:
+        a.max_it = 5000 if a.method == "pieces" else 200
+    if not (0 < a.theta <= 1) or a.outer < 1 or a.max_it < 1 or not (0 <= a.perturb < 1):
+        print("proto_fixed_points.py: --theta must lie in (0, 1], --outer and --max-it be positive, --perturb in [0, 1)",
+              file=sys.stderr)
         return 2
     try:
         prob = read_problem(a.problem)
@@ -175,7 +285,13 @@ def main(argv=None):
         print(f"proto_fixed_points.py: {a.problem} has no contacts: nothing to solve", file=sys.stderr)
         return 2
     t0 = time.time()
-    out = desaxce(prob, a.outer, a.theta) if a.method == "desaxce" else fb_lcp(prob, a.max_it)
+    try:
+        out = {"desaxce": lambda: desaxce(prob, a.outer, a.theta), "fb-lcp": lambda: fb_lcp(prob, a.max_it),
+               "lm": lambda: levenberg_marquardt(prob, a.max_it, a.start),
+               "pieces": lambda: pieces(prob, a.perturb, a.max_it)}[a.method]()
+    except InputError as err:
+        print(f"proto_fixed_points.py: {err}", file=sys.stderr)
+        return 2
     out.update({"problem": a.problem, "contacts": prob["nc"], "seconds": round(time.time() - t0, 2)})
     print(json.dumps(out))
     return 0

@@ -1,7 +1,9 @@
 #!/usr/bin/python3
-"""scripts/proto_fixed_points.py on a problem both methods solve: confine5's step 3 (5 contacts, friction), exported
-by kergs. The De Saxce fixed point must reach 1e-9 and the Fischer-Burmeister Newton 1e-10 on kergs's natural
-residual, each reporting it in its JSON line; a missing file is refused with status 2."""
+"""scripts/proto_fixed_points.py on a problem its methods solve: confine5's step 3 (5 contacts, friction), exported
+by kergs. The De Saxce fixed point must reach 1e-9, the Fischer-Burmeister Newton and Levenberg-Marquardt 1e-10 on
+kergs's natural residual, each reporting it in its JSON line. `pieces` on kergs's answer perturbed by 1e-3 (its
+contact states kept) must find its states' equations consistent and step back to the answer. A missing file is
+refused with status 2."""
 import json
 import os
 import subprocess
@@ -18,7 +20,8 @@ def main():
     p = k.run(1, "-options_file", "cases/confine5.opts", "-steps", 3, "-solver_type", "newton", "-output", k.path("confine5.h5"),
               "-fclib_step", 3, "-fclib_output", problem, "-quiet")
     check(p.returncode == 0 and os.path.exists(problem), "kergs exports confine5's step 3")
-    for method, extra, tol in (("desaxce", ["--outer", "60"], 1e-9), ("fb-lcp", ["--max-it", "50"], 1e-10)):
+    for method, extra, tol in (("desaxce", ["--outer", "60"], 1e-9), ("fb-lcp", ["--max-it", "50"], 1e-10),
+                               ("lm", ["--max-it", "50"], 1e-10)):
         p = subprocess.run(["/usr/bin/python3", SCRIPT, method, problem] + extra, capture_output=True, text=True)
         try:
             out = json.loads(p.stdout.strip().splitlines()[-1])
@@ -26,6 +29,15 @@ def main():
             out = {}
         check(p.returncode == 0 and out.get("method") == method and out.get("contacts") == 5 and out.get("residual", 1) <= tol,
               f"{method}: natural residual {out.get('residual')} <= {tol:g} on 5 contacts")
+    p = subprocess.run(["/usr/bin/python3", SCRIPT, "pieces", problem, "--perturb", "1e-3"], capture_output=True, text=True)
+    try:
+        out = json.loads(p.stdout.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        out = {}
+    check(p.returncode == 0 and out.get("residual", 0) > 1e-5 and out.get("unreached_fraction", 1) <= 1e-8
+          and out.get("residual_after_step", 1) <= 1e-12,
+          f"pieces: a perturbed answer's states are consistent ({out.get('unreached_fraction')}) and one step returns "
+          f"({out.get('residual')} -> {out.get('residual_after_step')})")
     p = subprocess.run(["/usr/bin/python3", SCRIPT, "desaxce", k.path("missing.h5")], capture_output=True, text=True)
     check(p.returncode == 2 and "no such file" in p.stderr, "a missing problem file: status 2, named")
     return 1 if failures else 0

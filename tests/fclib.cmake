@@ -19,7 +19,7 @@ add_test(NAME profiles_quick
                  --kergs $<TARGET_FILE:kergs_exe>
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(profiles_quick PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 1 TIMEOUT 300 LABELS fclib)
-# scripts/proto_fixed_points.py (docs/solver.md, "Prototypes measured and not kept"): both methods solve confine5's
+# scripts/proto_fixed_points.py (docs/solver.md, "Prototypes measured and not kept"): its methods solve confine5's
 # step 3 to kergs's natural residual, and a missing file is refused
 add_test(NAME proto_fixed_points
          COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/check_proto_fixed_points.py --kergs $<TARGET_FILE:kergs_exe>
