@@ -200,7 +200,9 @@ def rho_of(W):
 def levenberg_marquardt(prob, max_it, start):
     W, q, mu = prob["W"].tocsr(), prob["q"], prob["mu"]
     rho, m = rho_of(W), prob["m"]
-    r = prob["r_kergs"].copy() if start == "stored" and prob["r_kergs"] is not None else np.zeros(m)
+    if start == "stored" and prob["r_kergs"] is None:
+        raise InputError(f"{prob['path']}: no stored solution (/solution/r) to start from")
+    r = prob["r_kergs"].copy() if start == "stored" else np.zeros(m)
     res = natural_residual(prob, r)[0]
     for it in range(max_it + 1):
         F, _, J = alart_curnier(W, q, mu, rho, r, True)
