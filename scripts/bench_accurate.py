@@ -23,9 +23,10 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
               10,000-disk sample under its pressure with friction 0.5, one step from zero impulses, a problem with a
               solution. newton to 1e-6 (capped at 300 Newton steps) from zero and from the sample's forces, NLGS to
               natural 1e-6 (capped at 30,000 sweeps), and newton without friction as the control; residuals, times, and
-              the Love-Weber stress of each answer against the boundary's (the walls' tractions, friction included). Then the same step of newton at 300 disks
-              (cases/compact_small.h5), its 2 x 2 and 3 x 3 mirrored tilings (scripts/tile_sample.py) and 5,000 disks:
-              Newton steps against size (docs/solver.md, "A dense frictional packing at rest").
+              the Love-Weber stress of each answer against the boundary's (the walls' tractions, friction included).
+              Then the same step of newton at 300 disks (cases/compact_small.h5), its 2 x 2 and 3 x 3 mirrored tilings
+              (scripts/tile_sample.py) and 5,000 disks: Newton steps against size (docs/solver.md, "A dense frictional
+              packing at rest").
   ranks40k    (not run by default; about 4 minutes) 1 against 2 ranks on a square polydisperse packing:
               cases/compact_10k.h5 mirrored 2 x 2 (40,000 disks, scripts/tile_sample.py) at rest under its pressure
               walls without friction (cases/rest_10k.opts -friction 0), one step from zero impulses, newton to 1e-6:
@@ -220,6 +221,19 @@ if "ranks100k" in parts:
               "residual_max_2": float(np.max(two["residual"])), "newton_steps_1": [int(x) for x in one["iterations"]],
               "newton_steps_2": [int(x) for x in two["iterations"]], "seconds_1": t1, "seconds_2": t2, "speedup": t1 / t2})
 
+def tiled_sample(sample, tiles):
+    """`sample` mirrored into tiles x tiles by scripts/tile_sample.py (at rest as written): a sample file in tmp."""
+    path = os.path.join(tmp, f"{os.path.splitext(os.path.basename(sample))[0]}_{tiles}x{tiles}.h5")
+    subprocess.run(["/usr/bin/python3", "scripts/tile_sample.py", sample, path, "--tiles", f"{tiles},{tiles}"], check=True,
+                   stdout=subprocess.DEVNULL, env=env)
+    return path
+
+
+def over_boundary(s):
+    """The Love-Weber stress's sxx and syy over the boundary's (the walls' tractions, friction included), first step."""
+    return [round(float(s[c][0] / s["boundary_" + c][0]), 4) for c in ("sxx", "syy")]
+
+
 if "rest10k" in parts:
     # a capped answer injects energy (docs/solver.md): the blow-up check would end the run with no figures
     REST = ["-options_file", "cases/rest_10k.opts", "-output_every", "1000", "-blowup_energy", "0"]
@@ -234,31 +248,21 @@ if "rest10k" in parts:
               "iterations": {k: int(r["iterations"][0]) for k, r in rows.items()},
               "solve_seconds": {k: round(float(r["solve_seconds"][0]), 2) for k, r in rows.items()},
               "kinetic_energy_after": {k: float(r["kinetic_energy"][0]) for k, r in rows.items()},
-              "love_weber_over_boundary": {k: [round(float(r["sxx"][0] / r["boundary_sxx"][0]), 4),
-                                               round(float(r["syy"][0] / r["boundary_syy"][0]), 4)]
-                                        for k, r in rows.items()},
+              "love_weber_over_boundary": {k: over_boundary(r) for k, r in rows.items()},
               "target": "newton converges (1e-6) with friction as without", "met": bool(rows["newton"]["converged"][0])})
-    samples = {"300": "cases/compact_small.h5", "5000": "cases/compact_5k.h5"}
-    for t in (2, 3):
-        tiled = os.path.join(tmp, f"compact_small_{t}x{t}.h5")
-        subprocess.run(["/usr/bin/python3", "scripts/tile_sample.py", "cases/compact_small.h5", tiled, "--tiles", f"{t},{t}"],
-                       check=True, stdout=subprocess.DEVNULL, env=env)
-        samples[str(300 * t * t)] = tiled
+    samples = {"300": "cases/compact_small.h5", "1200": tiled_sample("cases/compact_small.h5", 2),
+               "2700": tiled_sample("cases/compact_small.h5", 3), "5000": "cases/compact_5k.h5"}
     sizes = {n: run(f"rest{n}_newton_1e-6", 1, REST + ["-sample_input", path]) for n, path in samples.items()}
     sizes["10000"] = rows["newton"]
-    sizes = dict(sorted(sizes.items(), key=lambda kv: int(kv[0])))
     if all(r is not None for r in sizes.values()):
         emit({"bench": "rest_sizes", "disks": [int(n) for n in sizes], "newton_steps": [int(r["iterations"][0]) for r in sizes.values()],
               "residual": [float(r["residual"][0]) for r in sizes.values()],
               "solve_seconds": [round(float(r["solve_seconds"][0]), 2) for r in sizes.values()],
-              "love_weber_over_boundary": [[round(float(r[c][0] / r["boundary_" + c][0]), 4) for c in ("sxx", "syy")]
-                                           for r in sizes.values()]})
+              "love_weber_over_boundary": [over_boundary(r) for r in sizes.values()]})
 
 if "ranks40k" in parts:
-    square = os.path.join(tmp, "compact_10k_2x2.h5")
-    subprocess.run(["/usr/bin/python3", "scripts/tile_sample.py", "cases/compact_10k.h5", square, "--tiles", "2,2"], check=True,
-                   stdout=subprocess.DEVNULL, env=env)
-    SQUARE = ["-options_file", "cases/rest_10k.opts", "-sample_input", square, "-friction", "0", "-output_every", "1000"]
+    SQUARE = ["-options_file", "cases/rest_10k.opts", "-sample_input", tiled_sample("cases/compact_10k.h5", 2), "-friction", "0",
+              "-output_every", "1000"]
     one = run("square40k_newton_1rank", 1, SQUARE)
     two = run("square40k_newton_2ranks", 2, SQUARE)
     if one is not None and two is not None:

@@ -46,7 +46,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from siconos_solve import InputError, natural_residual, read_problem  # noqa: E402
+from siconos_solve import InputError, contact_rho, natural_residual, read_problem  # noqa: E402
 
 
 def block_diagonal(blocks):
@@ -123,8 +123,7 @@ def fischer_burmeister(a, b):
 def stewart_trinkle(W, q, mu):
     """M x + c with x = (r_n, beta+, beta-, lambda') per contact, lambda' = lambda / rho, rows in impulse units (rho = 1 / W_nn);
     r = T x."""
-    wnn = W.diagonal()[0::2]
-    rho = np.where(wnn > 0, 1.0 / np.where(wnn > 0, wnn, 1.0), 1.0)  # as the natural residual's rho
+    rho = contact_rho(W)  # as the natural residual's rho
     T = block_diagonal([[[1, 0, 0, 0], [0, 1, -1, 0]] for _ in mu])
     S = block_diagonal([[[p, 0], [0, p], [0, -p], [0, 0]] for p in rho])
     G = block_diagonal([[[0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 1], [m, -1, -1, 0]] for m in mu])
@@ -192,18 +191,12 @@ def alart_curnier(W, q, mu, rho, r, jacobian):
     return F, states, (block_diagonal(A) + block_diagonal(B) @ W).tocsr()
 
 
-def rho_of(W):
-    wnn = W.diagonal()[0::2]
-    return np.where(wnn > 0, 1.0 / np.where(wnn > 0, wnn, 1.0), 1.0)
-
-
 def levenberg_marquardt(prob, max_it, start):
     W, q, mu = prob["W"].tocsr(), prob["q"], prob["mu"]
-    rho, m = rho_of(W), prob["m"]
+    rho, m = contact_rho(W), prob["m"]
     if start == "stored" and prob["r_kergs"] is None:
         raise InputError(f"{prob['path']}: no stored solution (/solution/r) to start from")
     r = prob["r_kergs"].copy() if start == "stored" else np.zeros(m)
-    res = natural_residual(prob, r)[0]
     for it in range(max_it + 1):
         F, _, J = alart_curnier(W, q, mu, rho, r, True)
         res = natural_residual(prob, r)[0]
@@ -247,7 +240,7 @@ def pieces(prob, perturb, max_it):
     if prob["r_kergs"] is None:
         raise InputError(f"{prob['path']}: no stored solution (/solution/r) to check")
     r = prob["r_kergs"] * (1 + perturb * np.random.default_rng(2013).standard_normal(prob["m"]))
-    _, st, _ = alart_curnier(W, q, mu, rho_of(W), r, False)
+    _, st, _ = alart_curnier(W, q, mu, contact_rho(W), r, False)
     A, b, E, f = piece_equations(W, r, st, mu)
     y, _, its, rnorm, _, anorm, _, arnorm = spla.lsqr(A, b, atol=1e-14, btol=1e-14, iter_lim=max_it)[:8]
     d = E @ y + f

@@ -189,6 +189,12 @@ def project_coulomb_cone(zn, zt, mu):
     return pn, pt
 
 
+def contact_rho(W):
+    """rho = 1 / W_nn per contact (1 where W_nn <= 0): the scale of kergs's natural map and of its newton."""
+    wnn = W.diagonal()[0::2]
+    return np.where(wnn > 0, 1.0 / np.where(wnn > 0, wnn, 1.0), 1.0)
+
+
 def natural_residual(prob, r):
     """(relative residual, ||e||, u): e = r - proj_K(r - rho u~), u~ = (u_n + mu |u_t|, u_t), rho = 1 / W_nn; the residual
     is ||e|| / max(||r||, ||p||), p = r - e (kergs's KergsLawNaturalResidualScaled): 1 at r = 0 unless e = 0."""
@@ -196,8 +202,7 @@ def natural_residual(prob, r):
     u = W @ r + q
     if prob["nc"] == 0:
         return 0.0, 0.0, u
-    wnn = W.diagonal()[0::2]
-    rho = np.where(wnn > 0, 1.0 / np.where(wnn > 0, wnn, 1.0), 1.0)
+    rho = contact_rho(W)
     rn, rt, un, ut = r[0::2], r[1::2], u[0::2], u[1::2]
     pn, pt = project_coulomb_cone(rn - rho * (un + mu * np.abs(ut)), rt - rho * ut, mu)
     enorm = math.sqrt(float(np.sum((rn - pn) ** 2) + np.sum((rt - pt) ** 2)))

@@ -14,6 +14,15 @@ from checks import ROOT, Kergs, check, failures
 SCRIPT = os.path.join(ROOT, "scripts", "proto_fixed_points.py")
 
 
+def run_method(*args):
+    """The script's exit status and its last line, parsed as JSON ({} if it is not)."""
+    p = subprocess.run(["/usr/bin/python3", SCRIPT] + [str(x) for x in args], capture_output=True, text=True)
+    try:
+        return p, json.loads(p.stdout.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        return p, {}
+
+
 def main():
     k = Kergs.from_command_line(__doc__)
     problem = k.path("confine5_step3.fclib.h5")
@@ -22,18 +31,10 @@ def main():
     check(p.returncode == 0 and os.path.exists(problem), "kergs exports confine5's step 3")
     for method, extra, tol in (("desaxce", ["--outer", "60"], 1e-9), ("fb-lcp", ["--max-it", "50"], 1e-10),
                                ("lm", ["--max-it", "50"], 1e-10)):
-        p = subprocess.run(["/usr/bin/python3", SCRIPT, method, problem] + extra, capture_output=True, text=True)
-        try:
-            out = json.loads(p.stdout.strip().splitlines()[-1])
-        except (ValueError, IndexError):
-            out = {}
+        p, out = run_method(method, problem, *extra)
         check(p.returncode == 0 and out.get("method") == method and out.get("contacts") == 5 and out.get("residual", 1) <= tol,
               f"{method}: natural residual {out.get('residual')} <= {tol:g} on 5 contacts")
-    p = subprocess.run(["/usr/bin/python3", SCRIPT, "pieces", problem, "--perturb", "1e-3"], capture_output=True, text=True)
-    try:
-        out = json.loads(p.stdout.strip().splitlines()[-1])
-    except (ValueError, IndexError):
-        out = {}
+    p, out = run_method("pieces", problem, "--perturb", "1e-3")
     check(p.returncode == 0 and out.get("residual", 0) > 1e-5 and out.get("unreached_fraction", 1) <= 1e-8
           and out.get("residual_after_step", 1) <= 1e-12,
           f"pieces: a perturbed answer's states are consistent ({out.get('unreached_fraction')}) and one step returns "
