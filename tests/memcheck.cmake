@@ -28,6 +28,10 @@ endforeach()
 kergs_test(NAME malloc_dump_confine5_newton_schwarz NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type newton
                 -solver_newton_redundant_max 0)
+# newton's De Saxce start: a Tao (BQPIP with a MUMPS Cholesky), E, E^T W E, per step
+kergs_test(NAME malloc_dump_rest_newton_desaxce NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
+           ARGS -options_file cases/rest_10k.opts -sample_input cases/compact_small.h5 -blowup_energy 0 -quiet -malloc_debug -malloc_dump
+                -output_none -solver_newton_desaxce_max_it 4)
 # newton's working set: J rebuilt over a subset of the contacts when the answer closes a deferred one
 kergs_test(NAME malloc_dump_confine5_newton_working_set NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type newton

@@ -12,6 +12,7 @@
 PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Update, KERGS_IO, KERGS_Exchange;
 PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition, KERGS_Watch, KERGS_Macro;
 PetscLogEvent KERGS_Subdomain;
+PetscLogEvent KERGS_DeSaxce;
 
 static PetscBool PackageInitialized = PETSC_FALSE;
 static char     *RunOptions         = NULL; /* KergsProvenanceSetOptions: the options of the run as given (rank 0) */
@@ -50,6 +51,7 @@ PetscErrorCode KergsInitializePackage(void)
   PetscCall(PetscLogEventRegister("KergsWatch", classid, &KERGS_Watch));
   PetscCall(PetscLogEventRegister("KergsMacro", classid, &KERGS_Macro));
   PetscCall(PetscLogEventRegister("KergsSubdomain", classid, &KERGS_Subdomain));
+  PetscCall(PetscLogEventRegister("KergsDeSaxce", classid, &KERGS_DeSaxce));
   PetscFunctionReturn(0);
 }
 

@@ -110,6 +110,13 @@ static PetscErrorCode NaturalResidual(KergsSolver s, Newton *nt, PetscInt n, Pet
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode NewtonNaturalResidual(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res)
+{
+  PetscFunctionBeginUser;
+  PetscCall(NaturalResidual(s, nt, n, nc, r, u, res));
+  PetscFunctionReturn(0);
+}
+
 /* ------------------------------------------------------------------------------------------------ */
 /* Set-up and solve                                                                                 */
 
@@ -677,10 +684,13 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = nt->second_attempts = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   nt->smooth_steps                           = 0;
+  nt->desaxce_qps = nt->desaxce_its = 0;
+  nt->desaxce_seconds                        = 0.0;
   nt->subdomains_computed                    = 0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
+  if (res > 0) PetscCall(NewtonDeSaxceStart(s, nt, n, nc, wmean, nt->enorm / res, r, u, vd, &res));
   if (nt->working_set) {
     PetscCall(NewtonWorkingSetBegin(s, nt, n, nc, r, u));
     PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
@@ -715,6 +725,11 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
   PetscCall(KergsSolveStatsAdd(st, "smoothing_steps", (PetscReal)nt->smooth_steps));
   PetscCall(KergsSolveStatsAdd(st, "second_attempts", (PetscReal)nt->second_attempts));
+  if (nt->desaxce_max_it > 0) {
+    PetscCall(KergsSolveStatsAdd(st, "desaxce_qps", (PetscReal)nt->desaxce_qps));
+    PetscCall(KergsSolveStatsAdd(st, "desaxce_ip_iterations", (PetscReal)nt->desaxce_its));
+    PetscCall(KergsSolveStatsAdd(st, "desaxce_seconds", nt->desaxce_seconds));
+  }
   if (nt->working_set) {
     PetscCall(KergsSolveStatsAdd(st, "working_set_rebuilds", (PetscReal)nt->rebuilds));
     PetscCall(KergsSolveStatsAdd(st, "deferred_contacts", (PetscReal)nt->left_out));
@@ -793,6 +808,14 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "Several ranks, additive Schwarz: each subdomain's J computed from W's subdomain, extracted once per J, "
                              "instead of extracted from J at every set-up",
                              "", nt->subdomains_from_w, &nt->subdomains_from_w, NULL));
+  PetscCall(PetscOptionsInt("-solver_newton_desaxce_max_it",
+                            "De Saxce QPs (convex, by TAO's interior point) before Newton, at most (0: none), until -solver_newton_desaxce_tol",
+                            "", nt->desaxce_max_it, &nt->desaxce_max_it, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_desaxce_tol", "Natural residual that ends the De Saxce QPs before Newton", "",
+                             nt->desaxce_tol, &nt->desaxce_tol, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_desaxce_rtol",
+                             "Each De Saxce QP's tolerance (TAO's gatol, velocity units) relative to -solver_newton_desaxce_tol", "",
+                             nt->desaxce_rtol, &nt->desaxce_rtol, NULL));
   PetscCall(
       KergsOptionsBool(PetscOptionsObject, "-solver_newton_working_set",
                        "Leave the contacts that the warm start leaves open out of J while they stay open (not with -solver_prox kernel)",
@@ -832,6 +855,17 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              "-solver_newton_shift %g must be non-negative", (double)nt->shift);
   PetscCheck(nt->armijo > 0 && nt->armijo < 0.5, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_armijo %g must lie in (0, 0.5)",
              (double)nt->armijo);
+  PetscCheck(nt->desaxce_max_it >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_desaxce_max_it %" PetscInt_FMT " must be non-negative", nt->desaxce_max_it);
+  PetscCheck(nt->desaxce_tol > 0 && PetscIsNormalReal(nt->desaxce_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_desaxce_tol %g must be positive", (double)nt->desaxce_tol);
+  PetscCheck(nt->desaxce_rtol > 0 && PetscIsNormalReal(nt->desaxce_rtol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_desaxce_rtol %g must be positive", (double)nt->desaxce_rtol);
+  if (nt->desaxce_max_it > 0) { /* the QPs' Tao options read once here, for -help and the unused-option check */
+    Tao tao;
+    PetscCall(NewtonDeSaxceCreateTao(s, &tao));
+    PetscCall(TaoDestroy(&tao));
+  }
   PetscCheck(nt->max_backtracks >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_max_backtracks %" PetscInt_FMT " must be non-negative", nt->max_backtracks);
   PetscCheck(!(nt->working_set && nt->prox == NEWTON_PROX_KERNEL), s->comm, PETSC_ERR_ARG_INCOMP,
@@ -882,6 +916,11 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(
         viewer, "After %" PetscInt_FMT " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
         nt->second_window, (double)nt->second_rho));
+  if (nt->desaxce_max_it > 0)
+    PetscCall(PetscViewerASCIIPrintf(viewer,
+                                     "De Saxce start: at most %" PetscInt_FMT " convex QPs (TAO BQPIP, each to %g times the target) until the "
+                                     "natural residual is %g\n",
+                                     nt->desaxce_max_it, (double)nt->desaxce_rtol, (double)nt->desaxce_tol));
   if (nt->working_set)
     PetscCall(PetscViewerASCIIPrintf(
         viewer,
@@ -955,6 +994,8 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->smooth_raises       = 1;
   nt->second_rho          = 0.1;
   nt->second_window       = 250;
+  nt->desaxce_tol         = 1e-5;
+  nt->desaxce_rtol        = 1e-2;
   PetscCall(NewtonCreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 1000; /* the cap of the tradeoff study's reference runs (docs/tradeoff.md) */

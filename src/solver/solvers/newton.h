@@ -7,6 +7,7 @@
 #include <kergs/private/solverimpl.h>
 #include <kergs/kernel.h>
 #include <petscksp.h>
+#include <petsctao.h>
 
 typedef enum { NEWTON_PROX_NONE, NEWTON_PROX_IDENTITY, NEWTON_PROX_KERNEL } NewtonProx;
 
@@ -87,6 +88,11 @@ typedef struct {
   PetscInt  second_window;         /* -solver_newton_second_window: Newton steps without a tenfold gain that end the first */
   PetscReal rho_used;              /* the factor of the current Attempt's rho */
   PetscInt  second_attempts;       /* second Attempts of the last solve (0 or 1) */
+  PetscInt  desaxce_max_it;        /* -solver_newton_desaxce_max_it: De Saxce QPs before Newton (0: none) */
+  PetscReal desaxce_tol;           /* -solver_newton_desaxce_tol: natural residual that ends them */
+  PetscReal desaxce_rtol;          /* -solver_newton_desaxce_rtol: each QP's tolerance relative to that target */
+  PetscInt  desaxce_qps, desaxce_its; /* the last solve's QPs and their interior-point iterations */
+  PetscReal desaxce_seconds;
   PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
   PetscBool stale;                 /* J changed since that set-up */
   /* figures of the last solve */
@@ -109,6 +115,12 @@ PETSC_INTERN PetscErrorCode NewtonDestroyJacobian(Newton *);
 /* newton_working.c */
 PETSC_INTERN PetscErrorCode NewtonWorkingSetBegin(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u);
 PETSC_INTERN PetscErrorCode NewtonWorkingSetGrow(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscBool *grown);
+/* newton_desaxce.c */
+PETSC_INTERN PetscErrorCode NewtonDeSaxceCreateTao(KergsSolver, Tao *);
+PETSC_INTERN PetscErrorCode NewtonDeSaxceStart(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscReal wmean, PetscReal scale, Vec r,
+                                               Vec u, Vec vd, PetscReal *res);
+/* newton.c */
+PETSC_INTERN PetscErrorCode NewtonNaturalResidual(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res);
 /* newton_subdomain.c */
 PETSC_INTERN PetscErrorCode NewtonSubdomainSetSortedLU(PC);
 PETSC_INTERN PetscErrorCode NewtonSubdomainReleaseSortedLU(PC);
