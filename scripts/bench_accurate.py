@@ -31,6 +31,10 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
               cases/compact_10k.h5 mirrored 2 x 2 (40,000 disks, scripts/tile_sample.py) at rest under its pressure
               walls without friction (cases/rest_10k.opts -friction 0), one step from zero impulses, newton to 1e-6:
               residuals, Newton steps and speed-up (docs/solver.md, "A dense frictional packing at rest").
+  desaxce     (not run by default; about 1 minute) newton's De Saxce start (-solver_newton_desaxce_max_it 6) against
+              newton alone on the frictional rest step of cases/rest_10k.opts at 300, 1,200 and 2,700 disks
+              (cases/compact_small.h5 and its mirrored tilings), to 1e-8, 300 Newton steps at most: QPs, Newton steps,
+              residuals and solve times (docs/solver.md, "A De Saxce start").
   big         (--big only) biaxial 10^6 disks on 2 ranks, first step, newton to 1e-6: time, peak memory per grain.
 
 Usage: bench_accurate.py [--kergs build/kergs] [--parts confine500,biaxial20k,pressure20k,siconos,ranks100k] [--big] [--quick]
@@ -259,6 +263,19 @@ if "rest10k" in parts:
               "residual": [float(r["residual"][0]) for r in sizes.values()],
               "solve_seconds": [round(float(r["solve_seconds"][0]), 2) for r in sizes.values()],
               "love_weber_over_boundary": [over_boundary(r) for r in sizes.values()]})
+
+if "desaxce" in parts:
+    REST = ["-options_file", "cases/rest_10k.opts", "-output_every", "1000", "-blowup_energy", "0", "-solver_tol", "1e-8"]
+    for n, path in {"300": "cases/compact_small.h5", "1200": tiled_sample("cases/compact_small.h5", 2),
+                    "2700": tiled_sample("cases/compact_small.h5", 3)}.items():
+        alone = run(f"rest{n}_newton_1e-8", 1, REST + ["-sample_input", path])
+        start = run(f"rest{n}_newton_1e-8_desaxce", 1, REST + ["-sample_input", path, "-solver_newton_desaxce_max_it", "6"])
+        if alone is not None and start is not None:
+            emit({"bench": "desaxce_start", "disks": int(n), "residual": [float(alone["residual"][0]), float(start["residual"][0])],
+                  "newton_steps": [int(alone["iterations"][0]), int(start["iterations"][0])],
+                  "desaxce_qps": int(start["desaxce_qps"][0]), "desaxce_seconds": round(float(start["desaxce_seconds"][0]), 3),
+                  "solve_seconds": [round(float(alone["solve_seconds"][0]), 3), round(float(start["solve_seconds"][0]), 3)],
+                  "order": "newton alone, with the De Saxce start"})
 
 if "ranks40k" in parts:
     SQUARE = ["-options_file", "cases/rest_10k.opts", "-sample_input", tiled_sample("cases/compact_10k.h5", 2), "-friction", "0",
