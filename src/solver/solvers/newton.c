@@ -813,9 +813,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                             "", nt->desaxce_max_it, &nt->desaxce_max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_desaxce_tol", "Natural residual that ends the De Saxce QPs before Newton", "",
                              nt->desaxce_tol, &nt->desaxce_tol, NULL));
-  PetscCall(PetscOptionsReal("-solver_newton_desaxce_rtol",
-                             "Each De Saxce QP's tolerance (TAO's gatol, velocity units) relative to -solver_newton_desaxce_tol", "",
-                             nt->desaxce_rtol, &nt->desaxce_rtol, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_desaxce_qp_tol",
+                             "Each De Saxce QP's natural residual |min(z, grad / W_nn)| that ends it, relative to the impulse scale", "",
+                             nt->desaxce_qp_tol, &nt->desaxce_qp_tol, NULL));
   PetscCall(
       KergsOptionsBool(PetscOptionsObject, "-solver_newton_working_set",
                        "Leave the contacts that the warm start leaves open out of J while they stay open (not with -solver_prox kernel)",
@@ -859,8 +859,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              "-solver_newton_desaxce_max_it %" PetscInt_FMT " must be non-negative", nt->desaxce_max_it);
   PetscCheck(nt->desaxce_tol > 0 && PetscIsNormalReal(nt->desaxce_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_desaxce_tol %g must be positive", (double)nt->desaxce_tol);
-  PetscCheck(nt->desaxce_rtol > 0 && PetscIsNormalReal(nt->desaxce_rtol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "-solver_newton_desaxce_rtol %g must be positive", (double)nt->desaxce_rtol);
+  PetscCheck(nt->desaxce_qp_tol > 0 && PetscIsNormalReal(nt->desaxce_qp_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_desaxce_qp_tol %g must be positive", (double)nt->desaxce_qp_tol);
   if (nt->desaxce_max_it > 0) { /* the QPs' Tao options read once here, for -help and the unused-option check */
     Tao tao;
     PetscCall(NewtonDeSaxceCreateTao(s, &tao));
@@ -918,9 +918,9 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
         nt->second_window, (double)nt->second_rho));
   if (nt->desaxce_max_it > 0)
     PetscCall(PetscViewerASCIIPrintf(viewer,
-                                     "De Saxce start: at most %" PetscInt_FMT " convex QPs (TAO BQPIP, each to %g times the target) until the "
-                                     "natural residual is %g\n",
-                                     nt->desaxce_max_it, (double)nt->desaxce_rtol, (double)nt->desaxce_tol));
+                                     "De Saxce start: at most %" PetscInt_FMT " convex QPs (TAO BQPIP, each to %g of the impulse scale) until "
+                                     "the natural residual is %g\n",
+                                     nt->desaxce_max_it, (double)nt->desaxce_qp_tol, (double)nt->desaxce_tol));
   if (nt->working_set)
     PetscCall(PetscViewerASCIIPrintf(
         viewer,
@@ -995,7 +995,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->second_rho          = 0.1;
   nt->second_window       = 250;
   nt->desaxce_tol         = 1e-5;
-  nt->desaxce_rtol        = 1e-2;
+  nt->desaxce_qp_tol      = 1e-3;
   PetscCall(NewtonCreateLinearSolver(s, nt));
   s->data               = nt;
   s->max_it             = 1000; /* the cap of the tradeoff study's reference runs (docs/tradeoff.md) */

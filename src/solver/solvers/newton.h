@@ -90,7 +90,7 @@ typedef struct {
   PetscInt  second_attempts;       /* second Attempts of the last solve (0 or 1) */
   PetscInt  desaxce_max_it;        /* -solver_newton_desaxce_max_it: De Saxce QPs before Newton (0: none) */
   PetscReal desaxce_tol;           /* -solver_newton_desaxce_tol: natural residual that ends them */
-  PetscReal desaxce_rtol;          /* -solver_newton_desaxce_rtol: each QP's tolerance relative to that target */
+  PetscReal desaxce_qp_tol;        /* -solver_newton_desaxce_qp_tol: each QP's tolerance relative to the impulse scale */
   PetscInt  desaxce_qps, desaxce_its; /* the last solve's QPs and their interior-point iterations */
   PetscReal desaxce_seconds;
   PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
