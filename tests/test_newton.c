@@ -222,6 +222,14 @@ static PetscErrorCode TestOneContact(const char *extra)
     PetscCall(RunSteps(opts, 5, &st, &maxits, &maxres, &nconv));
     PetscCall(Checkf((PetscBool)(maxits <= 3 && nconv == 5), maxits, 3, "%s%s%s: Newton steps per time step (all converged)", cases[i].what,
                      extra[0] ? ", " : "", extra));
+    if (strstr(extra, "desaxce") && (i == 1 || i == 3 || i == 4)) { /* a loaded frictional contact: the start ran */
+      PetscReal qps = 0, q;
+      for (PetscInt row = 0; row < 5; row++) {
+        PetscCall(StatAt(st->results, "desaxce_qps", row, &q));
+        qps += q;
+      }
+      PetscCall(Checkf((PetscBool)(qps >= 1), qps, 1, "%s, %s: De Saxce QPs over the 5 steps", cases[i].what, extra));
+    }
     PetscCall(KergsSceneAllGatherReal(st->scene, st->scene->v, KERGS_DIM, v));
     if (i == 1 || i == 2)
       PetscCall(

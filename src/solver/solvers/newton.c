@@ -660,7 +660,8 @@ static PetscErrorCode SolveFrom(KergsSolver s, Newton *nt, PetscInt n, PetscInt 
 }
 
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
-   -solver_newton_switch_tol, then SolveFrom. With a working set (-solver_newton_working_set, newton_working.c) J is
+   -solver_newton_switch_tol, and the optional De Saxce start (-solver_newton_desaxce_max_it, newton_desaxce.c), then
+   SolveFrom. With a working set (-solver_newton_working_set, newton_working.c) J is
    set up here, once the contacts that the warm start leaves open are known. */
 static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
                                          KergsSolveStats *stats)
@@ -684,7 +685,7 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = nt->second_attempts = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   nt->smooth_steps                           = 0;
-  nt->desaxce_qps = nt->desaxce_its = 0;
+  nt->desaxce_qps = nt->desaxce_ip_its = 0;
   nt->desaxce_seconds                        = 0.0;
   nt->subdomains_computed                    = 0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
@@ -727,7 +728,7 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "second_attempts", (PetscReal)nt->second_attempts));
   if (nt->desaxce_max_it > 0) {
     PetscCall(KergsSolveStatsAdd(st, "desaxce_qps", (PetscReal)nt->desaxce_qps));
-    PetscCall(KergsSolveStatsAdd(st, "desaxce_ip_iterations", (PetscReal)nt->desaxce_its));
+    PetscCall(KergsSolveStatsAdd(st, "desaxce_ip_iterations", (PetscReal)nt->desaxce_ip_its));
     PetscCall(KergsSolveStatsAdd(st, "desaxce_seconds", nt->desaxce_seconds));
   }
   if (nt->working_set) {

@@ -28,7 +28,7 @@ typedef struct {
   PetscReal  kkt;       /* its last value */
 } DeSaxce;
 
-/* TAO's convergence test for BQPIP: the QP's own natural residual |min(z, g / W_nn)|, g = H z + c its gradient (the
+/* TAO's convergence test for BQPIP: the QP's own natural residual |min(z, g / mean W_nn)|, g = H z + c its gradient (the
    KKT conditions of z >= 0: 0 <= z _|_ g >= 0), in impulse units, at most kkt_tol. BQPIP's own measure mixes the
    duality gap with the gradient's 1-norm and stagnates above any tolerance tied to the contact problem (measured). */
 static PetscErrorCode ConvergenceTest(Tao tao, void *ctx)
@@ -146,9 +146,9 @@ static PetscErrorCode SetUp(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, 
     PetscCall(MatDestroy(&Waij));
   }
   PetscCall(MatDestroy(&Wa));
-  /* E^T W E is singular with W, and its rounding leaves CHOLMOD a negative pivot where BQPIP's barrier term is small
-     (measured on biaxial_5k's first step): a proximal term sigma |z - z_k|^2 / 2 with sigma = 1e-8 mean W_nn, which
-     vanishes at the fixed point */
+  /* E^T W E is singular with W (and along a - b on a contact without friction, whose edges coincide), and its rounding
+     left CHOLMOD a negative pivot where BQPIP's barrier term is small (measured on biaxial_5k's first step): a proximal
+     term sigma |z - z_k|^2 / 2 with sigma = 1e-8 mean W_nn, which vanishes at the fixed point */
   PetscCall(MatShift(ds->H, PROX * wmean));
   PetscCall(MatSetOption(ds->H, MAT_SYMMETRIC, PETSC_TRUE));
   PetscCall(MatCreateVecs(ds->H, &ds->z, &ds->c));
@@ -233,6 +233,8 @@ static PetscErrorCode SolveQP(DeSaxce *ds, Vec r, Vec vd, PetscInt *its, PetscBo
   PetscCall(TaoGetIterationNumber(ds->tao, its));
   PetscCall(TaoGetConvergedReason(ds->tao, &reason));
   *solved = (PetscBool)(reason > 0);
+  /* BQPIP keeps its slacks positive, not z: a loose answer may have z slightly negative, r = E z outside its cone */
+  PetscCall(VecPointwiseMax(ds->z, ds->z, ds->lb));
   PetscCall(MatMult(ds->E, ds->z, ds->w));
   PetscCall(VecSet(r, 0.0));
   PetscCall(VecISCopy(r, ds->is, SCATTER_FORWARD, ds->w));
@@ -249,12 +251,13 @@ static PetscErrorCode SolveQP(DeSaxce *ds, Vec r, Vec vd, PetscInt *its, PetscBo
 PetscErrorCode NewtonDeSaxceStart(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal wmean, PetscReal scale, Vec r, Vec u,
                                   Vec vd, PetscReal *res)
 {
-  DeSaxce        ds = {0};
-  PetscReal      best = *res;
+  DeSaxce         ds     = {0};
+  PetscReal       best   = *res;
+  const PetscReal target = PetscMax(nt->desaxce_tol, s->tol);
   PetscLogDouble t0, t1;
 
   PetscFunctionBeginUser;
-  if (nc != 2 || *res <= nt->desaxce_tol || nt->desaxce_max_it <= 0) PetscFunctionReturn(0);
+  if (nc != 2 || *res <= target || nt->desaxce_max_it <= 0) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(KERGS_DeSaxce, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   PetscCall(SetUp(s, nt, n, nc, wmean, scale, r, &ds));
@@ -262,13 +265,13 @@ PetscErrorCode NewtonDeSaxceStart(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   ds.kkt_tol = nt->desaxce_qp_tol * scale;
   PetscCall(VecCopy(r, nt->rbest));
   PetscCall(FromImpulses(s, &ds, n, r, u));
-  for (PetscInt k = 0; k < nt->desaxce_max_it && best > nt->desaxce_tol; k++) {
+  for (PetscInt k = 0; k < nt->desaxce_max_it && best > target; k++) {
     PetscInt  its    = 0;
     PetscBool solved = PETSC_FALSE;
     PetscReal now;
     PetscCall(SolveQP(&ds, r, vd, &its, &solved));
     nt->desaxce_qps++;
-    nt->desaxce_its += its;
+    nt->desaxce_ip_its += its;
     PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
     PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, &now));
     PetscCall(PetscInfo(NULL, "De Saxce QP %" PetscInt_FMT ": %" PetscInt_FMT " interior-point iterations%s (KKT %g), natural residual %g\n",
@@ -279,11 +282,11 @@ PetscErrorCode NewtonDeSaxceStart(KergsSolver s, Newton *nt, PetscInt n, PetscIn
     }
     if (!(now < PETSC_MAX_REAL) || (!solved && now >= best)) break; /* a QP left unsolved may still have helped */
     if (its == 0) break; /* its start met the QP's tolerance: the fixed point no longer moves at this tolerance */
-    PetscCall(FromImpulses(s, &ds, n, r, u)); /* the next shift; z stays the QP's answer */
+    PetscCall(FromImpulses(s, &ds, n, r, u)); /* the next shift, and z from r (the same z where mu > 0) */
   }
   PetscCall(VecCopy(nt->rbest, r));
   PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
-  *res = best;
+  PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, res)); /* best, and nt->enorm of r itself */
   PetscCall(Destroy(&ds));
   PetscCall(PetscTime(&t1));
   nt->desaxce_seconds += t1 - t0;
