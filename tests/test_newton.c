@@ -266,7 +266,8 @@ static PetscErrorCode TestDeSaxceStart(void)
   PetscCall(StatAt(st->results, "desaxce_qps", -1, &qps));
   PetscCall(KergsStepperDestroy(&st));
   PetscCall(Checkf((PetscBool)(qps >= 1 && qps <= 4 && nconv == 1 && maxres <= 1e-8 && maxits <= 10), maxits, 10,
-                   "frictional packing at rest (300 disks), De Saxce start (%g QPs, residual %g): Newton steps", (double)qps, (double)maxres));
+                   "frictional packing at rest (300 disks), De Saxce start (%g QPs, residual %g): Newton steps", (double)qps,
+                   (double)maxres));
   PetscCall(PetscSNPrintf(opts, sizeof(opts), "%s -solver_max_it 60", rest));
   PetscCall(RunSteps(opts, 1, NULL, &maxits, &maxres, &nconv));
   PetscCall(Checkf((PetscBool)(nconv == 0), maxres, 1e-8, "the same step without the start: not converged in 60 Newton steps (residual)"));

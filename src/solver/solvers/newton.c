@@ -686,8 +686,8 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   nt->smooth_steps                           = 0;
   nt->desaxce_qps = nt->desaxce_ip_its = 0;
-  nt->desaxce_seconds                        = 0.0;
-  nt->subdomains_computed                    = 0;
+  nt->desaxce_seconds                  = 0.0;
+  nt->subdomains_computed              = 0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
@@ -809,11 +809,12 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "Several ranks, additive Schwarz: each subdomain's J computed from W's subdomain, extracted once per J, "
                              "instead of extracted from J at every set-up",
                              "", nt->subdomains_from_w, &nt->subdomains_from_w, NULL));
-  PetscCall(PetscOptionsInt("-solver_newton_desaxce_max_it",
-                            "De Saxce QPs (convex, by TAO's interior point) before Newton, at most (0: none), until -solver_newton_desaxce_tol",
-                            "", nt->desaxce_max_it, &nt->desaxce_max_it, NULL));
-  PetscCall(PetscOptionsReal("-solver_newton_desaxce_tol", "Natural residual that ends the De Saxce QPs before Newton", "",
-                             nt->desaxce_tol, &nt->desaxce_tol, NULL));
+  PetscCall(
+      PetscOptionsInt("-solver_newton_desaxce_max_it",
+                      "De Saxce QPs (convex, by TAO's interior point) before Newton, at most (0: none), until -solver_newton_desaxce_tol",
+                      "", nt->desaxce_max_it, &nt->desaxce_max_it, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_desaxce_tol", "Natural residual that ends the De Saxce QPs before Newton", "", nt->desaxce_tol,
+                             &nt->desaxce_tol, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_desaxce_qp_tol",
                              "Each De Saxce QP's natural residual |min(z, grad / W_nn)| that ends it, relative to the impulse scale", "",
                              nt->desaxce_qp_tol, &nt->desaxce_qp_tol, NULL));
@@ -919,7 +920,8 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
         nt->second_window, (double)nt->second_rho));
   if (nt->desaxce_max_it > 0)
     PetscCall(PetscViewerASCIIPrintf(viewer,
-                                     "De Saxce start: at most %" PetscInt_FMT " convex QPs (TAO BQPIP, each to %g of the impulse scale) until "
+                                     "De Saxce start: at most %" PetscInt_FMT
+                                     " convex QPs (TAO BQPIP, each to %g of the impulse scale) until "
                                      "the natural residual is %g\n",
                                      nt->desaxce_max_it, (double)nt->desaxce_qp_tol, (double)nt->desaxce_tol));
   if (nt->working_set)

@@ -91,8 +91,9 @@ typedef struct {
   PetscInt  desaxce_max_it;        /* -solver_newton_desaxce_max_it: De Saxce QPs before Newton (0: none) */
   PetscReal desaxce_tol;           /* -solver_newton_desaxce_tol: natural residual that ends them */
   PetscReal desaxce_qp_tol;        /* -solver_newton_desaxce_qp_tol: each QP's tolerance relative to the impulse scale */
-  PetscInt  desaxce_qps, desaxce_ip_its; /* the last solve's QPs and their interior-point iterations */
-  PetscReal desaxce_seconds;             /* and the time they took */
+  PetscInt  desaxce_qps;           /* the last solve's De Saxce QPs */
+  PetscInt  desaxce_ip_its;        /* their interior-point iterations */
+  PetscReal desaxce_seconds;       /* and their time */
   PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
   PetscBool stale;                 /* J changed since that set-up */
   /* figures of the last solve */

@@ -15,17 +15,17 @@
 #define PROX 1e-8 /* the QPs' proximal coefficient, relative to the mean W_nn */
 
 typedef struct {
-  Mat        H;         /* E^T W E over the active contacts */
-  Mat        E;         /* edge coordinates to the active contacts' impulses */
-  IS         is;        /* the active components, global indices of r */
-  Vec        z, c, w;   /* the QP's unknowns, its linear term, work on the active components */
-  Vec        lb, ub;    /* z >= 0 */
-  PetscReal *shift;     /* per local active contact */
-  PetscInt   nactive;   /* local active contacts */
-  Tao        tao;       /* prefix solver_newton_desaxce_ */
-  PetscReal  wmean;     /* mean W_nn: velocities to impulses */
-  PetscReal  kkt_tol;   /* the QP's KKT residual that ends it, in impulse units */
-  PetscReal  kkt;       /* its last value */
+  Mat        H;       /* E^T W E over the active contacts */
+  Mat        E;       /* edge coordinates to the active contacts' impulses */
+  IS         is;      /* the active components, global indices of r */
+  Vec        z, c, w; /* the QP's unknowns, its linear term, work on the active components */
+  Vec        lb, ub;  /* z >= 0 */
+  PetscReal *shift;   /* per local active contact */
+  PetscInt   nactive; /* local active contacts */
+  Tao        tao;     /* prefix solver_newton_desaxce_ */
+  PetscReal  wmean;   /* mean W_nn: velocities to impulses */
+  PetscReal  kkt_tol; /* the QP's KKT residual that ends it, in impulse units */
+  PetscReal  kkt;     /* its last value */
 } DeSaxce;
 
 /* TAO's convergence test for BQPIP: the QP's own natural residual |min(z, g / mean W_nn)|, g = H z + c its gradient (the
@@ -53,10 +53,14 @@ static PetscErrorCode ConvergenceTest(Tao tao, void *ctx)
   ds->kkt = PetscSqrtReal(sum);
   PetscCall(TaoGetIterationNumber(tao, &its));
   PetscCall(TaoGetMaximumIterations(tao, &max_it));
-  if (PetscIsInfOrNanReal(ds->kkt)) PetscCall(TaoSetConvergedReason(tao, TAO_DIVERGED_NAN));
-  else if (ds->kkt <= ds->kkt_tol) PetscCall(TaoSetConvergedReason(tao, TAO_CONVERGED_USER));
-  else if (its >= max_it) PetscCall(TaoSetConvergedReason(tao, TAO_DIVERGED_MAXITS));
-  else PetscCall(TaoSetConvergedReason(tao, TAO_CONTINUE_ITERATING));
+  if (PetscIsInfOrNanReal(ds->kkt))
+    PetscCall(TaoSetConvergedReason(tao, TAO_DIVERGED_NAN));
+  else if (ds->kkt <= ds->kkt_tol)
+    PetscCall(TaoSetConvergedReason(tao, TAO_CONVERGED_USER));
+  else if (its >= max_it)
+    PetscCall(TaoSetConvergedReason(tao, TAO_DIVERGED_MAXITS));
+  else
+    PetscCall(TaoSetConvergedReason(tao, TAO_CONTINUE_ITERATING));
   PetscFunctionReturn(0);
 }
 
@@ -254,7 +258,7 @@ PetscErrorCode NewtonDeSaxceStart(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   DeSaxce         ds     = {0};
   PetscReal       best   = *res;
   const PetscReal target = PetscMax(nt->desaxce_tol, s->tol);
-  PetscLogDouble t0, t1;
+  PetscLogDouble  t0, t1;
 
   PetscFunctionBeginUser;
   if (nc != 2 || *res <= target || nt->desaxce_max_it <= 0) PetscFunctionReturn(0);
@@ -274,14 +278,15 @@ PetscErrorCode NewtonDeSaxceStart(KergsSolver s, Newton *nt, PetscInt n, PetscIn
     nt->desaxce_ip_its += its;
     PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
     PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, &now));
-    PetscCall(PetscInfo(NULL, "De Saxce QP %" PetscInt_FMT ": %" PetscInt_FMT " interior-point iterations%s (KKT %g), natural residual %g\n",
+    PetscCall(PetscInfo(NULL,
+                        "De Saxce QP %" PetscInt_FMT ": %" PetscInt_FMT " interior-point iterations%s (KKT %g), natural residual %g\n",
                         k + 1, its, solved ? "" : " (not converged)", (double)ds.kkt, (double)now));
     if (now < best) {
       best = now;
       PetscCall(VecCopy(r, nt->rbest));
     }
     if (!(now < PETSC_MAX_REAL) || (!solved && now >= best)) break; /* a QP left unsolved may still have helped */
-    if (its == 0) break; /* its start met the QP's tolerance: the fixed point no longer moves at this tolerance */
+    if (its == 0) break;                      /* its start met the QP's tolerance: the fixed point no longer moves at this tolerance */
     PetscCall(FromImpulses(s, &ds, n, r, u)); /* the next shift, and z from r (the same z where mu > 0) */
   }
   PetscCall(VecCopy(nt->rbest, r));
