@@ -5,6 +5,7 @@
 
 #include <kergs/solver.h>
 #include <kergs/sweep.h>
+#include <petsctao.h>
 
 #define KERGS_SOLVER_MAXMONITORS 5
 
@@ -79,6 +80,13 @@ PETSC_INTERN PetscErrorCode KergsSolverMonitor(KergsSolver, PetscInt it, PetscRe
 /* At the solve's exit: the last iteration's monitor call, with the residual recorded for the step (src/solver/monitor.c) */
 PETSC_INTERN PetscErrorCode KergsSolverMonitorFlush(KergsSolver, PetscReal residual);
 PETSC_INTERN PetscErrorCode KergsSolverMonitorSetFromOptions(PetscOptionItems *, KergsSolver);
+/* For the types that hand a convex QP min 1/2 x^T H x + c^T x to a Tao (src/solver/solvers/quadratic.c): its objective,
+   gradient and constant Hessian, read from *q at every call (H and c may change between solves, not their layout). */
+typedef struct {
+  Mat H;
+  Vec c;
+} KergsQuadratic;
+PETSC_INTERN PetscErrorCode KergsQuadraticSetTao(KergsQuadratic *, Tao);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLKerGS(KergsSolver);
 PETSC_INTERN PetscErrorCode KergsSolverCreate_NLGSJac(KergsSolver);

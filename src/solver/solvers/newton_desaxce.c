@@ -15,17 +15,17 @@
 #define PROX 1e-8 /* the QPs' proximal coefficient, relative to the mean W_nn */
 
 typedef struct {
-  Mat        H;       /* E^T W E over the active contacts */
-  Mat        E;       /* edge coordinates to the active contacts' impulses */
-  IS         is;      /* the active components, global indices of r */
-  Vec        z, c, w; /* the QP's unknowns, its linear term, work on the active components */
-  Vec        lb, ub;  /* z >= 0 */
-  PetscReal *shift;   /* per local active contact */
-  PetscInt   nactive; /* local active contacts */
-  Tao        tao;     /* prefix solver_newton_desaxce_ */
-  PetscReal  wmean;   /* mean W_nn: velocities to impulses */
-  PetscReal  kkt_tol; /* the QP's KKT residual that ends it, in impulse units */
-  PetscReal  kkt;     /* its last value */
+  KergsQuadratic qp;      /* H: E^T W E over the active contacts (+ a proximal term); c: the linear term */
+  Mat            E;       /* edge coordinates to the active contacts' impulses */
+  IS             is;      /* the active components, global indices of r */
+  Vec            z, w;    /* the QP's unknowns, work on the active components */
+  Vec            lb, ub;  /* z >= 0 */
+  PetscReal     *shift;   /* per local active contact */
+  PetscInt       nactive; /* local active contacts */
+  Tao            tao;     /* prefix solver_newton_desaxce_ */
+  PetscReal      wmean;   /* mean W_nn: velocities to impulses */
+  PetscReal      kkt_tol; /* the QP's KKT residual that ends it, in impulse units */
+  PetscReal      kkt;     /* its last value */
 } DeSaxce;
 
 /* TAO's convergence test for BQPIP: the QP's own natural residual |min(z, g / mean W_nn)|, g = H z + c its gradient (the
@@ -41,8 +41,8 @@ static PetscErrorCode ConvergenceTest(Tao tao, void *ctx)
 
   PetscFunctionBeginUser;
   PetscCall(TaoGetSolution(tao, &z));
-  PetscCall(MatMult(ds->H, z, ds->w));
-  PetscCall(VecAXPY(ds->w, 1.0, ds->c));
+  PetscCall(MatMult(ds->qp.H, z, ds->w));
+  PetscCall(VecAXPY(ds->w, 1.0, ds->qp.c));
   PetscCall(VecGetLocalSize(z, &m));
   PetscCall(VecGetArrayRead(z, &zl));
   PetscCall(VecGetArrayRead(ds->w, &gl));
@@ -61,34 +61,6 @@ static PetscErrorCode ConvergenceTest(Tao tao, void *ctx)
     PetscCall(TaoSetConvergedReason(tao, TAO_DIVERGED_MAXITS));
   else
     PetscCall(TaoSetConvergedReason(tao, TAO_CONTINUE_ITERATING));
-  PetscFunctionReturn(0);
-}
-
-/* f = 1/2 z^T H z + c^T z and its gradient H z + c. */
-static PetscErrorCode ObjectiveGradient(Tao tao, Vec z, PetscReal *f, Vec g, void *ctx)
-{
-  DeSaxce    *ds = (DeSaxce *)ctx;
-  PetscScalar zHz, cz;
-
-  PetscFunctionBeginUser;
-  (void)tao;
-  PetscCall(MatMult(ds->H, z, g));
-  PetscCall(VecDot(z, g, &zHz));
-  PetscCall(VecDot(ds->c, z, &cz));
-  PetscCall(VecAXPY(g, 1.0, ds->c));
-  *f = 0.5 * PetscRealPart(zHz) + PetscRealPart(cz);
-  PetscFunctionReturn(0);
-}
-
-/* The Hessian is H, constant. */
-static PetscErrorCode Hessian(Tao tao, Vec z, Mat H, Mat P, void *ctx)
-{
-  PetscFunctionBeginUser;
-  (void)tao;
-  (void)z;
-  (void)H;
-  (void)P;
-  (void)ctx;
   PetscFunctionReturn(0);
 }
 
@@ -146,16 +118,16 @@ static PetscErrorCode SetUp(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, 
   {
     Mat Waij;
     PetscCall(MatConvert(Wa, MATAIJ, MAT_INITIAL_MATRIX, &Waij));
-    PetscCall(MatPtAP(Waij, ds->E, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &ds->H));
+    PetscCall(MatPtAP(Waij, ds->E, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &ds->qp.H));
     PetscCall(MatDestroy(&Waij));
   }
   PetscCall(MatDestroy(&Wa));
   /* E^T W E is singular with W (and along a - b on a contact without friction, whose edges coincide), and its rounding
      left CHOLMOD a negative pivot where BQPIP's barrier term is small (measured on biaxial_5k's first step): a proximal
      term sigma |z - z_k|^2 / 2 with sigma = 1e-8 mean W_nn, which vanishes at the fixed point */
-  PetscCall(MatShift(ds->H, PROX * wmean));
-  PetscCall(MatSetOption(ds->H, MAT_SYMMETRIC, PETSC_TRUE));
-  PetscCall(MatCreateVecs(ds->H, &ds->z, &ds->c));
+  PetscCall(MatShift(ds->qp.H, PROX * wmean));
+  PetscCall(MatSetOption(ds->qp.H, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscCall(MatCreateVecs(ds->qp.H, &ds->z, &ds->qp.c));
   PetscCall(VecDuplicate(ds->z, &ds->w));
   PetscCall(VecDuplicate(ds->z, &ds->lb));
   PetscCall(VecDuplicate(ds->z, &ds->ub));
@@ -166,8 +138,7 @@ static PetscErrorCode SetUp(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, 
   PetscCall(VecSet(ds->ub, 100.0 * scale));
   PetscCall(PetscMalloc1(ds->nactive + 1, &ds->shift));
   PetscCall(NewtonDeSaxceCreateTao(s, &ds->tao));
-  PetscCall(TaoSetObjectiveAndGradient(ds->tao, NULL, ObjectiveGradient, ds));
-  PetscCall(TaoSetHessian(ds->tao, ds->H, ds->H, Hessian, ds));
+  PetscCall(KergsQuadraticSetTao(&ds->qp, ds->tao));
   PetscCall(TaoSetVariableBounds(ds->tao, ds->lb, ds->ub));
   PetscCall(TaoSetConvergenceTest(ds->tao, ConvergenceTest, ds));
   PetscFunctionReturn(0);
@@ -177,11 +148,11 @@ static PetscErrorCode Destroy(DeSaxce *ds)
 {
   PetscFunctionBeginUser;
   PetscCall(TaoDestroy(&ds->tao));
-  PetscCall(MatDestroy(&ds->H));
+  PetscCall(MatDestroy(&ds->qp.H));
   PetscCall(MatDestroy(&ds->E));
   PetscCall(ISDestroy(&ds->is));
   PetscCall(VecDestroy(&ds->z));
-  PetscCall(VecDestroy(&ds->c));
+  PetscCall(VecDestroy(&ds->qp.c));
   PetscCall(VecDestroy(&ds->w));
   PetscCall(VecDestroy(&ds->lb));
   PetscCall(VecDestroy(&ds->ub));
@@ -230,8 +201,8 @@ static PetscErrorCode SolveQP(DeSaxce *ds, Vec r, Vec vd, PetscInt *its, PetscBo
   PetscCall(VecGetArray(ds->w, &wl));
   for (PetscInt k = 0; k < ds->nactive; k++) wl[2 * k] += ds->shift[k];
   PetscCall(VecRestoreArray(ds->w, &wl));
-  PetscCall(MatMultTranspose(ds->E, ds->w, ds->c));
-  PetscCall(VecAXPY(ds->c, -PROX * ds->wmean, ds->z)); /* the proximal centre z_k */
+  PetscCall(MatMultTranspose(ds->E, ds->w, ds->qp.c));
+  PetscCall(VecAXPY(ds->qp.c, -PROX * ds->wmean, ds->z)); /* the proximal centre z_k */
   PetscCall(TaoSetSolution(ds->tao, ds->z));
   PetscCall(TaoSolve(ds->tao));
   PetscCall(TaoGetIterationNumber(ds->tao, its));

@@ -17,14 +17,14 @@
 #include <petsctao.h>
 
 typedef struct {
-  Tao       tao; /* this step's QP solver; prefix solver_tresca_ */
-  char      taotype[64];
-  Mat       H;            /* W over the active components (+ sigma I), AIJ */
-  IS        is;           /* the active components, global indices of r */
-  Vec       x, c, lb, ub; /* the active components: impulses, linear term, bounds */
-  PetscReal wmean;        /* mean W_nn over the active contacts */
-  PetscReal sigma;        /* the proximal coefficient of this step (absolute) */
-  PetscInt  nactive;      /* local active contacts */
+  Tao            tao; /* this step's QP solver; prefix solver_tresca_ */
+  char           taotype[64];
+  KergsQuadratic qp;        /* H: W over the active components (+ sigma I), AIJ; c: the linear term */
+  IS             is;        /* the active components, global indices of r */
+  Vec            x, lb, ub; /* the active components: impulses, bounds */
+  PetscReal      wmean;     /* mean W_nn over the active contacts */
+  PetscReal      sigma;     /* the proximal coefficient of this step (absolute) */
+  PetscInt       nactive;   /* local active contacts */
   /* options */
   PetscReal sigma_factor; /* -solver_tresca_sigma: sigma / mean W_nn, at least */
   PetscReal sigma_alpha;  /* -solver_tresca_sigma_alpha: sigma / mean W_nn = alpha * natural residual, when larger */
@@ -34,42 +34,14 @@ typedef struct {
   PetscLogDouble tao_seconds;
 } Tresca;
 
-/* f = 1/2 x^T H x + c^T x and its gradient H x + c. */
-static PetscErrorCode TrescaObjectiveGradient(Tao tao, Vec x, PetscReal *f, Vec g, void *ctx)
-{
-  Tresca     *tr = (Tresca *)ctx;
-  PetscScalar xHx, cx;
-
-  PetscFunctionBeginUser;
-  (void)tao;
-  PetscCall(MatMult(tr->H, x, g));
-  PetscCall(VecDot(x, g, &xHx));
-  PetscCall(VecDot(tr->c, x, &cx));
-  PetscCall(VecAXPY(g, 1.0, tr->c));
-  *f = 0.5 * PetscRealPart(xHx) + PetscRealPart(cx);
-  PetscFunctionReturn(0);
-}
-
-/* The Hessian is H itself, constant: nothing to compute. */
-static PetscErrorCode TrescaHessian(Tao tao, Vec x, Mat H, Mat P, void *ctx)
-{
-  PetscFunctionBeginUser;
-  (void)tao;
-  (void)x;
-  (void)H;
-  (void)P;
-  (void)ctx;
-  PetscFunctionReturn(0);
-}
-
 static PetscErrorCode DestroyStepObjects(Tresca *tr)
 {
   PetscFunctionBeginUser;
   PetscCall(TaoDestroy(&tr->tao));
-  PetscCall(MatDestroy(&tr->H));
+  PetscCall(MatDestroy(&tr->qp.H));
   PetscCall(ISDestroy(&tr->is));
   PetscCall(VecDestroy(&tr->x));
-  PetscCall(VecDestroy(&tr->c));
+  PetscCall(VecDestroy(&tr->qp.c));
   PetscCall(VecDestroy(&tr->lb));
   PetscCall(VecDestroy(&tr->ub));
   PetscFunctionReturn(0);
@@ -131,18 +103,15 @@ static PetscErrorCode SolverSetUp_Tresca(KergsSolver s, KergsScene scene, KergsC
   PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
   PetscCall(MatCreateSubMatrix(Wfull, tr->is, tr->is, MAT_INITIAL_MATRIX, &Wa));
   PetscCall(MatDestroy(&Wfull));
-  PetscCall(MatConvert(Wa, MATAIJ, MAT_INITIAL_MATRIX, &tr->H));
+  PetscCall(MatConvert(Wa, MATAIJ, MAT_INITIAL_MATRIX, &tr->qp.H));
   PetscCall(MatDestroy(&Wa));
-  if (tr->sigma > 0) PetscCall(MatShift(tr->H, tr->sigma));
-  PetscCall(MatSetOption(tr->H, MAT_SYMMETRIC, PETSC_TRUE));
-  PetscCall(MatCreateVecs(tr->H, &tr->x, &tr->c));
+  if (tr->sigma > 0) PetscCall(MatShift(tr->qp.H, tr->sigma));
+  PetscCall(MatSetOption(tr->qp.H, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscCall(MatCreateVecs(tr->qp.H, &tr->x, &tr->qp.c));
   PetscCall(VecDuplicate(tr->x, &tr->lb));
   PetscCall(VecDuplicate(tr->x, &tr->ub));
   PetscCall(CreateTao(s, tr));
-  /* no gradient vector of ours: with one, TRON (PETSc 3.18) kept a reference to it past TaoDestroy, a vector leaked
-     per step (-malloc_dump, tests/memcheck.cmake); Tao makes its own */
-  PetscCall(TaoSetObjectiveAndGradient(tr->tao, NULL, TrescaObjectiveGradient, tr));
-  PetscCall(TaoSetHessian(tr->tao, tr->H, tr->H, TrescaHessian, tr));
+  PetscCall(KergsQuadraticSetTao(&tr->qp, tr->tao));
   PetscCall(TaoSetVariableBounds(tr->tao, tr->lb, tr->ub));
   PetscFunctionReturn(0);
 }
@@ -203,13 +172,13 @@ static PetscErrorCode SolveQP(KergsSolver s, Tresca *tr, PetscInt n, PetscInt nc
   PetscFunctionBeginUser;
   PetscCall(SetBounds(s, tr, n, nc));
   if (sigma != tr->sigma) { /* H = W + sigma I: only its diagonal changes */
-    PetscCall(MatShift(tr->H, sigma - tr->sigma));
+    PetscCall(MatShift(tr->qp.H, sigma - tr->sigma));
     tr->sigma = sigma;
   }
   PetscCall(VecGetSubVector(vd, tr->is, &sub));
-  PetscCall(VecCopy(sub, tr->c));
+  PetscCall(VecCopy(sub, tr->qp.c));
   PetscCall(VecRestoreSubVector(vd, tr->is, &sub));
-  if (tr->sigma > 0) PetscCall(VecAXPY(tr->c, -tr->sigma, tr->x));
+  if (tr->sigma > 0) PetscCall(VecAXPY(tr->qp.c, -tr->sigma, tr->x));
   PetscCall(TaoSetTolerances(tr->tao, gatol, 0.0, 0.0));
   PetscCall(TaoSetSolution(tr->tao, tr->x));
   PetscCall(PetscTime(&t0));
