@@ -225,6 +225,27 @@ PetscErrorCode KergsSolverSetUpSweep(KergsSolver s, KergsScene scene, KergsConta
   PetscFunctionReturn(0);
 }
 
+/* For the types that work on the active contacts only (tresca, snesvi, newton's De Saxce start): their components as an
+   IS of global indices into the contact vectors (W's rows), and W over them as AIJ (TAO's and SNESVI's active-set
+   methods extract submatrices on arbitrary component subsets). */
+PetscErrorCode KergsSolverActiveSubmatrix(KergsSolver s, Mat W, PetscInt n, PetscInt nc, IS *is, Mat *Wa)
+{
+  PetscInt rstart, m = 0, *idx;
+  Mat      Wsub;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetOwnershipRange(W, &rstart, NULL));
+  PetscCall(PetscMalloc1(n * nc + 1, &idx));
+  for (PetscInt a = 0; a < n; a++)
+    if (s->active[a])
+      for (PetscInt j = 0; j < nc; j++) idx[m++] = rstart + a * nc + j;
+  PetscCall(ISCreateGeneral(s->comm, m, idx, PETSC_OWN_POINTER, is));
+  PetscCall(MatCreateSubMatrix(W, *is, *is, MAT_INITIAL_MATRIX, &Wsub));
+  PetscCall(MatConvert(Wsub, MATAIJ, MAT_INITIAL_MATRIX, Wa));
+  PetscCall(MatDestroy(&Wsub));
+  PetscFunctionReturn(0);
+}
+
 /* Sweeps until the chosen criterion is below tol or max_it sweeps were done (Algorithm 2's loop).
    At exit the natural-map residual is recomputed from r, whatever the criterion. */
 PetscErrorCode KergsSolverIterate(KergsSolver s, KergsOperators ops, PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *stats)

@@ -67,6 +67,8 @@ struct _p_KergsSolver {
 
 /* Shared by the types: mark active contacts (predicted gap <= 0) and set up the sweep on W. */
 PETSC_INTERN PetscErrorCode KergsSolverSetUpSweep(KergsSolver, KergsScene, KergsContacts, KergsOperators);
+/* Shared by the types that work on the active contacts only: their components (IS) and W over them (AIJ). */
+PETSC_INTERN PetscErrorCode KergsSolverActiveSubmatrix(KergsSolver, Mat W, PetscInt n, PetscInt nc, IS *is, Mat *Wa);
 /* Shared by the types: run sweeps until the criterion or max_it, extra/diag as in KergsSweepRun; when the type
    has a presweep hook, extra (one entry per local component) is updated by it before every sweep. */
 PETSC_INTERN PetscErrorCode KergsSolverIterate(KergsSolver, KergsOperators, PetscReal *extra, const PetscReal *Wdiag, KergsSolveStats *);

@@ -7,7 +7,6 @@
 #include <kergs/private/solverimpl.h>
 #include <kergs/kernel.h>
 #include <petscksp.h>
-#include <petsctao.h>
 
 typedef enum { NEWTON_PROX_NONE, NEWTON_PROX_IDENTITY, NEWTON_PROX_KERNEL } NewtonProx;
 

@@ -10,7 +10,6 @@
    solves the problem. On dense frictional packings at rest of a few thousand grains Newton's merit stalls on wrong
    pieces; after one loosely solved QP Newton finishes in a few steps. */
 #include "newton.h"
-#include <petsctao.h>
 
 #define PROX 1e-8 /* the QPs' proximal coefficient, relative to the mean W_nn */
 
@@ -26,6 +25,7 @@ typedef struct {
   PetscReal      wmean;   /* mean W_nn: velocities to impulses */
   PetscReal      kkt_tol; /* the QP's KKT residual that ends it, in impulse units */
   PetscReal      kkt;     /* its last value */
+  PetscReal      bound;   /* z's upper bound, meant never to bind */
 } DeSaxce;
 
 /* TAO's convergence test for BQPIP: the QP's own natural residual |min(z, g / mean W_nn)|, g = H z + c its gradient (the
@@ -90,20 +90,18 @@ PetscErrorCode NewtonDeSaxceCreateTao(KergsSolver s, Tao *tao)
 }
 
 /* The QP of this step: the active components, E, H = E^T W E, the vectors and the Tao. */
-static PetscErrorCode SetUp(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal wmean, PetscReal scale, Vec r, DeSaxce *ds)
+static PetscErrorCode SetUp(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscReal wmean, PetscReal scale, DeSaxce *ds)
 {
-  PetscInt rstart, m = 0, k = 0, *idx;
+  PetscInt rstart, m, k = 0;
   Mat      Wa;
 
   PetscFunctionBeginUser;
-  PetscCall(VecGetOwnershipRange(r, &rstart, NULL));
-  PetscCall(PetscMalloc1(n * nc + 1, &idx));
-  for (PetscInt a = 0; a < n; a++)
-    if (s->active[a])
-      for (PetscInt j = 0; j < nc; j++) idx[m++] = rstart + a * nc + j;
+  PetscCall(KergsSolverActiveSubmatrix(s, nt->Wfull, n, nc, &ds->is, &Wa));
+  PetscCall(ISGetLocalSize(ds->is, &m));
   ds->nactive = m / nc;
-  PetscCall(ISCreateGeneral(s->comm, m, idx, PETSC_OWN_POINTER, &ds->is));
-  PetscCall(MatCreateSubMatrix(nt->Wfull, ds->is, ds->is, MAT_INITIAL_MATRIX, &Wa));
+  ds->wmean   = wmean;
+  ds->kkt_tol = nt->desaxce_qp_tol * scale;
+  ds->bound   = 100.0 * scale;
   PetscCall(MatCreateAIJ(s->comm, m, m, PETSC_DETERMINE, PETSC_DETERMINE, 2, NULL, 0, NULL, &ds->E));
   PetscCall(MatGetOwnershipRange(ds->E, &rstart, NULL));
   for (PetscInt a = 0; a < n; a++) {
@@ -115,12 +113,7 @@ static PetscErrorCode SetUp(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, 
   }
   PetscCall(MatAssemblyBegin(ds->E, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(ds->E, MAT_FINAL_ASSEMBLY));
-  {
-    Mat Waij;
-    PetscCall(MatConvert(Wa, MATAIJ, MAT_INITIAL_MATRIX, &Waij));
-    PetscCall(MatPtAP(Waij, ds->E, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &ds->qp.H));
-    PetscCall(MatDestroy(&Waij));
-  }
+  PetscCall(MatPtAP(Wa, ds->E, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &ds->qp.H));
   PetscCall(MatDestroy(&Wa));
   /* E^T W E is singular with W (and along a - b on a contact without friction, whose edges coincide), and its rounding
      left CHOLMOD a negative pivot where BQPIP's barrier term is small (measured on biaxial_5k's first step): a proximal
@@ -135,7 +128,7 @@ static PetscErrorCode SetUp(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, 
   /* no impulse exceeds 100 times the problem's scale (max(|r|, |p|) over all contacts): a finite bound that is never
      reached keeps BQPIP's first point in proportion (with +inf its first residual was 1e12 and 40 iterations went to
      bringing it down) */
-  PetscCall(VecSet(ds->ub, 100.0 * scale));
+  PetscCall(VecSet(ds->ub, ds->bound));
   PetscCall(PetscMalloc1(ds->nactive + 1, &ds->shift));
   PetscCall(NewtonDeSaxceCreateTao(s, &ds->tao));
   PetscCall(KergsQuadraticSetTao(&ds->qp, ds->tao));
@@ -212,11 +205,10 @@ static PetscErrorCode SolveQP(DeSaxce *ds, Vec r, Vec vd, PetscInt *its, PetscBo
   PetscCall(VecPointwiseMax(ds->z, ds->z, ds->lb));
   { /* the bound is meant never to bind (SetUp): say so when it comes near (measured: 17 times the scale at most, on the
        biaxial test's first step, against 100) */
-    PetscReal zmax, bound;
+    PetscReal zmax;
     PetscCall(VecMax(ds->z, NULL, &zmax));
-    PetscCall(VecMax(ds->ub, NULL, &bound));
-    if (zmax > 0.5 * bound)
-      PetscCall(PetscInfo(NULL, "De Saxce QP: an edge coordinate %g is near its bound %g\n", (double)zmax, (double)bound));
+    if (zmax > 0.5 * ds->bound)
+      PetscCall(PetscInfo(NULL, "De Saxce QP: an edge coordinate %g is near its bound %g\n", (double)zmax, (double)ds->bound));
   }
   PetscCall(MatMult(ds->E, ds->z, ds->w));
   PetscCall(VecSet(r, 0.0));
@@ -243,9 +235,7 @@ PetscErrorCode NewtonDeSaxceStart(KergsSolver s, Newton *nt, PetscInt n, PetscIn
   if (nc != 2 || *res <= target || nt->desaxce_max_it <= 0) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(KERGS_DeSaxce, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
-  PetscCall(SetUp(s, nt, n, nc, wmean, scale, r, &ds));
-  ds.wmean   = wmean;
-  ds.kkt_tol = nt->desaxce_qp_tol * scale;
+  PetscCall(SetUp(s, nt, n, nc, wmean, scale, &ds));
   PetscCall(VecCopy(r, nt->rbest));
   PetscCall(FromImpulses(s, &ds, n, r, u));
   for (PetscInt k = 0; k < nt->desaxce_max_it && best > target; k++) {

@@ -1,7 +1,6 @@
 /* The convex QPs that solver types hand to a Tao (tresca's Tresca problems, newton's De Saxce start):
    f(x) = 1/2 x^T H x + c^T x, its gradient H x + c, and its constant Hessian H (solverimpl.h, KergsQuadratic). */
 #include <kergs/private/solverimpl.h>
-#include <petsctao.h>
 
 static PetscErrorCode QuadraticObjectiveGradient(Tao tao, Vec x, PetscReal *f, Vec g, void *ctx)
 {

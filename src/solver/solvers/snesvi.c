@@ -240,33 +240,24 @@ static PetscErrorCode CreateSNES(KergsSolver s, SnesVI *vi)
 /* The active components (IS), mu and rho per active contact, and W over the active components (AIJ). */
 static PetscErrorCode BuildActiveSystem(KergsSolver s, SnesVI *vi, KergsOperators ops, PetscInt n)
 {
-  PetscInt   rstart, *idx, m = 0;
   PetscReal *blocks;
-  Mat        Wfull, Wsub;
-  Vec        r;
+  Mat        Wfull;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
-  PetscCall(VecGetOwnershipRange(r, &rstart, NULL));
-  PetscCall(PetscMalloc1(n * vi->nc + 1, &idx));
   PetscCall(PetscMalloc2(n + 1, &vi->mu, n + 1, &vi->rho));
   PetscCall(PetscMalloc1(n * vi->nc * vi->nc + 1, &blocks));
   PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, blocks));
   vi->nactive = 0;
   for (PetscInt a = 0; a < n; a++)
     if (s->active[a]) {
-      const PetscReal wnn = blocks[a * vi->nc * vi->nc];
-      for (PetscInt j = 0; j < vi->nc; j++) idx[m++] = rstart + a * vi->nc + j;
+      const PetscReal wnn    = blocks[a * vi->nc * vi->nc];
       vi->mu[vi->nactive]    = vi->nc > 1 ? s->mu[a] : 0.0;
       vi->rho[vi->nactive++] = wnn > 0 ? 1.0 / wnn : 1.0;
     }
   PetscCall(PetscFree(blocks));
-  PetscCall(ISCreateGeneral(s->comm, m, idx, PETSC_OWN_POINTER, &vi->is));
   PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
-  PetscCall(MatCreateSubMatrix(Wfull, vi->is, vi->is, MAT_INITIAL_MATRIX, &Wsub));
+  PetscCall(KergsSolverActiveSubmatrix(s, Wfull, n, vi->nc, &vi->is, &vi->Wa));
   PetscCall(MatDestroy(&Wfull));
-  PetscCall(MatConvert(Wsub, MATAIJ, MAT_INITIAL_MATRIX, &vi->Wa));
-  PetscCall(MatDestroy(&Wsub));
   PetscFunctionReturn(0);
 }
 

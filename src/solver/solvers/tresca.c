@@ -71,26 +71,21 @@ static PetscErrorCode SolverSetUp_Tresca(KergsSolver s, KergsScene scene, KergsC
 {
   Tresca        *tr = (Tresca *)s->data;
   KergsDofLayout layout;
-  PetscInt       n, nc, rstart, *idx, m = 0;
+  PetscInt       n, nc;
   PetscReal     *blocks, sums[2] = {0.0, 0.0};
-  Mat            Wfull, Wa;
-  Vec            r;
+  Mat            Wfull;
 
   PetscFunctionBeginUser;
   PetscCall(KergsSolverSetUpSweep(s, scene, contacts, ops));
   PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
   PetscCall(KergsOperatorsGetLayout(ops, &layout));
-  PetscCall(KergsOperatorsGetContactVectors(ops, &r, NULL, NULL));
   nc = layout.ncomp;
   PetscCall(DestroyStepObjects(tr));
-  PetscCall(VecGetOwnershipRange(r, &rstart, NULL));
-  PetscCall(PetscMalloc1(n * nc + 1, &idx));
   PetscCall(PetscMalloc1(n * nc * nc + 1, &blocks));
   PetscCall(KergsSweepGetDiagonalBlocks(s->sweep, blocks));
   tr->nactive = 0;
   for (PetscInt a = 0; a < n; a++)
     if (s->active[a]) {
-      for (PetscInt j = 0; j < nc; j++) idx[m++] = rstart + a * nc + j;
       tr->nactive++;
       sums[0] += blocks[a * nc * nc];
       sums[1] += 1.0;
@@ -99,12 +94,9 @@ static PetscErrorCode SolverSetUp_Tresca(KergsSolver s, KergsScene scene, KergsC
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 2, MPIU_REAL, MPIU_SUM, s->comm));
   tr->wmean = sums[1] > 0 ? sums[0] / sums[1] : 1.0;
   tr->sigma = tr->sigma_factor * tr->wmean;
-  PetscCall(ISCreateGeneral(s->comm, m, idx, PETSC_OWN_POINTER, &tr->is));
   PetscCall(KergsOperatorsGetFullW(ops, &Wfull));
-  PetscCall(MatCreateSubMatrix(Wfull, tr->is, tr->is, MAT_INITIAL_MATRIX, &Wa));
+  PetscCall(KergsSolverActiveSubmatrix(s, Wfull, n, nc, &tr->is, &tr->qp.H));
   PetscCall(MatDestroy(&Wfull));
-  PetscCall(MatConvert(Wa, MATAIJ, MAT_INITIAL_MATRIX, &tr->qp.H));
-  PetscCall(MatDestroy(&Wa));
   if (tr->sigma > 0) PetscCall(MatShift(tr->qp.H, tr->sigma));
   PetscCall(MatSetOption(tr->qp.H, MAT_SYMMETRIC, PETSC_TRUE));
   PetscCall(MatCreateVecs(tr->qp.H, &tr->x, &tr->qp.c));
