@@ -71,52 +71,6 @@ static PetscErrorCode EvaluateFunction(KergsSolver s, Newton *nt, PetscInt n, Pe
   PetscFunctionReturn(0);
 }
 
-/* Contact a's impulse ra and natural map e (KergsLawNaturalMap) from the arrays of r and u = W r + v^d. */
-static void ContactNaturalMap(KergsSolver s, Newton *nt, PetscInt nc, PetscInt a, const PetscScalar rl[], const PetscScalar ul[],
-                              PetscReal ra[], PetscReal e[])
-{
-  PetscReal ua[KERGS_MAXCOMP];
-
-  for (PetscInt c = 0; c < nc; c++) {
-    ra[c] = PetscRealPart(rl[a * nc + c]);
-    ua[c] = PetscRealPart(ul[a * nc + c]);
-  }
-  KergsLawNaturalMap(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a], e);
-}
-
-/* The natural residual of the original problem (KergsLawNaturalResidualScaled, docs/solver.md) from r and u = W r + v^d. */
-static PetscErrorCode NaturalResidual(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res)
-{
-  const PetscScalar *rl, *ul;
-  PetscReal          sums[3] = {0.0, 0.0, 0.0};
-
-  PetscFunctionBeginUser;
-  PetscCall(VecGetArrayRead(r, &rl));
-  PetscCall(VecGetArrayRead(u, &ul));
-  for (PetscInt a = 0; a < n; a++) {
-    PetscReal ra[KERGS_MAXCOMP], e[KERGS_MAXCOMP];
-    ContactNaturalMap(s, nt, nc, a, rl, ul, ra, e);
-    for (PetscInt c = 0; c < nc; c++) {
-      sums[0] += e[c] * e[c];
-      sums[1] += ra[c] * ra[c];
-      sums[2] += PetscSqr(ra[c] - e[c]);
-    }
-  }
-  PetscCall(VecRestoreArrayRead(u, &ul));
-  PetscCall(VecRestoreArrayRead(r, &rl));
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sums, 3, MPIU_REAL, MPIU_SUM, s->comm));
-  *res      = KergsLawNaturalResidualScaled(sums[0], sums[1], sums[2]);
-  nt->enorm = PetscSqrtReal(sums[0]);
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode NewtonNaturalResidual(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res)
-{
-  PetscFunctionBeginUser;
-  PetscCall(NaturalResidual(s, nt, n, nc, r, u, res));
-  PetscFunctionReturn(0);
-}
-
 /* ------------------------------------------------------------------------------------------------ */
 /* Set-up and solve                                                                                 */
 
@@ -312,12 +266,12 @@ static PetscErrorCode Sweeps(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc,
     nt->sweeps++;
     if ((k + 1) % nt->sweep_check == 0 && k + 1 < count) {
       PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
-      PetscCall(NaturalResidual(s, nt, n, nc, r, u, res));
+      PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, res));
       if (*res <= target) break;
     }
   }
   PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
-  PetscCall(NaturalResidual(s, nt, n, nc, r, u, res));
+  PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, res));
   PetscFunctionReturn(0);
 }
 
@@ -329,7 +283,7 @@ static PetscErrorCode MonitorNewtonStep(KergsSolver s, Newton *nt, PetscInt n, P
 
   PetscFunctionBeginUser;
   if (!s->nmonitors) PetscFunctionReturn(0);
-  PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
+  PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, &res));
   PetscCall(KergsSolverMonitor(s, step, res, res));
   PetscFunctionReturn(0);
 }
@@ -480,7 +434,7 @@ static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, Petsc
     PetscCall(LineSearch(s, nt, n, nc, r, u, vd, &merit, &ok));
     (*steps)++;
     nt->smooth_steps++;
-    PetscCall(NaturalResidual(s, nt, n, nc, r, u, res));
+    PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, res));
     PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, *steps));
     PetscCall(PetscInfo(NULL, "smoothing %" PetscInt_FMT ": natural residual %g, eps %g, %" PetscInt_FMT " halvings\n", *steps,
                         (double)*res, (double)nt->eps, nt->backtracks - b0));
@@ -515,14 +469,14 @@ static PetscErrorCode Polish(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc,
   PetscCall(VecGetArray(nt->rc, &pl));
   for (PetscInt a = 0; a < n; a++) {
     PetscReal ra[KERGS_MAXCOMP], e[KERGS_MAXCOMP];
-    ContactNaturalMap(s, nt, nc, a, rl, ul, ra, e);
+    NewtonContactNaturalMap(s, nt, nc, a, rl, ul, ra, e);
     for (PetscInt c = 0; c < nc; c++) pl[a * nc + c] = ra[c] - e[c];
   }
   PetscCall(VecRestoreArray(nt->rc, &pl));
   PetscCall(VecRestoreArrayRead(u, &ul));
   PetscCall(VecRestoreArrayRead(r, &rl));
   PetscCall(MoveTo(nt, nt->rc, r, u, vd));
-  PetscCall(NaturalResidual(s, nt, n, nc, r, u, &polished));
+  PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, &polished));
   if (polished < *res)
     *res = polished;
   else
@@ -549,7 +503,7 @@ static PetscErrorCode Attempt(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc
   while (res > s->tol && nglobal > 0 && *steps < limit) {
     PetscReal before = res, inner_tol;
     PetscCall(VecCopy(r, nt->rc));
-    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res)); /* |e| at the centre (after a rejected outer iteration too) */
+    PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, &res)); /* |e| at the centre (after a rejected outer iteration too) */
     /* the first attempt is plain Newton (the smallest sigma): enough when the warm start lies on the solution's piece
        of F, and the residual (absolute at r = 0) says little about the distance to the solution */
     nt->sigma = nt->prox != NEWTON_PROX_NONE
@@ -568,7 +522,7 @@ static PetscErrorCode Attempt(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc
         PetscCall(MonitorNewtonStep(s, nt, n, nc, r, u, *steps));
       }
     }
-    PetscCall(NaturalResidual(s, nt, n, nc, r, u, &res));
+    PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, &res));
     outer++;
     nt->outer++;
     ok = (PetscBool)(PetscSqrtReal(2.0 * nt->merit) <= inner_tol); /* the proximal problem was solved */

@@ -115,11 +115,24 @@ PETSC_INTERN PetscErrorCode NewtonDestroyJacobian(Newton *);
 /* newton_working.c */
 PETSC_INTERN PetscErrorCode NewtonWorkingSetBegin(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u);
 PETSC_INTERN PetscErrorCode NewtonWorkingSetGrow(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscBool *grown);
+/* Contact a's impulse ra and natural map e (KergsLawNaturalMap) from the arrays of r and u = W r + v^d. */
+static inline void NewtonContactNaturalMap(KergsSolver s, const Newton *nt, PetscInt nc, PetscInt a, const PetscScalar rl[],
+                                           const PetscScalar ul[], PetscReal ra[], PetscReal e[])
+{
+  PetscReal ua[KERGS_MAXCOMP];
+
+  for (PetscInt c = 0; c < nc; c++) {
+    ra[c] = PetscRealPart(rl[a * nc + c]);
+    ua[c] = PetscRealPart(ul[a * nc + c]);
+  }
+  KergsLawNaturalMap(nc, ra, ua, s->mu[a], nt->rho_nat[a], s->active[a], e);
+}
+
 /* newton_desaxce.c */
 PETSC_INTERN PetscErrorCode NewtonDeSaxceCreateTao(KergsSolver, Tao *);
 PETSC_INTERN PetscErrorCode NewtonDeSaxceStart(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscReal wmean, PetscReal scale, Vec r,
                                                Vec u, Vec vd, PetscReal *res);
-/* newton.c */
+/* newton_residual.c */
 PETSC_INTERN PetscErrorCode NewtonNaturalResidual(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res);
 /* newton_subdomain.c */
 PETSC_INTERN PetscErrorCode NewtonSubdomainSetSortedLU(PC);
