@@ -1,10 +1,11 @@
 #!/usr/bin/python3
-"""Three exact methods for the 2D frictional contact problem, prototyped on kergs's FCLib exports before any C is
+"""Four exact methods for the 2D frictional contact problem, prototyped on kergs's FCLib exports before any C is
 written, and not kept, and one diagnosis of a stored answer (docs/solver.md, "Prototypes measured and not kept"). All
 are judged by kergs's own natural residual (scripts/siconos_solve.py's, recomputed from r).
 
   proto_fixed_points.py desaxce PROBLEM.fclib.h5 [--outer 40] [--theta 1.0]
   proto_fixed_points.py fb-lcp  PROBLEM.fclib.h5 [--max-it 200]
+  proto_fixed_points.py ip-lcp  PROBLEM.fclib.h5 [--max-it 200] [--write ANSWER.fclib.h5]
   proto_fixed_points.py lm      PROBLEM.fclib.h5 [--max-it 200] [--start zero|stored]
   proto_fixed_points.py pieces  PROBLEM.fclib.h5 [--perturb 0] [--max-it 5000]
 
@@ -21,6 +22,11 @@ contact (r_t = beta+ - beta-, lambda the sliding speed), every pair scaled to im
 by a semismooth Newton method on the Fischer-Burmeister function with an Armijo search on its C^1 merit (De Luca,
 Facchinei and Kanzow 1996), and a gradient step where the Newton direction does not descend.
 
+ip-lcp: the same Stewart-Trinkle LCP solved by Mehrotra's predictor-corrector interior point (the desaxce QPs' solver),
+although its theory needs a monotone LCP and this one is not; from every x equal to the scale of its right-hand side.
+--write copies the problem with the answer as its solution, so that kergs can start from it (-fclib_input ANSWER
+-fclib_start solution).
+
 lm: Levenberg-Marquardt on kergs's Alart-Curnier function F (rho = 1 / W_nn, its generalized Jacobian J = A + B W),
 lambda = |F| (Yamashita and Fukushima), the step from the augmented system [[-I, J], [J^T, lambda I]] (J^T J is denser),
 an Armijo search on 1/2 |F|^2; from r = 0 or from the solution stored in the file (kergs's answer).
@@ -32,7 +38,8 @@ how much of its right-hand side no dr reaches: near 0 when the states are those 
 are not. --perturb e multiplies r by 1 + e N(0, 1) first (a control: a solution perturbed keeps most of its states).
 Reports the natural residual after the best of the steps 1, 1/2, ..., 1/16 along dr.
 
-Each prints one line per outer iteration (desaxce) or per 10 Newton steps (fb-lcp) and a last JSON line.
+Each prints one line per outer iteration (desaxce), per interior-point iteration (ip-lcp) or per 10 Newton steps (fb-lcp)
+and a last JSON line.
 """
 import argparse
 import json
@@ -54,8 +61,10 @@ def block_diagonal(blocks):
     return sp.block_diag([sp.csr_matrix(b) for b in blocks], format="csr")
 
 
-def interior_point_lcp(M, b, z0=None, tol=1e-14, max_it=200):
-    """Mehrotra's predictor-corrector on the monotone LCP 0 <= z _|_ w = M z + b >= 0. Returns z, iterations, ok."""
+def interior_point_lcp(M, b, z0=None, tol=1e-14, max_it=200, monitor=None):
+    """Mehrotra's predictor-corrector on the LCP 0 <= z _|_ w = M z + b >= 0 (its theory needs M monotone; ip-lcp runs it
+    on one that is not). monitor(it, z), when given, is called before each iteration and ends the solve by returning
+    True. Returns z, iterations, ok."""
     n = b.size
     scale = max(float(np.abs(b).max()), 1e-300)
     z = np.ones(n) if z0 is None else np.maximum(z0, 1e-3 * max(float(z0.max()), 1e-12))
@@ -64,6 +73,8 @@ def interior_point_lcp(M, b, z0=None, tol=1e-14, max_it=200):
         f1 = w - M @ z - b
         gap = z @ w / n
         if np.linalg.norm(f1, np.inf) <= tol * scale and gap <= tol * scale * max(float(z.max()), 1e-300):
+            return z, it, True
+        if monitor is not None and monitor(it, z):
             return z, it, True
         lu = spla.splu((M + sp.diags(w / z)).tocsc(), permc_spec="COLAMD")
 
@@ -167,6 +178,41 @@ def fb_lcp(prob, max_it):
     return {"method": "fb-lcp", "newton_steps": it, "residual": res}
 
 
+def ip_lcp(prob, max_it):
+    """Mehrotra's interior point on the Stewart-Trinkle LCP itself (not monotone once mu > 0), from x = the scale of c;
+    stops at natural residual 1e-10. Returns the JSON dict and r."""
+    M, c, T = stewart_trinkle(prob["W"].tocsr(), prob["q"], prob["mu"])
+    history = []
+
+    def monitor(it, x):
+        history.append(natural_residual(prob, T @ x)[0])
+        print(f"interior-point iteration {it}: natural residual {history[-1]:.3e}", flush=True)
+        return history[-1] < 1e-10
+
+    x0 = np.full(c.size, max(float(np.abs(c).max()), 1e-300))
+    x, its, _ = interior_point_lcp(M, c, z0=x0, tol=0.0, max_it=max_it, monitor=monitor)
+    r = T @ x
+    res = natural_residual(prob, r)[0]
+    return {"method": "ip-lcp", "iterations": its, "residual": res, "residual_best": min(history + [res])}, r
+
+
+def write_solution(source, target, prob, r):
+    """A copy of the problem file with r (and u = W r + q) as its solution, for kergs's -fclib_start solution; written
+    to a temporary file and renamed."""
+    import shutil
+
+    import h5py
+    tmp = target + ".tmp"
+    shutil.copyfile(source, tmp)
+    with h5py.File(tmp, "r+") as f:
+        for name, value in (("r", r), ("u", prob["W"] @ r + prob["q"])):
+            path = "solution/" + name
+            if path in f:
+                del f[path]
+            f.create_dataset(path, data=value)
+    os.replace(tmp, target)
+
+
 def alart_curnier(W, q, mu, rho, r, jacobian):
     """F(r) contact by contact, the contact states, and with `jacobian` J = A + B W (sparse)."""
     u = W @ r + q
@@ -257,11 +303,14 @@ def pieces(prob, perturb, max_it):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("method", choices=("desaxce", "fb-lcp", "lm", "pieces"))
+    ap.add_argument("method", choices=("desaxce", "fb-lcp", "ip-lcp", "lm", "pieces"))
     ap.add_argument("problem")
     ap.add_argument("--outer", type=int, default=40, help="desaxce: outer iterations (default 40)")
     ap.add_argument("--theta", type=float, default=1.0, help="desaxce: relaxation of the shift's update, in (0, 1] (default 1)")
-    ap.add_argument("--max-it", type=int, default=None, help="fb-lcp, lm: Newton steps (default 200); pieces: LSQR iterations (5000)")
+    ap.add_argument("--max-it", type=int, default=None,
+                    help="fb-lcp, lm: Newton steps (default 200); ip-lcp: interior-point iterations (200); pieces: LSQR iterations (5000)")
+    ap.add_argument("--write", metavar="FILE", help="ip-lcp: write the problem with its answer as the solution, for kergs's "
+                    "-fclib_input FILE -fclib_start solution")
     ap.add_argument("--start", choices=("zero", "stored"), default="zero", help="lm: from r = 0 or from the file's solution")
     ap.add_argument("--perturb", type=float, default=0.0, help="pieces: relative random perturbation of the stored r (default 0)")
     a = ap.parse_args(argv)
@@ -271,6 +320,12 @@ def main(argv=None):
         print("proto_fixed_points.py: --theta must lie in (0, 1], --outer and --max-it be positive, --perturb in [0, 1)",
               file=sys.stderr)
         return 2
+    if a.write is not None:
+        bad = a.method != "ip-lcp" or (os.path.exists(a.write) and not os.path.isfile(a.write))
+        if bad or (os.path.exists(a.problem) and os.path.exists(a.write) and os.path.samefile(a.problem, a.write)):
+            print(f"proto_fixed_points.py: --write {a.write}: only with ip-lcp, and to a regular file other than the problem",
+                  file=sys.stderr)
+            return 2
     try:
         prob = read_problem(a.problem)
     except InputError as err:
@@ -282,11 +337,17 @@ def main(argv=None):
     t0 = time.time()
     try:
         out = {"desaxce": lambda: desaxce(prob, a.outer, a.theta), "fb-lcp": lambda: fb_lcp(prob, a.max_it),
+               "ip-lcp": lambda: ip_lcp(prob, a.max_it),
                "lm": lambda: levenberg_marquardt(prob, a.max_it, a.start),
                "pieces": lambda: pieces(prob, a.perturb, a.max_it)}[a.method]()
     except InputError as err:
         print(f"proto_fixed_points.py: {err}", file=sys.stderr)
         return 2
+    if a.method == "ip-lcp":
+        out, r = out
+        if a.write is not None:
+            write_solution(a.problem, a.write, prob, r)
+            out["written"] = a.write
     out.update({"problem": a.problem, "contacts": prob["nc"], "seconds": round(time.time() - t0, 2)})
     print(json.dumps(out))
     return 0
