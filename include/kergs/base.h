@@ -19,8 +19,9 @@ PETSC_EXTERN PetscLogEvent KERGS_Exchange;
 /* The kernel projector (factorization, diagonal blocks of Z, applications), the predictor, the partition, the watch
    (src/step/watch.c: blow-ups and solver failures). */
 PETSC_EXTERN PetscLogEvent  KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition, KERGS_Watch, KERGS_Macro;
-PETSC_EXTERN PetscLogEvent  KERGS_Subdomain; /* newton's subdomain matrices of additive Schwarz, from W's */
-PETSC_EXTERN PetscLogEvent  KERGS_DeSaxce;   /* newton's De Saxce start: its QPs */
+PETSC_EXTERN PetscLogEvent  KERGS_Subdomain;     /* newton's subdomain matrices of additive Schwarz, from W's */
+PETSC_EXTERN PetscLogEvent  KERGS_DeSaxce;       /* newton's De Saxce start: its QPs */
+PETSC_EXTERN PetscLogEvent  KERGS_InteriorPoint; /* newton's interior-point start */
 PETSC_EXTERN PetscErrorCode KergsInitializePackage(void);
 
 /* Collective: personalised exchange of records of `size` bytes. send[] holds sendcount[q] records for rank q, grouped

@@ -13,6 +13,7 @@ PetscLogEvent KERGS_Detect, KERGS_Assemble, KERGS_Solve, KERGS_Sweep, KERGS_Upda
 PetscLogEvent KERGS_Factor, KERGS_KernelDiag, KERGS_KernelApply, KERGS_Predict, KERGS_Partition, KERGS_Watch, KERGS_Macro;
 PetscLogEvent KERGS_Subdomain;
 PetscLogEvent KERGS_DeSaxce;
+PetscLogEvent KERGS_InteriorPoint;
 
 static PetscBool PackageInitialized = PETSC_FALSE;
 static char     *RunOptions         = NULL; /* KergsProvenanceSetOptions: the options of the run as given (rank 0) */
@@ -52,6 +53,7 @@ PetscErrorCode KergsInitializePackage(void)
   PetscCall(PetscLogEventRegister("KergsMacro", classid, &KERGS_Macro));
   PetscCall(PetscLogEventRegister("KergsSubdomain", classid, &KERGS_Subdomain));
   PetscCall(PetscLogEventRegister("KergsDeSaxce", classid, &KERGS_DeSaxce));
+  PetscCall(PetscLogEventRegister("KergsInteriorPt", classid, &KERGS_InteriorPoint));
   PetscFunctionReturn(0);
 }
 

@@ -614,7 +614,8 @@ static PetscErrorCode SolveFrom(KergsSolver s, Newton *nt, PetscInt n, PetscInt 
 }
 
 /* Optional NLGS sweeps first (-solver_newton_max_sweeps), until the natural residual is at most
-   -solver_newton_switch_tol, and the optional De Saxce start (-solver_newton_desaxce_max_it, newton_desaxce.c), then
+   -solver_newton_switch_tol, the optional interior-point start (-solver_newton_ip_max_it, newton_ip.c) and De Saxce
+   start (-solver_newton_desaxce_max_it, newton_desaxce.c), then
    SolveFrom. With a working set (-solver_newton_working_set, newton_working.c) J is
    set up here, once the contacts that the warm start leaves open are known. */
 static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsContacts contacts, KergsOperators ops,
@@ -641,10 +642,13 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->smooth_steps                           = 0;
   nt->desaxce_qps = nt->desaxce_ip_its = 0;
   nt->desaxce_seconds                  = 0.0;
+  nt->ip_its                           = 0;
+  nt->ip_seconds                       = 0.0;
   nt->subdomains_computed              = 0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
   PetscCall(Sweeps(s, nt, n, nc, r, u, vd, 0, 0.0, &res));
   if (res > nt->switch_tol && nt->max_sweeps > 0) PetscCall(Sweeps(s, nt, n, nc, r, u, vd, nt->max_sweeps, nt->switch_tol, &res));
+  if (res > 0) PetscCall(NewtonInteriorPointStart(s, nt, n, nc, r, u, vd, &res));
   if (res > 0) PetscCall(NewtonDeSaxceStart(s, nt, n, nc, wmean, nt->enorm / res, r, u, vd, &res));
   if (nt->working_set) {
     PetscCall(NewtonWorkingSetBegin(s, nt, n, nc, r, u));
@@ -680,6 +684,10 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
   PetscCall(KergsSolveStatsAdd(st, "smoothing_steps", (PetscReal)nt->smooth_steps));
   PetscCall(KergsSolveStatsAdd(st, "second_attempts", (PetscReal)nt->second_attempts));
+  if (nt->ip_max_it > 0) {
+    PetscCall(KergsSolveStatsAdd(st, "ip_iterations", (PetscReal)nt->ip_its));
+    PetscCall(KergsSolveStatsAdd(st, "ip_seconds", nt->ip_seconds));
+  }
   if (nt->desaxce_max_it > 0) {
     PetscCall(KergsSolveStatsAdd(st, "desaxce_qps", (PetscReal)nt->desaxce_qps));
     PetscCall(KergsSolveStatsAdd(st, "desaxce_ip_iterations", (PetscReal)nt->desaxce_ip_its));
@@ -763,6 +771,12 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "Several ranks, additive Schwarz: each subdomain's J computed from W's subdomain, extracted once per J, "
                              "instead of extracted from J at every set-up",
                              "", nt->subdomains_from_w, &nt->subdomains_from_w, NULL));
+  PetscCall(PetscOptionsInt("-solver_newton_ip_max_it",
+                            "Interior-point iterations on the Stewart-Trinkle LCP before Newton, at most (0: none), until "
+                            "-solver_newton_ip_tol",
+                            "", nt->ip_max_it, &nt->ip_max_it, NULL));
+  PetscCall(PetscOptionsReal("-solver_newton_ip_tol", "Natural residual that ends the interior-point iterations before Newton", "",
+                             nt->ip_tol, &nt->ip_tol, NULL));
   PetscCall(
       PetscOptionsInt("-solver_newton_desaxce_max_it",
                       "De Saxce QPs (convex, by TAO's interior point) before Newton, at most (0: none), until -solver_newton_desaxce_tol",
@@ -811,6 +825,10 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              "-solver_newton_shift %g must be non-negative", (double)nt->shift);
   PetscCheck(nt->armijo > 0 && nt->armijo < 0.5, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_armijo %g must lie in (0, 0.5)",
              (double)nt->armijo);
+  PetscCheck(nt->ip_max_it >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_newton_ip_max_it %" PetscInt_FMT " must be non-negative",
+             nt->ip_max_it);
+  PetscCheck(nt->ip_tol > 0 && PetscIsNormalReal(nt->ip_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-solver_newton_ip_tol %g must be positive", (double)nt->ip_tol);
   PetscCheck(nt->desaxce_max_it >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_desaxce_max_it %" PetscInt_FMT " must be non-negative", nt->desaxce_max_it);
   PetscCheck(nt->desaxce_tol > 0 && PetscIsNormalReal(nt->desaxce_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -872,6 +890,11 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(
         viewer, "After %" PetscInt_FMT " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
         nt->second_window, (double)nt->second_rho));
+  if (nt->ip_max_it > 0)
+    PetscCall(PetscViewerASCIIPrintf(viewer,
+                                     "Interior-point start: at most %" PetscInt_FMT
+                                     " Mehrotra iterations on the Stewart-Trinkle LCP until the natural residual is %g\n",
+                                     nt->ip_max_it, (double)nt->ip_tol));
   if (nt->desaxce_max_it > 0)
     PetscCall(PetscViewerASCIIPrintf(viewer,
                                      "De Saxce start: at most %" PetscInt_FMT
@@ -952,6 +975,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->second_rho          = 0.1;
   nt->second_window       = 250;
   nt->desaxce_tol         = 1e-5;
+  nt->ip_tol              = 1e-5;
   nt->desaxce_qp_tol      = 1e-3;
   PetscCall(NewtonCreateLinearSolver(s, nt));
   s->data               = nt;

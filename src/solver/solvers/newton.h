@@ -93,6 +93,10 @@ typedef struct {
   PetscInt  desaxce_qps;           /* the last solve's De Saxce QPs */
   PetscInt  desaxce_ip_its;        /* their interior-point iterations */
   PetscReal desaxce_seconds;       /* and their time */
+  PetscInt  ip_max_it;             /* -solver_newton_ip_max_it: interior-point iterations before Newton (0: none) */
+  PetscReal ip_tol;                /* -solver_newton_ip_tol: natural residual that ends them */
+  PetscInt  ip_its;                /* the last solve's interior-point iterations */
+  PetscReal ip_seconds;            /* and their time */
   PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
   PetscBool stale;                 /* J changed since that set-up */
   /* figures of the last solve */
@@ -132,6 +136,8 @@ static inline void NewtonContactNaturalMap(KergsSolver s, const Newton *nt, Pets
 PETSC_INTERN PetscErrorCode NewtonDeSaxceCreateTao(KergsSolver, Tao *);
 PETSC_INTERN PetscErrorCode NewtonDeSaxceStart(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscReal wmean, PetscReal scale, Vec r,
                                                Vec u, Vec vd, PetscReal *res);
+/* newton_ip.c */
+PETSC_INTERN PetscErrorCode NewtonInteriorPointStart(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *res);
 /* newton_residual.c */
 PETSC_INTERN PetscErrorCode NewtonNaturalResidual(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res);
 /* newton_subdomain.c */

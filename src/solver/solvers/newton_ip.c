@@ -1,0 +1,358 @@
+/* newton's interior-point start (-solver_newton_ip_max_it): Mehrotra's predictor-corrector on the 2D law written as the
+   linear complementarity problem of Stewart and Trinkle, before Newton (docs/solver.md, "An interior-point start").
+
+   Per contact x = (r_n, beta+, beta-, lambda) >= 0, r_t = beta+ - beta-, and w = M x + c >= 0 complementary to x:
+     w = (rho u_n, rho u_t + lambda, -rho u_t + lambda, mu r_n - beta+ - beta-),   u = W r + v^d,
+   rho = 1 / W_nn, so that every pair is in impulse units. M = S W T + G: T x = r, S (4 x 2) scales u, G (4 x 4) is
+   local. The LCP is not monotone once mu > 0, so the interior point has no convergence theory; measured, it puts
+   the answer on the solution's pieces where Newton from zero stalls (dense frictional packings at rest).
+
+   Each iteration solves (M + X^-1 W) dx = g twice (predictor, corrector). With K = G + X^-1 W block diagonal, y = T dx
+   satisfies the 2 x 2 per contact system (I + T K^-1 S W) y = T K^-1 g, which is newton's J = A + B W with A = I and
+   B = T K^-1 S: assembled and factored by newton's own linear solver, once per iteration. Then dx = K^-1 (g - S W y). */
+#include "newton.h"
+
+#define NX 4 /* unknowns per contact */
+
+typedef struct {
+  PetscInt   n;         /* local contacts */
+  PetscReal *x, *w;     /* per contact NX */
+  PetscReal *f1;        /* w - M x - c */
+  PetscReal *Kinv;      /* per contact NX x NX, row-major */
+  PetscReal *dxa, *dwa; /* the predictor's direction */
+  PetscReal *dx, *dw;   /* the corrector's */
+  PetscReal *g;         /* the right-hand side of (M + X^-1 W) dx = g */
+  PetscReal *target;    /* the corrector's target for x.w */
+  PetscInt   nglobal;   /* active contacts, all ranks */
+} InteriorPoint;
+
+/* The inverse of a 4 x 4 matrix by Gauss-Jordan elimination with partial pivoting; false if singular. */
+static PetscBool Invert4(const PetscReal a[NX * NX], PetscReal inv[NX * NX])
+{
+  PetscReal m[NX][2 * NX];
+
+  for (PetscInt i = 0; i < NX; i++)
+    for (PetscInt j = 0; j < NX; j++) {
+      m[i][j]      = a[i * NX + j];
+      m[i][NX + j] = i == j ? 1.0 : 0.0;
+    }
+  for (PetscInt c = 0; c < NX; c++) {
+    PetscInt p = c;
+    for (PetscInt i = c + 1; i < NX; i++)
+      if (PetscAbsReal(m[i][c]) > PetscAbsReal(m[p][c])) p = i;
+    if (!(PetscAbsReal(m[p][c]) > 0)) return PETSC_FALSE;
+    for (PetscInt j = 0; j < 2 * NX; j++) {
+      const PetscReal t = m[c][j];
+      m[c][j]           = m[p][j];
+      m[p][j]           = t;
+    }
+    const PetscReal piv = m[c][c];
+    for (PetscInt j = 0; j < 2 * NX; j++) m[c][j] /= piv;
+    for (PetscInt i = 0; i < NX; i++) {
+      if (i == c || m[i][c] == 0) continue;
+      const PetscReal f = m[i][c];
+      for (PetscInt j = 0; j < 2 * NX; j++) m[i][j] -= f * m[c][j];
+    }
+  }
+  for (PetscInt i = 0; i < NX; i++)
+    for (PetscInt j = 0; j < NX; j++) inv[i * NX + j] = m[i][NX + j];
+  return PETSC_TRUE;
+}
+
+/* r = T x on the active contacts (0 elsewhere), and u = W r + v^d. */
+static PetscErrorCode ImpulsesFromX(KergsSolver s, Newton *nt, const InteriorPoint *ip, Vec r, Vec u, Vec vd)
+{
+  PetscScalar *rl;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArray(r, &rl));
+  for (PetscInt a = 0; a < ip->n; a++) {
+    const PetscReal *x = ip->x + NX * a;
+    rl[2 * a]          = s->active[a] ? x[0] : 0.0;
+    rl[2 * a + 1]      = s->active[a] ? x[1] - x[2] : 0.0;
+  }
+  PetscCall(VecRestoreArray(r, &rl));
+  PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+  PetscFunctionReturn(0);
+}
+
+/* M x + c of contact a, from its x and its u = W r + v^d. */
+static void LCPMap(const KergsSolver s, const Newton *nt, PetscInt a, const PetscReal x[NX], const PetscScalar ul[], PetscReal mx[NX])
+{
+  const PetscReal rho = nt->rho_nat[a], un = PetscRealPart(ul[2 * a]), ut = PetscRealPart(ul[2 * a + 1]);
+
+  mx[0] = rho * un;
+  mx[1] = rho * ut + x[3];
+  mx[2] = -rho * ut + x[3];
+  mx[3] = s->mu[a] * x[0] - x[1] - x[2];
+}
+
+/* f1 = w - M x - c at the current x (u current), and the mean complementarity x.w / N. */
+static PetscErrorCode Residuals(KergsSolver s, Newton *nt, InteriorPoint *ip, Vec u, PetscReal *gap)
+{
+  const PetscScalar *ul;
+  PetscReal          sum = 0.0;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArrayRead(u, &ul));
+  for (PetscInt a = 0; a < ip->n; a++) {
+    PetscReal mx[NX];
+    if (!s->active[a]) continue;
+    LCPMap(s, nt, a, ip->x + NX * a, ul, mx);
+    for (PetscInt i = 0; i < NX; i++) {
+      ip->f1[NX * a + i] = ip->w[NX * a + i] - mx[i];
+      sum += ip->x[NX * a + i] * ip->w[NX * a + i];
+    }
+  }
+  PetscCall(VecRestoreArrayRead(u, &ul));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sum, 1, MPIU_REAL, MPIU_SUM, s->comm));
+  *gap = sum / (NX * PetscMax(ip->nglobal, 1));
+  PetscFunctionReturn(0);
+}
+
+/* Per contact K = G + X^-1 W, its inverse, and J's blocks A = I, B = T K^-1 S (S = rho [[1, 0], [0, 1], [0, -1], [0, 0]]).
+   Inactive contacts keep r = 0: A = I, B = 0. False on a rank where some K is singular. */
+static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
+{
+  for (PetscInt a = 0; a < ip->n; a++) {
+    PetscReal *A = nt->A + 4 * a, *B = nt->B + 4 * a, *Ki = ip->Kinv + NX * NX * a;
+    A[0] = A[3] = 1.0;
+    A[1] = A[2] = 0.0;
+    B[0] = B[1] = B[2] = B[3] = 0.0;
+    if (!s->active[a]) continue;
+    const PetscReal *x = ip->x + NX * a, *w = ip->w + NX * a, rho = nt->rho_nat[a];
+    PetscReal        K[NX * NX] = {0};
+    K[1 * NX + 3] = K[2 * NX + 3] = 1.0;
+    K[3 * NX + 0]                 = s->mu[a];
+    K[3 * NX + 1] = K[3 * NX + 2] = -1.0;
+    for (PetscInt i = 0; i < NX; i++) K[i * NX + i] += w[i] / x[i];
+    if (!Invert4(K, Ki)) return PETSC_FALSE;
+    /* (T K^-1)(row, :) = K^-1 row 0, and K^-1 row 1 - row 2; times S's columns rho (e_0 + ...) */
+    for (PetscInt col = 0; col < 2; col++) {
+      /* S's column col: rho (1, 0, 0, 0) for col 0, rho (0, 1, -1, 0) for col 1 */
+      PetscReal Kcol[NX];
+      for (PetscInt i = 0; i < NX; i++) Kcol[i] = rho * (col == 0 ? Ki[i * NX + 0] : Ki[i * NX + 1] - Ki[i * NX + 2]);
+      B[0 * 2 + col] = Kcol[0];
+      B[1 * 2 + col] = Kcol[1] - Kcol[2];
+    }
+  }
+  return PETSC_TRUE;
+}
+
+/* One direction: g = f1 - (x.w - target) / x, J y = T K^-1 g (newton's linear solver; F = -T K^-1 g), then
+   dx = K^-1 (g - S W y) and dw = (target - x.w - w.dx) / x. target NULL: 0 (the predictor). */
+static PetscErrorCode Direction(KergsSolver s, Newton *nt, InteriorPoint *ip, const PetscReal *target, PetscReal *dx, PetscReal *dw,
+                                PetscBool *solved)
+{
+  PetscScalar       *Fl;
+  const PetscScalar *wy;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArray(nt->F, &Fl));
+  for (PetscInt a = 0; a < ip->n; a++) {
+    Fl[2 * a] = Fl[2 * a + 1] = 0.0;
+    if (!s->active[a]) continue;
+    const PetscReal *x = ip->x + NX * a, *w = ip->w + NX * a, *Ki = ip->Kinv + NX * NX * a;
+    PetscReal       *g = ip->g + NX * a, Kg[NX];
+    for (PetscInt i = 0; i < NX; i++) g[i] = ip->f1[NX * a + i] - (x[i] * w[i] - (target ? target[NX * a + i] : 0.0)) / x[i];
+    for (PetscInt i = 0; i < NX; i++) {
+      Kg[i] = 0.0;
+      for (PetscInt j = 0; j < NX; j++) Kg[i] += Ki[i * NX + j] * g[j];
+    }
+    Fl[2 * a]     = -Kg[0];
+    Fl[2 * a + 1] = -(Kg[1] - Kg[2]);
+  }
+  PetscCall(VecRestoreArray(nt->F, &Fl));
+  PetscCall(NewtonSolveDirection(nt, ip->n, 2, solved));
+  if (!*solved) PetscFunctionReturn(0);
+  PetscCall(MatMult(nt->Wfull, nt->d, nt->Wd));
+  PetscCall(VecGetArrayRead(nt->Wd, &wy));
+  for (PetscInt a = 0; a < ip->n; a++) {
+    if (!s->active[a]) continue;
+    const PetscReal *x = ip->x + NX * a, *w = ip->w + NX * a, *Ki = ip->Kinv + NX * NX * a, *g = ip->g + NX * a, rho = nt->rho_nat[a];
+    const PetscReal  swy[NX] = {rho * PetscRealPart(wy[2 * a]), rho * PetscRealPart(wy[2 * a + 1]), -rho * PetscRealPart(wy[2 * a + 1]),
+                                0.0};
+    for (PetscInt i = 0; i < NX; i++) {
+      PetscReal v = 0.0;
+      for (PetscInt j = 0; j < NX; j++) v += Ki[i * NX + j] * (g[j] - swy[j]);
+      dx[NX * a + i] = v;
+    }
+    for (PetscInt i = 0; i < NX; i++) {
+      const PetscReal t = target ? target[NX * a + i] : 0.0;
+      dw[NX * a + i]    = (t - x[i] * w[i] - w[i] * dx[NX * a + i]) / x[i];
+    }
+  }
+  PetscCall(VecRestoreArrayRead(nt->Wd, &wy));
+  PetscFunctionReturn(0);
+}
+
+/* The longest step in [0, 1] that keeps x + t dx and w + t dw nonnegative, over all ranks. */
+static PetscErrorCode LongestStep(KergsSolver s, const InteriorPoint *ip, const PetscReal *dx, const PetscReal *dw, PetscReal *step)
+{
+  PetscReal t = 1.0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt a = 0; a < ip->n; a++) {
+    if (!s->active[a]) continue;
+    for (PetscInt i = NX * a; i < NX * (a + 1); i++) {
+      if (dx[i] < 0) t = PetscMin(t, -ip->x[i] / dx[i]);
+      if (dw[i] < 0) t = PetscMin(t, -ip->w[i] / dw[i]);
+    }
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &t, 1, MPIU_REAL, MPIU_MIN, s->comm));
+  *step = t;
+  PetscFunctionReturn(0);
+}
+
+/* Mehrotra's centring: sigma = (gap after the predictor's longest step / gap)^3, and the corrector's target
+   sigma gap - dxa dwa. */
+static PetscErrorCode CorrectorTarget(KergsSolver s, InteriorPoint *ip, PetscReal gap, PetscReal step, PetscReal *target)
+{
+  PetscReal sum = 0.0, sigma;
+
+  PetscFunctionBeginUser;
+  for (PetscInt a = 0; a < ip->n; a++) {
+    if (!s->active[a]) continue;
+    for (PetscInt i = NX * a; i < NX * (a + 1); i++) sum += (ip->x[i] + step * ip->dxa[i]) * (ip->w[i] + step * ip->dwa[i]);
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sum, 1, MPIU_REAL, MPIU_SUM, s->comm));
+  sigma = gap > 0 ? PetscPowReal(sum / (NX * PetscMax(ip->nglobal, 1)) / gap, 3.0) : 0.0;
+  for (PetscInt i = 0; i < NX * ip->n; i++) target[i] = sigma * gap - ip->dxa[i] * ip->dwa[i];
+  PetscFunctionReturn(0);
+}
+
+/* The first point: every x the largest |c| (c = (rho v^d_n, rho v^d_t, -rho v^d_t, 0)), w = max(M x + c, 0) + that. */
+static PetscErrorCode FirstPoint(KergsSolver s, Newton *nt, InteriorPoint *ip, Vec r, Vec u, Vec vd)
+{
+  const PetscScalar *vl, *ul;
+  PetscReal          scale = 0.0;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArrayRead(vd, &vl));
+  for (PetscInt a = 0; a < ip->n; a++)
+    if (s->active[a])
+      for (PetscInt c = 0; c < 2; c++) scale = PetscMax(scale, nt->rho_nat[a] * PetscAbsScalar(vl[2 * a + c]));
+  PetscCall(VecRestoreArrayRead(vd, &vl));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &scale, 1, MPIU_REAL, MPIU_MAX, s->comm));
+  if (!(scale > 0)) scale = 1.0;
+  for (PetscInt i = 0; i < NX * ip->n; i++) ip->x[i] = scale;
+  PetscCall(ImpulsesFromX(s, nt, ip, r, u, vd));
+  PetscCall(VecGetArrayRead(u, &ul));
+  for (PetscInt a = 0; a < ip->n; a++) {
+    PetscReal mx[NX];
+    if (!s->active[a]) continue;
+    LCPMap(s, nt, a, ip->x + NX * a, ul, mx);
+    for (PetscInt i = 0; i < NX; i++) ip->w[NX * a + i] = PetscMax(mx[i], 0.0) + scale;
+  }
+  PetscCall(VecRestoreArrayRead(u, &ul));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode Create(KergsSolver s, PetscInt n, InteriorPoint *ip)
+{
+  PetscInt m = 0;
+
+  PetscFunctionBeginUser;
+  ip->n = n;
+  for (PetscInt a = 0; a < n; a++)
+    if (s->active[a]) m++;
+  PetscCall(MPIU_Allreduce(&m, &ip->nglobal, 1, MPIU_INT, MPI_SUM, s->comm));
+  PetscCall(PetscCalloc5(NX * n + 1, &ip->x, NX * n + 1, &ip->w, NX * n + 1, &ip->f1, NX * NX * n + 1, &ip->Kinv, NX * n + 1, &ip->g));
+  PetscCall(PetscCalloc5(NX * n + 1, &ip->dxa, NX * n + 1, &ip->dwa, NX * n + 1, &ip->dx, NX * n + 1, &ip->dw, NX * n + 1, &ip->target));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode Destroy(InteriorPoint *ip)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree5(ip->x, ip->w, ip->f1, ip->Kinv, ip->g));
+  PetscCall(PetscFree5(ip->dxa, ip->dwa, ip->dx, ip->dw, ip->target));
+  PetscFunctionReturn(0);
+}
+
+/* One predictor-corrector iteration; *ok false when a K is singular, a linear solve failed or the step vanished. */
+static PetscErrorCode Iterate(KergsSolver s, Newton *nt, InteriorPoint *ip, PetscReal gap, PetscBool *ok)
+{
+  PetscInt  good;
+  PetscReal step;
+  PetscBool solved;
+
+  PetscFunctionBeginUser;
+  good = SetBlocks(s, nt, ip) ? 1 : 0;
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &good, 1, MPIU_INT, MPI_MIN, s->comm));
+  *ok = (PetscBool)good;
+  if (!*ok) PetscFunctionReturn(0);
+  PetscCall(NewtonAssembleJacobian(s, nt, ip->n, 2, 0.0, 0.0));
+  PetscCall(Direction(s, nt, ip, NULL, ip->dxa, ip->dwa, &solved));
+  if (!solved) {
+    *ok = PETSC_FALSE;
+    PetscFunctionReturn(0);
+  }
+  PetscCall(LongestStep(s, ip, ip->dxa, ip->dwa, &step));
+  PetscCall(CorrectorTarget(s, ip, gap, step, ip->target));
+  PetscCall(Direction(s, nt, ip, ip->target, ip->dx, ip->dw, &solved));
+  if (!solved) {
+    *ok = PETSC_FALSE;
+    PetscFunctionReturn(0);
+  }
+  PetscCall(LongestStep(s, ip, ip->dx, ip->dw, &step));
+  step = PetscMin(1.0, 0.995 * step);
+  for (PetscInt i = 0; i < NX * ip->n; i++) {
+    ip->x[i] += step * ip->dx[i];
+    ip->w[i] += step * ip->dw[i];
+  }
+  *ok = (PetscBool)(step > 0);
+  PetscFunctionReturn(0);
+}
+
+/* From r (u = W r + v^d and *res its natural residual on entry): at most -solver_newton_ip_max_it interior-point
+   iterations, until the natural residual of r = T x is at most max(-solver_newton_ip_tol, -solver_tol); r and u end at
+   the best answer by natural residual (the entry's if none improved on it). Friction only: nc = 2. J is set up here
+   when the working set would otherwise set it up later (every contact a row of it), and released after. */
+PetscErrorCode NewtonInteriorPointStart(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *res)
+{
+  InteriorPoint   ip   = {0};
+  PetscReal       best = *res, ip_best = PETSC_MAX_REAL; /* over the entry and the iterates; over the iterates */
+  const PetscReal target = PetscMax(nt->ip_tol, s->tol);
+  PetscLogDouble  t0, t1;
+
+  PetscFunctionBeginUser;
+  if (nc != 2 || *res <= target || nt->ip_max_it <= 0) PetscFunctionReturn(0);
+  PetscCall(PetscLogEventBegin(KERGS_InteriorPoint, 0, 0, 0, 0));
+  PetscCall(PetscTime(&t0));
+  if (nt->working_set) {
+    for (PetscInt a = 0; a < n; a++) nt->in_J[a] = PETSC_TRUE;
+    PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
+  }
+  PetscCall(Create(s, n, &ip));
+  PetscCall(VecCopy(r, nt->rbest));
+  PetscCall(FirstPoint(s, nt, &ip, r, u, vd));
+  for (PetscInt k = 0;; k++) {
+    PetscReal now, gap = 0.0;
+    PetscBool ok = PETSC_FALSE;
+    PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, &now));
+    PetscCall(PetscInfo(NULL, "interior point %" PetscInt_FMT ": natural residual %g\n", k, (double)now));
+    ip_best = PetscMin(ip_best, now);
+    if (now < best) {
+      best = now;
+      PetscCall(VecCopy(r, nt->rbest));
+    }
+    /* measured: once the iterates leave the central path (J's factorization loses accuracy as X^-1 W spreads over
+       many orders of magnitude) the residual grows without coming back */
+    if (!(now < PETSC_MAX_REAL) || best <= target || k >= nt->ip_max_it || now > 10.0 * ip_best) break;
+    PetscCall(Residuals(s, nt, &ip, u, &gap));
+    PetscCall(Iterate(s, nt, &ip, gap, &ok));
+    if (!ok) break;
+    nt->ip_its++;
+    PetscCall(ImpulsesFromX(s, nt, &ip, r, u, vd));
+  }
+  PetscCall(VecCopy(nt->rbest, r));
+  PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
+  PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, res));
+  PetscCall(Destroy(&ip));
+  if (nt->working_set) PetscCall(NewtonDestroyJacobian(nt));
+  PetscCall(PetscTime(&t1));
+  nt->ip_seconds += t1 - t0;
+  PetscCall(PetscLogEventEnd(KERGS_InteriorPoint, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
