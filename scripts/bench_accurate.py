@@ -35,6 +35,11 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
               newton alone on the frictional rest step of cases/rest_10k.opts at 300, 1,200 and 2,700 disks
               (cases/compact_small.h5 and its mirrored tilings), to 1e-8, 300 Newton steps at most: QPs, Newton steps,
               residuals and solve times (docs/solver.md, "A De Saxce start").
+  ipstart     (not run by default; about 3 minutes) newton's interior-point start (-solver_newton_ip_max_it 30) against
+              newton alone: the frictional rest step of cases/rest_10k.opts at 300, 1,200, 2,700 and 5,000 disks
+              (cases/compact_small.h5, its mirrored tilings, cases/compact_5k.h5), to 1e-8, 300 Newton steps at most;
+              and confine500's 10 steps to 1e-10: interior-point iterations, Newton steps, residuals and solve times
+              (docs/solver.md, "An interior-point start").
   big         (--big only) biaxial 10^6 disks on 2 ranks, first step, newton to 1e-6: time, peak memory per grain.
 
 Usage: bench_accurate.py [--kergs build/kergs] [--parts confine500,biaxial20k,pressure20k,siconos,ranks100k] [--big] [--quick]
@@ -276,6 +281,23 @@ if "desaxce" in parts:
                   "desaxce_qps": int(start["desaxce_qps"][0]), "desaxce_seconds": round(float(start["desaxce_seconds"][0]), 3),
                   "solve_seconds": [round(float(alone["solve_seconds"][0]), 3), round(float(start["solve_seconds"][0]), 3)],
                   "order": "newton alone, with the De Saxce start"})
+
+if "ipstart" in parts:
+    REST = ["-options_file", "cases/rest_10k.opts", "-output_every", "1000", "-blowup_energy", "0", "-solver_tol", "1e-8"]
+    IP = ["-solver_newton_ip_max_it", "30"]
+    scenes = {f"rest{n}": REST + ["-sample_input", path] for n, path in
+              {"300": "cases/compact_small.h5", "1200": tiled_sample("cases/compact_small.h5", 2),
+               "2700": tiled_sample("cases/compact_small.h5", 3), "5000": "cases/compact_5k.h5"}.items()}
+    scenes["confine500"] = ["-options_file", "cases/confine500.opts", "-steps", "10"] + NEWTON + ["-solver_tol", "1e-10"]
+    for name, opts in scenes.items():
+        alone = run(f"{name}_newton", 1, opts)
+        start = run(f"{name}_newton_ip", 1, opts + IP)
+        if alone is not None and start is not None:
+            emit({"bench": "ip_start", "scene": name, "residual_max": [float(np.max(alone["residual"])), float(np.max(start["residual"]))],
+                  "newton_steps": [int(np.sum(alone["iterations"])), int(np.sum(start["iterations"]))],
+                  "ip_iterations": int(np.sum(start["ip_iterations"])), "ip_seconds": round(float(np.sum(start["ip_seconds"])), 3),
+                  "solve_seconds": [round(float(np.sum(alone["solve_seconds"])), 3), round(float(np.sum(start["solve_seconds"])), 3)],
+                  "order": "newton alone, with the interior-point start"})
 
 if "ranks40k" in parts:
     SQUARE = ["-options_file", "cases/rest_10k.opts", "-sample_input", tiled_sample("cases/compact_10k.h5", 2), "-friction", "0",
