@@ -771,14 +771,14 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "Several ranks, additive Schwarz: each subdomain's J computed from W's subdomain, extracted once per J, "
                              "instead of extracted from J at every set-up",
                              "", nt->subdomains_from_w, &nt->subdomains_from_w, NULL));
-  PetscCall(PetscOptionsInt("-solver_newton_ip_max_it",
+  PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_ip_max_it",
                             "Interior-point iterations on the Stewart-Trinkle LCP before Newton, at most (0: none), until "
                             "-solver_newton_ip_tol",
                             "", nt->ip_max_it, &nt->ip_max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_ip_tol", "Natural residual that ends the interior-point iterations before Newton", "",
                              nt->ip_tol, &nt->ip_tol, NULL));
   PetscCall(
-      PetscOptionsInt("-solver_newton_desaxce_max_it",
+      KergsOptionsInt(PetscOptionsObject, "-solver_newton_desaxce_max_it",
                       "De Saxce QPs (convex, by TAO's interior point) before Newton, at most (0: none), until -solver_newton_desaxce_tol",
                       "", nt->desaxce_max_it, &nt->desaxce_max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_desaxce_tol", "Natural residual that ends the De Saxce QPs before Newton", "", nt->desaxce_tol,
