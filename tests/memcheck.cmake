@@ -32,7 +32,8 @@ kergs_test(NAME malloc_dump_confine5_newton_schwarz NPROCS 2 FAIL_REGEX "${KERGS
 kergs_test(NAME malloc_dump_rest_newton_desaxce NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/rest_10k.opts -sample_input cases/compact_small.h5 -blowup_energy 0 -quiet -malloc_debug -malloc_dump
                 -output_none -solver_newton_desaxce_max_it 4)
-# newton's interior-point start: J set up over every contact, then again over the working set, per step
+# newton's interior-point start: J set up over every contact, then again over the working set (which leaves out the
+# contacts whose impulses the start dropped), per step
 kergs_test(NAME malloc_dump_rest_newton_ip NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/rest_10k.opts -sample_input cases/compact_small.h5 -blowup_energy 0 -quiet -malloc_debug -malloc_dump
                 -output_none -solver_newton_ip_max_it 30)

@@ -775,7 +775,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                             "Interior-point iterations on the Stewart-Trinkle LCP before Newton, at most (0: none), until "
                             "-solver_newton_ip_tol",
                             "", nt->ip_max_it, &nt->ip_max_it, NULL));
-  PetscCall(PetscOptionsReal("-solver_newton_ip_tol", "Natural residual that ends the interior-point iterations before Newton", "",
+  PetscCall(PetscOptionsReal("-solver_newton_ip_tol",
+                             "Natural residual that ends the interior-point iterations before Newton (or -solver_tol if looser)", "",
                              nt->ip_tol, &nt->ip_tol, NULL));
   PetscCall(
       KergsOptionsInt(PetscOptionsObject, "-solver_newton_desaxce_max_it",
