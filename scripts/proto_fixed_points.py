@@ -24,7 +24,7 @@ Facchinei and Kanzow 1996), and a gradient step where the Newton direction does 
 
 ip-lcp: the same Stewart-Trinkle LCP solved by Mehrotra's predictor-corrector interior point (the desaxce QPs' solver),
 although its theory needs a monotone LCP and this one is not; from every x equal to the scale of its right-hand side.
---write copies the problem with the answer as its solution, so that kergs can start from it (-fclib_input ANSWER
+--write copies the problem with the best iterate (by natural residual) as its solution, so that kergs can start from it (-fclib_input ANSWER
 -fclib_start solution).
 
 lm: Levenberg-Marquardt on kergs's Alart-Curnier function F (rho = 1 / W_nn, its generalized Jacobian J = A + B W),
@@ -182,17 +182,19 @@ def ip_lcp(prob, max_it):
     """Mehrotra's interior point on the Stewart-Trinkle LCP itself (not monotone once mu > 0), from x = the scale of c;
     stops at natural residual 1e-10. Returns the JSON dict and r."""
     M, c, T = stewart_trinkle(prob["W"].tocsr(), prob["q"], prob["mu"])
-    history = []
+    history, best = [], {}
 
     def monitor(it, x):
         history.append(natural_residual(prob, T @ x)[0])
         print(f"interior-point iteration {it}: natural residual {history[-1]:.3e}", flush=True)
+        if history[-1] <= min(history):
+            best["r"] = T @ x
         return history[-1] < 1e-10
 
     x0 = np.full(c.size, max(float(np.abs(c).max()), 1e-300))
     x, its, _ = interior_point_lcp(M, c, z0=x0, tol=0.0, max_it=max_it, monitor=monitor)
-    r = T @ x
-    res = natural_residual(prob, r)[0]
+    res = natural_residual(prob, T @ x)[0]
+    r = best["r"] if history and min(history) < res else T @ x
     return {"method": "ip-lcp", "iterations": its, "residual": res, "residual_best": min(history + [res])}, r
 
 

@@ -1,6 +1,6 @@
 /* kergs solver type "newton" (newton.c): its state, shared with its linear algebra (newton_linear.c: the Jacobian
-   J = A + B (W + sigma I) + eps I on W's pattern, and the solves of J d = -F), its working set (newton_working.c) and
-   its subdomain solver (newton_subdomain.c). Private to these files. */
+   J = A + B (W + sigma I) + eps I on W's pattern, and the solves of J d = -F), its working set (newton_working.c), its
+   subdomain solver (newton_subdomain.c) and its two starts (newton_ip.c, newton_desaxce.c). Private to these files. */
 #ifndef KERGS_NEWTON_H
 #define KERGS_NEWTON_H
 

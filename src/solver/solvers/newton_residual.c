@@ -1,5 +1,5 @@
 /* newton's measure of convergence: the natural residual of the original problem over its contacts, shared by newton.c
-   and its De Saxce start (newton_desaxce.c). */
+   and its two starts (newton_ip.c, newton_desaxce.c). */
 #include "newton.h"
 
 /* The natural residual of the original problem (KergsLawNaturalResidualScaled, docs/solver.md) from r and u = W r + v^d. */
