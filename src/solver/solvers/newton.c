@@ -28,9 +28,9 @@
    rho (SolverSolve_Newton, -solver_newton_second_rho). On one rank J is stored in W's AMD order (PresortContacts,
    newton_linear.c). The type is warm-started from the previous step's impulses like every type; optional NLGS sweeps
    first (-solver_newton_max_sweeps, -solver_newton_switch_tol), then an optional interior-point start
-   (-solver_newton_ip_max_it, newton_ip.c) and De Saxce start (-solver_newton_desaxce_max_it, newton_desaxce.c). With -solver_newton_working_set, contacts that the
-   warm start leaves open stay out of J while they are on the law's open piece (newton_working.c). Convergence is the
-   natural residual of the original problem (-solver_tol, default 1e-10). */
+   (-solver_newton_ip_max_it, newton_ip.c) and De Saxce start (-solver_newton_desaxce_max_it, newton_desaxce.c). With
+   -solver_newton_working_set, contacts that the warm start leaves open stay out of J while they are on the law's open piece
+   (newton_working.c). Convergence is the natural residual of the original problem (-solver_tol, default 1e-10). */
 #include "newton.h"
 
 static const char *const NewtonProxes[] = {"none", "identity", "kernel", "NewtonProx", "NEWTON_PROX_", NULL};
