@@ -269,12 +269,19 @@ if "rest10k" in parts:
               "solve_seconds": [round(float(r["solve_seconds"][0]), 2) for r in sizes.values()],
               "love_weber_over_boundary": [over_boundary(r) for r in sizes.values()]})
 
+# the frictional rest step to 1e-8 on the 300-disk sample and its mirrored tilings: where newton's two starts are compared
+REST_1E8 = ["-options_file", "cases/rest_10k.opts", "-output_every", "1000", "-blowup_energy", "0", "-solver_tol", "1e-8"]
+
+
+def rest_samples():
+    return {"300": "cases/compact_small.h5", "1200": tiled_sample("cases/compact_small.h5", 2),
+            "2700": tiled_sample("cases/compact_small.h5", 3)}
+
+
 if "desaxce" in parts:
-    REST = ["-options_file", "cases/rest_10k.opts", "-output_every", "1000", "-blowup_energy", "0", "-solver_tol", "1e-8"]
-    for n, path in {"300": "cases/compact_small.h5", "1200": tiled_sample("cases/compact_small.h5", 2),
-                    "2700": tiled_sample("cases/compact_small.h5", 3)}.items():
-        alone = run(f"rest{n}_newton_1e-8", 1, REST + ["-sample_input", path])
-        start = run(f"rest{n}_newton_1e-8_desaxce", 1, REST + ["-sample_input", path, "-solver_newton_desaxce_max_it", "6"])
+    for n, path in rest_samples().items():
+        alone = run(f"rest{n}_newton_1e-8", 1, REST_1E8 + ["-sample_input", path])
+        start = run(f"rest{n}_newton_1e-8_desaxce", 1, REST_1E8 + ["-sample_input", path, "-solver_newton_desaxce_max_it", "6"])
         if alone is not None and start is not None:
             emit({"bench": "desaxce_start", "disks": int(n), "residual": [float(alone["residual"][0]), float(start["residual"][0])],
                   "newton_steps": [int(alone["iterations"][0]), int(start["iterations"][0])],
@@ -283,11 +290,9 @@ if "desaxce" in parts:
                   "order": "newton alone, with the De Saxce start"})
 
 if "ipstart" in parts:
-    REST = ["-options_file", "cases/rest_10k.opts", "-output_every", "1000", "-blowup_energy", "0", "-solver_tol", "1e-8"]
     IP = ["-solver_newton_ip_max_it", "30"]
-    scenes = {f"rest{n}": REST + ["-sample_input", path] for n, path in
-              {"300": "cases/compact_small.h5", "1200": tiled_sample("cases/compact_small.h5", 2),
-               "2700": tiled_sample("cases/compact_small.h5", 3), "5000": "cases/compact_5k.h5"}.items()}
+    scenes = {f"rest{n}": REST_1E8 + ["-sample_input", path] for n, path in
+              {**rest_samples(), "5000": "cases/compact_5k.h5"}.items()}
     scenes["confine500"] = ["-options_file", "cases/confine500.opts", "-steps", "10"] + NEWTON + ["-solver_tol", "1e-10"]
     for name, opts in scenes.items():
         alone = run(f"{name}_newton", 1, opts)

@@ -24,8 +24,8 @@ Facchinei and Kanzow 1996), and a gradient step where the Newton direction does 
 
 ip-lcp: the same Stewart-Trinkle LCP solved by Mehrotra's predictor-corrector interior point (the desaxce QPs' solver),
 although its theory needs a monotone LCP and this one is not; from every x equal to the scale of its right-hand side.
---write copies the problem with the best iterate (by natural residual) as its solution, so that kergs can start from it (-fclib_input ANSWER
--fclib_start solution).
+--write copies the problem with the best iterate (by natural residual) as its solution, so that kergs can start from
+it (-fclib_input ANSWER -fclib_start solution).
 
 lm: Levenberg-Marquardt on kergs's Alart-Curnier function F (rho = 1 / W_nn, its generalized Jacobian J = A + B W),
 lambda = |F| (Yamashita and Fukushima), the step from the augmented system [[-I, J], [J^T, lambda I]] (J^T J is denser),
@@ -185,10 +185,11 @@ def ip_lcp(prob, max_it):
     history, best = [], {}
 
     def monitor(it, x):
-        history.append(natural_residual(prob, T @ x)[0])
+        r = T @ x
+        history.append(natural_residual(prob, r)[0])
         print(f"interior-point iteration {it}: natural residual {history[-1]:.3e}", flush=True)
         if history[-1] <= min(history):
-            best["r"] = T @ x
+            best["r"] = r
         return history[-1] < 1e-10
 
     x0 = np.full(c.size, max(float(np.abs(c).max()), 1e-300))
