@@ -35,11 +35,12 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
               newton alone on the frictional rest step of cases/rest_10k.opts at 300, 1,200 and 2,700 disks
               (cases/compact_small.h5 and its mirrored tilings), to 1e-8, 300 Newton steps at most: QPs, Newton steps,
               residuals and solve times (docs/solver.md, "A De Saxce start").
-  ipstart     (not run by default; about 3 minutes) newton's interior-point start (-solver_newton_ip_max_it 30) against
+  ipstart     (not run by default; about 4 minutes) newton's interior-point start (-solver_newton_ip_max_it 30) against
               newton alone: the frictional rest step of cases/rest_10k.opts at 300, 1,200, 2,700 and 5,000 disks
               (cases/compact_small.h5, its mirrored tilings, cases/compact_5k.h5), to 1e-8, 300 Newton steps at most;
-              and confine500's 10 steps to 1e-10: interior-point iterations, Newton steps, residuals and solve times
-              (docs/solver.md, "An interior-point start").
+              confine500's 10 steps to 1e-10; the 500-disk pressure scene of scripts/dem_compare at dt 5.5e-3 (20
+              steps to 1e-6) and pressure20k's 5 steps to 1e-8 (the predictive gap rule): interior-point iterations,
+              Newton steps, residuals and solve times (docs/solver.md, "An interior-point start").
   big         (--big only) biaxial 10^6 disks on 2 ranks, first step, newton to 1e-6: time, peak memory per grain.
 
 Usage: bench_accurate.py [--kergs build/kergs] [--parts confine500,biaxial20k,pressure20k,siconos,ranks100k] [--big] [--quick]
@@ -294,6 +295,10 @@ if "ipstart" in parts:
     scenes = {f"rest{n}": REST_1E8 + ["-sample_input", path] for n, path in
               {**rest_samples(), "5000": "cases/compact_5k.h5"}.items()}
     scenes["confine500"] = ["-options_file", "cases/confine500.opts", "-steps", "10"] + NEWTON + ["-solver_tol", "1e-10"]
+    # the 500-disk pressure scene of scripts/dem_compare at 5.5 times its dt (2 characteristic times), where two thirds of
+    # the contacts within the alert distance stay open, and pressure20k's 5 warm-started steps
+    scenes["pressure500_dt5.5e-3"] = pressure_scene(1, 20) + NEWTON + ["-dt", "5.5e-3", "-gap_rule", "predictive", "-solver_tol", "1e-6"]
+    scenes["pressure20k"] = pressure_scene(40, 5) + NEWTON + ["-gap_rule", "predictive", "-solver_tol", "1e-8"]
     for name, opts in scenes.items():
         alone = run(f"{name}_newton", 1, opts)
         start = run(f"{name}_newton_ip", 1, opts + IP)

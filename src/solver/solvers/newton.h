@@ -115,6 +115,7 @@ PETSC_INTERN PetscErrorCode NewtonChooseSortedSubdomains(Newton *);
 PETSC_INTERN PetscErrorCode NewtonSetUpJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc);
 PETSC_INTERN PetscErrorCode NewtonAssembleJacobian(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscReal eps, PetscReal sigma);
 PETSC_INTERN PetscErrorCode NewtonSolveDirection(Newton *, PetscInt n, PetscInt nc, PetscBool *solved);
+PETSC_INTERN PetscErrorCode NewtonSolveSystem(Newton *, KSP, KSPConvergedReason *);
 PETSC_INTERN PetscErrorCode NewtonDestroyJacobian(Newton *);
 /* newton_working.c */
 PETSC_INTERN PetscErrorCode NewtonWorkingSetBegin(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u);

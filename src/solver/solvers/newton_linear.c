@@ -474,8 +474,8 @@ static PetscErrorCode ApplyStaleFactor(PC pc, Vec x, Vec y)
   PetscFunctionReturn(0);
 }
 
-/* d = J^-1 (-F) by `ksp`, counting its iterations. */
-static PetscErrorCode SolveNewtonSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason)
+/* d = J^-1 (-F) by `ksp` (operators J), counting its iterations. */
+PetscErrorCode NewtonSolveSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason)
 {
   PetscInt its;
 
@@ -540,7 +540,7 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscB
   if (2 * changed > nt->reuse_its) PetscFunctionReturn(0);
   PetscCall(PetscObjectTypeCompare((PetscObject)nt->ksp, KSPPREONLY, &direct));
   if (direct)
-    PetscCall(SolveNewtonSystem(nt, nt->kreuse, &reason));
+    PetscCall(NewtonSolveSystem(nt, nt->kreuse, &reason));
   else {
     PetscBool schwarz;
     PetscCall(KSPGetPC(nt->ksp, &pc));
@@ -548,7 +548,7 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscB
     if (!schwarz || nt->user_pc) PetscFunctionReturn(0); /* a Krylov method chosen by option: every changed J is set up */
     PetscCall(PCSetReusePreconditioner(pc, PETSC_TRUE));
     PetscCall(PCSetFailedReason(pc, PC_NOERROR));
-    PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
+    PetscCall(NewtonSolveSystem(nt, nt->ksp, &reason));
   }
   *solved = (PetscBool)(reason > 0);
   if (*solved) nt->reused++;
@@ -618,7 +618,7 @@ static PetscErrorCode KernelDirection(Newton *nt, KSPConvergedReason *reason)
   PetscCall(PCSetUp(pc)); /* KSPSetUp does not set the PC up again once the KSP is set up; PCSetUp factors J when it changed */
   nt->factored = PETSC_TRUE;
   nt->stale    = PETSC_FALSE;
-  PetscCall(SolveNewtonSystem(nt, nt->kprox, reason)); /* J in the contacts' order: no presort with the kernel term */
+  PetscCall(NewtonSolveSystem(nt, nt->kprox, reason)); /* J in the contacts' order: no presort with the kernel term */
   PetscFunctionReturn(0);
 }
 
@@ -638,7 +638,7 @@ PetscErrorCode NewtonSolveDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBo
     PetscCall(ReuseDirection(nt, n, nc, solved));
     if (!*solved) {
       PetscCall(PrepareFactorization(nt, &pc));
-      PetscCall(SolveNewtonSystem(nt, nt->ksp, &reason));
+      PetscCall(NewtonSolveSystem(nt, nt->ksp, &reason));
       nt->factored   = PETSC_TRUE;
       nt->stale      = PETSC_FALSE;
       nt->sigma_fact = nt->sigma_used;
