@@ -474,7 +474,7 @@ static PetscErrorCode ApplyStaleFactor(PC pc, Vec x, Vec y)
   PetscFunctionReturn(0);
 }
 
-/* d = J^-1 (-F) by `ksp` (operators J), counting its iterations. */
+/* d = J^-1 (-F) by `ksp` (whose operator is J, or J_P on J's rows), counting its iterations. */
 PetscErrorCode NewtonSolveSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason)
 {
   PetscInt its;
