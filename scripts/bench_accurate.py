@@ -77,6 +77,7 @@ if a.big:
 B100K = ["-options_file", "cases/jammed_lattice.opts", "-lattice_n", "400,250", "-box", "0,0,4.005,2.17009", "-alert", "5e-4"]
 B1M = ["-options_file", "cases/jammed_lattice.opts", "-lattice_n", "1000,1000", "-box", "0,0,10.005,8.665254", "-alert", "5e-4"]
 NEWTON = ["-solver_type", "newton", "-solver_max_it", "1000"]
+IP_START = ["-solver_newton_ip_max_it", "30"]  # newton's interior-point start, as the ipstart and dt20k parts run it
 
 
 def emit(d):
@@ -187,9 +188,8 @@ if "dt20k" in parts:
     # same residual (<= 1e-8 on every step). The same 20 ms of pressure20k (predictive gap rule): newton alone at the
     # scene's dt, and newton with the interior-point start at the larger ones (docs/solver.md, "An interior-point start")
     base = pressure_scene(40, 1) + NEWTON + ["-gap_rule", "predictive", "-solver_tol", "1e-8"]
-    IP = ["-solver_newton_ip_max_it", "30"]
     rows = {}
-    for dt, steps, extra, tag in (("1e-3", 20, [], "newton"), ("2e-3", 10, IP, "newton_ip"), ("5e-3", 4, IP, "newton_ip"),
+    for dt, steps, extra, tag in (("1e-3", 20, [], "newton"), ("2e-3", 10, IP_START, "newton_ip"), ("5e-3", 4, IP_START, "newton_ip"),
                                   ("2e-3", 10, [], "newton"), ("5e-3", 4, [], "newton")):
         rows[(dt, tag)] = run(f"pressure20k_dt{dt}_{tag}", 1, base + ["-dt", dt, "-steps", str(steps)] + extra)
     ref = rows[("1e-3", "newton")]
@@ -316,7 +316,6 @@ if "desaxce" in parts:
                   "order": "newton alone, with the De Saxce start"})
 
 if "ipstart" in parts:
-    IP = ["-solver_newton_ip_max_it", "30"]
     scenes = {f"rest{n}": REST_1E8 + ["-sample_input", path] for n, path in
               {**rest_samples(), "5000": "cases/compact_5k.h5"}.items()}
     scenes["confine500"] = ["-options_file", "cases/confine500.opts", "-steps", "10"] + NEWTON + ["-solver_tol", "1e-10"]
@@ -326,7 +325,7 @@ if "ipstart" in parts:
     scenes["pressure20k"] = pressure_scene(40, 5) + NEWTON + ["-gap_rule", "predictive", "-solver_tol", "1e-8"]
     for name, opts in scenes.items():
         alone = run(f"{name}_newton", 1, opts)
-        start = run(f"{name}_newton_ip", 1, opts + IP)
+        start = run(f"{name}_newton_ip", 1, opts + IP_START)
         if alone is not None and start is not None:
             emit({"bench": "ip_start", "scene": name, "residual_max": [float(np.max(alone["residual"])), float(np.max(start["residual"]))],
                   "newton_steps": [int(np.sum(alone["iterations"])), int(np.sum(start["iterations"]))],
