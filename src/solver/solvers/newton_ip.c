@@ -479,8 +479,9 @@ static PetscErrorCode Iterations(KergsSolver s, Newton *nt, InteriorPoint *ip, P
     } else {
       since_best = now < ip_best ? 0 : since_best + 1;
       ip_best    = PetscMin(ip_best, now);
-      /* measured: once the iterates leave the central path (J's factorization loses accuracy as X^-1 W spreads over
-         many orders of magnitude, or a Krylov solve is too loose) the residual grows without coming back */
+      /* measured: once the iterates leave the central path (M not being monotone, M + X^-1 W grows nearly singular on
+         a few contacts and their directions block the step; or a Krylov solve is too loose) the residual grows
+         without coming back */
       if (now > 10.0 * ip_best || since_best >= 5) break;
     }
     PetscCall(Iterate(s, nt, ip, gap, &ok));
