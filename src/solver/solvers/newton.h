@@ -81,6 +81,7 @@ typedef struct {
   PetscReal smooth_kappa;          /* -solver_newton_smoothing_kappa: its Jacobian's regularisation / natural residual */
   PetscReal smooth_eps;            /* -solver_newton_smoothing_eps: its first eps / largest |rho v^d_n| */
   PetscInt  smooth_raises;         /* -solver_newton_smoothing_raises: stalls that raise eps instead of ending the phase */
+  PetscBool smooth_raises_set;     /* given: it holds after the interior-point start too (SmoothingRaises) */
   PetscReal eps;                   /* > 0: F is the smoothed Alart-Curnier function with this eps */
   PetscInt  smooth_steps;          /* Newton steps of the last solve's smoothing phase */
   PetscReal second_rho;            /* -solver_newton_second_rho: rho factor of a second Attempt after a failed first (0: none) */
