@@ -23,7 +23,8 @@
    sigma changed. Before the proximal iterations, unless a plain attempt from the warm start (at most 3 Newton steps,
    stopped after one that gains less than tenfold) cuts the natural residual a thousandfold, a smoothing Newton phase
    (SolveSmoothed, -solver_newton_smoothing) solves the smoothed function (KergsLawAlartCurnierSmoothed) for eps
-   falling tenfold at a time, with a Levenberg-Marquardt term in J, eps raised a hundredfold at its first stall; the
+   falling tenfold at a time, with a Levenberg-Marquardt term in J, eps raised a hundredfold at its first stall (not
+   after the interior-point start: SmoothingRaises); the
    proximal iterations finish from where it ends. A solve that stalls starts again from the same point with a smaller
    rho (SolverSolve_Newton, -solver_newton_second_rho). On one rank J is stored in W's AMD order (PresortContacts,
    newton_linear.c). The type is warm-started from the previous step's impulses like every type; optional NLGS sweeps
@@ -394,12 +395,12 @@ static PetscErrorCode ImpulseScale(KergsSolver s, Newton *nt, PetscInt n, PetscI
   PetscFunctionReturn(0);
 }
 
-/* The stalls of a smoothing phase that raise eps: -solver_newton_smoothing_raises, but none after an interior-point start
-   that iterated, unless the option was given. The raise is for a start whose contacts are still far from their pieces;
-   the interior point's answer lies on them, and a raised eps leaves it (on a step of the 500-disk pressure scene of
-   docs/tradeoff.md, from 3e-4 to 1.3e-3). Measured with the start on 24 variants of that scene (dt 5.5e-3; wall force,
-   friction, -solver_newton_ip_max_it): 0.79 of the time, 24 unconverged steps against 44 (docs/solver.md). */
-static PetscInt SmoothingRaises(const Newton *nt) { return nt->ip_its > 0 && !nt->smooth_raises_set ? 0 : nt->smooth_raises; }
+/* The stalls of a smoothing phase that raise eps: -solver_newton_smoothing_raises, but none in a solve that goes on from
+   the interior point's answer, unless the option was given. The raise is for a start whose contacts are still far from
+   their pieces; the interior point's answer lies on them, and a raised eps leaves it (on a step of the 500-disk pressure
+   scene of docs/tradeoff.md, from 3e-4 to 1.3e-3). Measured with the start on 24 variants of that scene (dt 5.5e-3; wall
+   force, friction, -solver_newton_ip_max_it): 0.79 of the time, 24 unconverged steps against 44 (docs/solver.md). */
+static PetscInt SmoothingRaises(const Newton *nt) { return nt->ip_answer && !nt->smooth_raises_set ? 0 : nt->smooth_raises; }
 
 /* Smoothing Newton (-solver_newton_smoothing): Newton steps on the smoothed function F_eps (KergsLawAlartCurnierSmoothed),
    eps divided by 10 whenever F_eps is solved to a tenth of eps per component, each step damped by the Armijo line
@@ -411,7 +412,7 @@ static PetscInt SmoothingRaises(const Newton *nt) { return nt->ip_its > 0 && !nt
    so the limit solves the original problem). Stops at the tolerance, at `limit` Newton steps in all, on a failed linear solve, or after
    -solver_newton_stall_steps steps in a row at one eps that each cut |F_eps| by less than a tenth (J nearly singular
    as eps -> 0): the proximal iterations go on from there. The first such stall of a solve (up to
-   -solver_newton_smoothing_raises of them) instead raises eps a hundredfold and goes on from the current point: eps was
+   -solver_newton_smoothing_raises of them, SmoothingRaises) instead raises eps a hundredfold and goes on from the current point: eps was
    lowered too early, while a few contacts were still far from their piece (on pressure20k's cold first step, two
    contacts closing at 5e-4 m/s with r_n = 0 held the residual at 1e-3), and the smoother function lets them move. */
 static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd,
@@ -450,6 +451,7 @@ static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, Petsc
     if (nt->stall_steps > 0 && stalls >= nt->stall_steps) {
       if (raises == SmoothingRaises(nt)) break;
       raises++;
+      nt->smooth_raised++;
       stalls = 0;
       nt->eps *= 100.0;
       PetscCall(PetscInfo(NULL, "smoothing stalled: eps raised to %g\n", (double)nt->eps));
@@ -648,9 +650,11 @@ static PetscErrorCode SolverSolve_Newton(KergsSolver s, KergsScene scene, KergsC
   nt->sweeps = nt->outer = nt->jacobians = nt->stalls = nt->factorizations = nt->reused = nt->second_attempts = 0;
   nt->linear_seconds = nt->sigma = nt->merit = 0.0;
   nt->smooth_steps                           = 0;
+  nt->smooth_raised                          = 0;
   nt->desaxce_qps = nt->desaxce_ip_its = 0;
   nt->desaxce_seconds                  = 0.0;
   nt->ip_its                           = 0;
+  nt->ip_answer                        = PETSC_FALSE;
   nt->ip_seconds                       = 0.0;
   nt->subdomains_computed              = 0;
   PetscCall(MeanCompliance(s, nt, n, &wmean));
@@ -691,6 +695,7 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscCall(KergsSolveStatsAdd(st, "reused_factorizations", (PetscReal)nt->reused));
   PetscCall(KergsSolveStatsAdd(st, "stalled_inner", (PetscReal)nt->stalls));
   PetscCall(KergsSolveStatsAdd(st, "smoothing_steps", (PetscReal)nt->smooth_steps));
+  PetscCall(KergsSolveStatsAdd(st, "smoothing_raises", (PetscReal)nt->smooth_raised));
   PetscCall(KergsSolveStatsAdd(st, "second_attempts", (PetscReal)nt->second_attempts));
   if (nt->ip_max_it > 0) {
     PetscCall(KergsSolveStatsAdd(st, "ip_iterations", (PetscReal)nt->ip_its));
@@ -895,7 +900,7 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
     if (nt->smooth_raises > 0 && nt->stall_steps > 0)
       PetscCall(PetscViewerASCIIPrintf(
           viewer, "  its first %" PetscInt_FMT " stall(s) of a solve raise eps a hundredfold instead of ending it%s\n", nt->smooth_raises,
-          nt->ip_max_it > 0 && !nt->smooth_raises_set ? " (none after the interior-point start)" : ""));
+          nt->ip_max_it > 0 && !nt->smooth_raises_set ? ", none in a solve that goes on from the interior point's answer" : ""));
   }
   if (nt->second_rho > 0)
     PetscCall(PetscViewerASCIIPrintf(

@@ -82,6 +82,7 @@ typedef struct {
   PetscReal smooth_eps;            /* -solver_newton_smoothing_eps: its first eps / largest |rho v^d_n| */
   PetscInt  smooth_raises;         /* -solver_newton_smoothing_raises: stalls that raise eps instead of ending the phase */
   PetscBool smooth_raises_set;     /* given: it holds after the interior-point start too (SmoothingRaises) */
+  PetscInt  smooth_raised;         /* raises of eps in the last solve's smoothing phase */
   PetscReal eps;                   /* > 0: F is the smoothed Alart-Curnier function with this eps */
   PetscInt  smooth_steps;          /* Newton steps of the last solve's smoothing phase */
   PetscReal second_rho;            /* -solver_newton_second_rho: rho factor of a second Attempt after a failed first (0: none) */
@@ -97,6 +98,7 @@ typedef struct {
   PetscInt  ip_max_it;             /* -solver_newton_ip_max_it: interior-point iterations before Newton (0: none) */
   PetscReal ip_tol;                /* -solver_newton_ip_tol: natural residual that ends them */
   PetscInt  ip_its;                /* the last solve's interior-point iterations */
+  PetscBool ip_answer;             /* the last solve went on from the interior point's answer (it improved on the entry) */
   PetscReal ip_seconds;            /* and their time */
   PetscBool factored;              /* ksp's preconditioner was set up on a J of this step */
   PetscBool stale;                 /* J changed since that set-up */

@@ -479,9 +479,8 @@ static PetscErrorCode Iterations(KergsSolver s, Newton *nt, InteriorPoint *ip, P
     } else {
       since_best = now < ip_best ? 0 : since_best + 1;
       ip_best    = PetscMin(ip_best, now);
-      /* measured: once the iterates leave the central path (M not being monotone, M + X^-1 W grows nearly singular on
-         a few contacts and their directions block the step; or a Krylov solve is too loose) the residual grows
-         without coming back */
+      /* measured: once the iterates leave the central path (M + X^-1 W grows nearly singular on a few contacts, whose
+         directions block the step; or a Krylov solve is too loose) the residual grows without coming back */
       if (now > 10.0 * ip_best || since_best >= 5) break;
     }
     PetscCall(Iterate(s, nt, ip, gap, &ok));
@@ -521,6 +520,7 @@ PetscErrorCode NewtonInteriorPointStart(KergsSolver s, Newton *nt, PetscInt n, P
   PetscCall(Create(s, nt, n, &ip));
   PetscCall(CreateDirectSolver(s, nt, &ip.ksp));
   PetscCall(Iterations(s, nt, &ip, nc, r, u, vd, target, &best));
+  nt->ip_answer = (PetscBool)(best < *res); /* else r goes back to the entry's */
   PetscCall(Destroy(&ip));
   PetscCall(VecCopy(nt->rbest, r));
   PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
