@@ -24,11 +24,10 @@
    stopped after one that gains less than tenfold) cuts the natural residual a thousandfold, a smoothing Newton phase
    (SolveSmoothed, -solver_newton_smoothing) solves the smoothed function (KergsLawAlartCurnierSmoothed) for eps
    falling tenfold at a time, with a Levenberg-Marquardt term in J, eps raised a hundredfold at its first stall (not
-   after the interior-point start: SmoothingRaises); the
-   proximal iterations finish from where it ends. A solve that stalls starts again from the same point with a smaller
-   rho (SolverSolve_Newton, -solver_newton_second_rho). On one rank J is stored in W's AMD order (PresortContacts,
-   newton_linear.c). The type is warm-started from the previous step's impulses like every type; optional NLGS sweeps
-   first (-solver_newton_max_sweeps, -solver_newton_switch_tol), then an optional interior-point start
+   after the interior-point start: SmoothingRaises); the proximal iterations finish from where it ends. A solve that
+   stalls starts again from the same point with a smaller rho (SolverSolve_Newton, -solver_newton_second_rho). On one rank J is stored in
+   W's AMD order (PresortContacts, newton_linear.c). The type is warm-started from the previous step's impulses like every type; optional
+   NLGS sweeps first (-solver_newton_max_sweeps, -solver_newton_switch_tol), then an optional interior-point start
    (-solver_newton_ip_max_it, newton_ip.c) and De Saxce start (-solver_newton_desaxce_max_it, newton_desaxce.c). With
    -solver_newton_working_set, contacts that the warm start leaves open stay out of J while they are on the law's open piece
    (newton_working.c). Convergence is the natural residual of the original problem (-solver_tol, default 1e-10). */
@@ -411,10 +410,10 @@ static PetscInt SmoothingRaises(const Newton *nt) { return nt->ip_answer && !nt-
    regularised by sigma = kappa * natural residual * mean W_nn (within sigma_max; a Levenberg-Marquardt term: F keeps W,
    so the limit solves the original problem). Stops at the tolerance, at `limit` Newton steps in all, on a failed linear solve, or after
    -solver_newton_stall_steps steps in a row at one eps that each cut |F_eps| by less than a tenth (J nearly singular
-   as eps -> 0): the proximal iterations go on from there. The first such stall of a solve (up to
-   -solver_newton_smoothing_raises of them, SmoothingRaises) instead raises eps a hundredfold and goes on from the current point: eps was
-   lowered too early, while a few contacts were still far from their piece (on pressure20k's cold first step, two
-   contacts closing at 5e-4 m/s with r_n = 0 held the residual at 1e-3), and the smoother function lets them move. */
+   as eps -> 0): the proximal iterations go on from there. The first such stall of a solve (up to SmoothingRaises of
+   them) instead raises eps a hundredfold and goes on from the current point: eps was lowered too early, while a few
+   contacts were still far from their piece (on pressure20k's cold first step, two contacts closing at 5e-4 m/s with r_n = 0 held the
+   residual at 1e-3), and the smoother function lets them move. */
 static PetscErrorCode SolveSmoothed(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, PetscInt nglobal, Vec r, Vec u, Vec vd,
                                     PetscReal wmean, PetscReal scale, PetscInt limit, PetscInt *steps, PetscReal *res)
 {
