@@ -11,18 +11,22 @@
    satisfies the 2 x 2 per contact system (I + T K^-1 S W) y = T K^-1 g, which is newton's J = A + B W with A = I and
    B = T K^-1 S: assembled and factored by newton's own linear solver, once per iteration. Then dx = K^-1 (g - S W y).
 
+   Without friction (one component per contact) the LCP is the normal problem alone: x = r_n, w = rho u_n, M = rho W
+   (monotone), G = 0, T = S / rho = 1, and J = 1 + (x / w) rho W.
+
    With newton's working set the problem holds the contacts the working set would put in J at the warm start, and
    those an iterate closes join it (JoinClosingContacts); the others keep r = 0. */
 #include "newton.h"
 
-#define NX 4 /* unknowns per contact */
+#define NX 4 /* unknowns per contact, at most: 4 with friction, 1 without */
 
 typedef struct {
   PetscInt   n;         /* local contacts */
+  PetscInt   nc, nx;    /* components of r per contact (2 or 1) and unknowns of x per contact (4 or 1) */
   PetscBool *in;        /* per contact: in the problem (active, and in J when newton keeps a working set) */
-  PetscReal *x, *w;     /* per contact NX */
+  PetscReal *x, *w;     /* per contact nx */
   PetscReal *f1;        /* w - M x - c */
-  PetscReal *Kinv;      /* per contact NX x NX, row-major */
+  PetscReal *Kinv;      /* per contact nx x nx, row-major */
   PetscReal *dxa, *dwa; /* the predictor's direction */
   PetscReal *dx, *dw;   /* the corrector's */
   PetscReal *g;         /* the right-hand side of (M + X^-1 W) dx = g */
@@ -72,9 +76,9 @@ static PetscErrorCode ImpulsesFromX(Newton *nt, const InteriorPoint *ip, Vec r, 
   PetscFunctionBeginUser;
   PetscCall(VecGetArray(r, &rl));
   for (PetscInt a = 0; a < ip->n; a++) {
-    const PetscReal *x = ip->x + NX * a;
-    rl[2 * a]          = ip->in[a] ? x[0] : 0.0;
-    rl[2 * a + 1]      = ip->in[a] ? x[1] - x[2] : 0.0;
+    const PetscReal *x = ip->x + ip->nx * a;
+    rl[ip->nc * a]     = ip->in[a] ? x[0] : 0.0;
+    if (ip->nc == 2) rl[2 * a + 1] = ip->in[a] ? x[1] - x[2] : 0.0;
   }
   PetscCall(VecRestoreArray(r, &rl));
   PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
@@ -82,14 +86,17 @@ static PetscErrorCode ImpulsesFromX(Newton *nt, const InteriorPoint *ip, Vec r, 
 }
 
 /* M x + c of contact a, from its x and its u = W r + v^d. */
-static void LCPMap(const KergsSolver s, const Newton *nt, PetscInt a, const PetscReal x[NX], const PetscScalar ul[], PetscReal mx[NX])
+static void LCPMap(const KergsSolver s, const Newton *nt, const InteriorPoint *ip, PetscInt a, const PetscReal x[NX],
+                   const PetscScalar ul[], PetscReal mx[NX])
 {
-  const PetscReal rho = nt->rho_nat[a], un = PetscRealPart(ul[2 * a]), ut = PetscRealPart(ul[2 * a + 1]);
+  const PetscReal rho = nt->rho_nat[a], un = PetscRealPart(ul[ip->nc * a]);
 
   mx[0] = rho * un;
-  mx[1] = rho * ut + x[3];
-  mx[2] = -rho * ut + x[3];
-  mx[3] = s->mu[a] * x[0] - x[1] - x[2];
+  if (ip->nc == 1) return;
+  const PetscReal ut = PetscRealPart(ul[2 * a + 1]);
+  mx[1]              = rho * ut + x[3];
+  mx[2]              = -rho * ut + x[3];
+  mx[3]              = s->mu[a] * x[0] - x[1] - x[2];
 }
 
 /* f1 = w - M x - c at the current x (u current), and the mean complementarity x.w / N. */
@@ -103,30 +110,40 @@ static PetscErrorCode Residuals(KergsSolver s, Newton *nt, InteriorPoint *ip, Ve
   for (PetscInt a = 0; a < ip->n; a++) {
     PetscReal mx[NX];
     if (!ip->in[a]) continue;
-    LCPMap(s, nt, a, ip->x + NX * a, ul, mx);
-    for (PetscInt i = 0; i < NX; i++) {
-      ip->f1[NX * a + i] = ip->w[NX * a + i] - mx[i];
-      sum += ip->x[NX * a + i] * ip->w[NX * a + i];
+    LCPMap(s, nt, ip, a, ip->x + ip->nx * a, ul, mx);
+    for (PetscInt i = 0; i < ip->nx; i++) {
+      ip->f1[ip->nx * a + i] = ip->w[ip->nx * a + i] - mx[i];
+      sum += ip->x[ip->nx * a + i] * ip->w[ip->nx * a + i];
     }
   }
   PetscCall(VecRestoreArrayRead(u, &ul));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sum, 1, MPIU_REAL, MPIU_SUM, s->comm));
-  *gap = sum / (NX * PetscMax(ip->nglobal, 1));
+  *gap = sum / (ip->nx * PetscMax(ip->nglobal, 1));
   PetscFunctionReturn(0);
 }
 
-/* Per contact K = G + X^-1 W, its inverse, and J's blocks A = I, B = T K^-1 S (S = rho [[1, 0], [0, 1], [0, -1], [0, 0]]).
-   Contacts outside the problem keep r = 0: A = I, B = 0. False on a rank where some K is singular. */
+/* Per contact K = G + X^-1 W, its inverse, and J's blocks A = I, B = T K^-1 S (S = rho [[1, 0], [0, 1], [0, -1], [0, 0]];
+   without friction K = w / x and B = rho x / w). Contacts outside the problem keep r = 0: A = I, B = 0. False on a rank
+   where some K is singular. */
 static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
 {
+  const PetscInt nc = ip->nc, nx = ip->nx;
+
   for (PetscInt a = 0; a < ip->n; a++) {
-    PetscReal *A = nt->A + 4 * a, *B = nt->B + 4 * a, *Ki = ip->Kinv + NX * NX * a;
-    A[0] = A[3] = 1.0;
-    A[1] = A[2] = 0.0;
-    B[0] = B[1] = B[2] = B[3] = 0.0;
+    PetscReal *A = nt->A + nc * nc * a, *B = nt->B + nc * nc * a, *Ki = ip->Kinv + nx * nx * a;
+    for (PetscInt i = 0; i < nc * nc; i++) {
+      A[i] = i % (nc + 1) == 0 ? 1.0 : 0.0;
+      B[i] = 0.0;
+    }
     if (!ip->in[a]) continue;
-    const PetscReal *x = ip->x + NX * a, *w = ip->w + NX * a, rho = nt->rho_nat[a];
-    PetscReal        K[NX * NX] = {0};
+    const PetscReal *x = ip->x + nx * a, *w = ip->w + nx * a, rho = nt->rho_nat[a];
+    if (nc == 1) {
+      if (!(w[0] > 0)) return PETSC_FALSE;
+      Ki[0] = x[0] / w[0];
+      B[0]  = rho * Ki[0];
+      continue;
+    }
+    PetscReal K[NX * NX] = {0};
     K[1 * NX + 3] = K[2 * NX + 3] = 1.0;
     K[3 * NX + 0]                 = s->mu[a];
     K[3 * NX + 1] = K[3 * NX + 2] = -1.0;
@@ -146,27 +163,36 @@ static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
   return PETSC_TRUE;
 }
 
+/* y = K^-1 v of contact a (nx entries). */
+static void ApplyKinv(const InteriorPoint *ip, PetscInt a, const PetscReal v[], PetscReal y[])
+{
+  const PetscReal *Ki = ip->Kinv + ip->nx * ip->nx * a;
+
+  for (PetscInt i = 0; i < ip->nx; i++) {
+    y[i] = 0.0;
+    for (PetscInt j = 0; j < ip->nx; j++) y[i] += Ki[i * ip->nx + j] * v[j];
+  }
+}
+
 /* One direction: g = f1 - (x.w - target) / x, J y = T K^-1 g (newton's linear solver; F = -T K^-1 g), then
    dx = K^-1 (g - S W y) and dw = (target - x.w - w.dx) / x. target NULL: 0 (the predictor). */
 static PetscErrorCode Direction(Newton *nt, InteriorPoint *ip, const PetscReal *target, PetscReal *dx, PetscReal *dw, PetscBool *solved)
 {
+  const PetscInt     nc = ip->nc, nx = ip->nx;
   PetscScalar       *Fl;
   const PetscScalar *wy;
 
   PetscFunctionBeginUser;
   PetscCall(VecGetArray(nt->F, &Fl));
   for (PetscInt a = 0; a < ip->n; a++) {
-    Fl[2 * a] = Fl[2 * a + 1] = 0.0;
+    for (PetscInt c = 0; c < nc; c++) Fl[nc * a + c] = 0.0;
     if (!ip->in[a]) continue;
-    const PetscReal *x = ip->x + NX * a, *w = ip->w + NX * a, *Ki = ip->Kinv + NX * NX * a;
-    PetscReal       *g = ip->g + NX * a, Kg[NX];
-    for (PetscInt i = 0; i < NX; i++) g[i] = ip->f1[NX * a + i] - (x[i] * w[i] - (target ? target[NX * a + i] : 0.0)) / x[i];
-    for (PetscInt i = 0; i < NX; i++) {
-      Kg[i] = 0.0;
-      for (PetscInt j = 0; j < NX; j++) Kg[i] += Ki[i * NX + j] * g[j];
-    }
-    Fl[2 * a]     = -Kg[0];
-    Fl[2 * a + 1] = -(Kg[1] - Kg[2]);
+    const PetscReal *x = ip->x + nx * a, *w = ip->w + nx * a;
+    PetscReal       *g = ip->g + nx * a, Kg[NX];
+    for (PetscInt i = 0; i < nx; i++) g[i] = ip->f1[nx * a + i] - (x[i] * w[i] - (target ? target[nx * a + i] : 0.0)) / x[i];
+    ApplyKinv(ip, a, g, Kg);
+    Fl[nc * a] = -Kg[0];
+    if (nc == 2) Fl[2 * a + 1] = -(Kg[1] - Kg[2]);
   }
   PetscCall(VecRestoreArray(nt->F, &Fl));
   if (ip->ksp) {
@@ -174,23 +200,25 @@ static PetscErrorCode Direction(Newton *nt, InteriorPoint *ip, const PetscReal *
     PetscCall(NewtonSolveSystem(nt, ip->ksp, &reason));
     *solved = (PetscBool)(reason > 0);
   } else
-    PetscCall(NewtonSolveDirection(nt, ip->n, 2, solved));
+    PetscCall(NewtonSolveDirection(nt, ip->n, nc, solved));
   if (!*solved) PetscFunctionReturn(0);
   PetscCall(MatMult(nt->Wfull, nt->d, nt->Wd));
   PetscCall(VecGetArrayRead(nt->Wd, &wy));
   for (PetscInt a = 0; a < ip->n; a++) {
     if (!ip->in[a]) continue;
-    const PetscReal *x = ip->x + NX * a, *w = ip->w + NX * a, *Ki = ip->Kinv + NX * NX * a, *g = ip->g + NX * a, rho = nt->rho_nat[a];
-    const PetscReal  swy[NX] = {rho * PetscRealPart(wy[2 * a]), rho * PetscRealPart(wy[2 * a + 1]), -rho * PetscRealPart(wy[2 * a + 1]),
-                                0.0};
-    for (PetscInt i = 0; i < NX; i++) {
-      PetscReal v = 0.0;
-      for (PetscInt j = 0; j < NX; j++) v += Ki[i * NX + j] * (g[j] - swy[j]);
-      dx[NX * a + i] = v;
+    const PetscReal *x = ip->x + nx * a, *w = ip->w + nx * a, *g = ip->g + nx * a, rho = nt->rho_nat[a];
+    PetscReal        v[NX];
+    v[0] = g[0] - rho * PetscRealPart(wy[nc * a]);
+    if (nc == 2) {
+      const PetscReal swt = rho * PetscRealPart(wy[2 * a + 1]);
+      v[1]                = g[1] - swt;
+      v[2]                = g[2] + swt;
+      v[3]                = g[3];
     }
-    for (PetscInt i = 0; i < NX; i++) {
-      const PetscReal t = target ? target[NX * a + i] : 0.0;
-      dw[NX * a + i]    = (t - x[i] * w[i] - w[i] * dx[NX * a + i]) / x[i];
+    ApplyKinv(ip, a, v, dx + nx * a);
+    for (PetscInt i = 0; i < nx; i++) {
+      const PetscReal t = target ? target[nx * a + i] : 0.0;
+      dw[nx * a + i]    = (t - x[i] * w[i] - w[i] * dx[nx * a + i]) / x[i];
     }
   }
   PetscCall(VecRestoreArrayRead(nt->Wd, &wy));
@@ -205,7 +233,7 @@ static PetscErrorCode LongestStep(KergsSolver s, const InteriorPoint *ip, const 
   PetscFunctionBeginUser;
   for (PetscInt a = 0; a < ip->n; a++) {
     if (!ip->in[a]) continue;
-    for (PetscInt i = NX * a; i < NX * (a + 1); i++) {
+    for (PetscInt i = ip->nx * a; i < ip->nx * (a + 1); i++) {
       if (dx[i] < 0) t = PetscMin(t, -ip->x[i] / dx[i]);
       if (dw[i] < 0) t = PetscMin(t, -ip->w[i] / dw[i]);
     }
@@ -224,17 +252,18 @@ static PetscErrorCode CorrectorTarget(KergsSolver s, InteriorPoint *ip, PetscRea
   PetscFunctionBeginUser;
   for (PetscInt a = 0; a < ip->n; a++) {
     if (!ip->in[a]) continue;
-    for (PetscInt i = NX * a; i < NX * (a + 1); i++) sum += (ip->x[i] + step * ip->dxa[i]) * (ip->w[i] + step * ip->dwa[i]);
+    for (PetscInt i = ip->nx * a; i < ip->nx * (a + 1); i++) sum += (ip->x[i] + step * ip->dxa[i]) * (ip->w[i] + step * ip->dwa[i]);
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &sum, 1, MPIU_REAL, MPIU_SUM, s->comm));
   /* Mehrotra's heuristic (Wright, Primal-Dual Interior-Point Methods, SIAM 1997, ch. 10), capped at 1: with M not
      monotone the predicted gap can exceed the current one */
-  sigma = gap > 0 ? PetscMin(1.0, PetscPowReal(sum / (NX * PetscMax(ip->nglobal, 1)) / gap, 3.0)) : 0.0;
-  for (PetscInt i = 0; i < NX * ip->n; i++) target[i] = sigma * gap - ip->dxa[i] * ip->dwa[i];
+  sigma = gap > 0 ? PetscMin(1.0, PetscPowReal(sum / (ip->nx * PetscMax(ip->nglobal, 1)) / gap, 3.0)) : 0.0;
+  for (PetscInt i = 0; i < ip->nx * ip->n; i++) target[i] = sigma * gap - ip->dxa[i] * ip->dwa[i];
   PetscFunctionReturn(0);
 }
 
-/* The first point: every x the largest |c| (c = (rho v^d_n, rho v^d_t, -rho v^d_t, 0)), w = max(M x + c, 0) + that. */
+/* The first point: every x the largest |c| (c = (rho v^d_n, rho v^d_t, -rho v^d_t, 0), or rho v^d_n without friction),
+   w = max(M x + c, 0) + that. */
 static PetscErrorCode FirstPoint(KergsSolver s, Newton *nt, InteriorPoint *ip, Vec r, Vec u, Vec vd)
 {
   const PetscScalar *vl, *ul;
@@ -244,29 +273,31 @@ static PetscErrorCode FirstPoint(KergsSolver s, Newton *nt, InteriorPoint *ip, V
   PetscCall(VecGetArrayRead(vd, &vl));
   for (PetscInt a = 0; a < ip->n; a++)
     if (ip->in[a])
-      for (PetscInt c = 0; c < 2; c++) scale = PetscMax(scale, nt->rho_nat[a] * PetscAbsScalar(vl[2 * a + c]));
+      for (PetscInt c = 0; c < ip->nc; c++) scale = PetscMax(scale, nt->rho_nat[a] * PetscAbsScalar(vl[ip->nc * a + c]));
   PetscCall(VecRestoreArrayRead(vd, &vl));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &scale, 1, MPIU_REAL, MPIU_MAX, s->comm));
   if (!(scale > 0)) scale = 1.0;
-  for (PetscInt i = 0; i < NX * ip->n; i++) ip->x[i] = scale;
+  for (PetscInt i = 0; i < ip->nx * ip->n; i++) ip->x[i] = scale;
   PetscCall(ImpulsesFromX(nt, ip, r, u, vd));
   PetscCall(VecGetArrayRead(u, &ul));
   for (PetscInt a = 0; a < ip->n; a++) {
     PetscReal mx[NX];
     if (!ip->in[a]) continue;
-    LCPMap(s, nt, a, ip->x + NX * a, ul, mx);
-    for (PetscInt i = 0; i < NX; i++) ip->w[NX * a + i] = PetscMax(mx[i], 0.0) + scale;
+    LCPMap(s, nt, ip, a, ip->x + ip->nx * a, ul, mx);
+    for (PetscInt i = 0; i < ip->nx; i++) ip->w[ip->nx * a + i] = PetscMax(mx[i], 0.0) + scale;
   }
   PetscCall(VecRestoreArrayRead(u, &ul));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode Create(KergsSolver s, const Newton *nt, PetscInt n, InteriorPoint *ip)
+static PetscErrorCode Create(KergsSolver s, const Newton *nt, PetscInt n, PetscInt nc, InteriorPoint *ip)
 {
   PetscInt m = 0;
 
   PetscFunctionBeginUser;
-  ip->n = n;
+  ip->n  = n;
+  ip->nc = nc;
+  ip->nx = nc == 2 ? NX : 1;
   PetscCall(PetscMalloc1(n + 1, &ip->in));
   for (PetscInt a = 0; a < n; a++) {
     ip->in[a] = (PetscBool)(s->active[a] && (!nt->working_set || nt->in_J[a]));
@@ -300,7 +331,7 @@ static PetscErrorCode Iterate(KergsSolver s, Newton *nt, InteriorPoint *ip, Pets
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &good, 1, MPIU_INT, MPI_MIN, s->comm));
   *ok = (PetscBool)good;
   if (!*ok) PetscFunctionReturn(0);
-  PetscCall(NewtonAssembleJacobian(s, nt, ip->n, 2, nt->shift, 0.0));
+  PetscCall(NewtonAssembleJacobian(s, nt, ip->n, ip->nc, nt->shift, 0.0));
   PetscCall(Direction(nt, ip, NULL, ip->dxa, ip->dwa, &solved));
   if (!solved) {
     *ok = PETSC_FALSE;
@@ -315,7 +346,7 @@ static PetscErrorCode Iterate(KergsSolver s, Newton *nt, InteriorPoint *ip, Pets
   }
   PetscCall(LongestStep(s, ip, ip->dx, ip->dw, &step));
   step = PetscMin(1.0, 0.995 * step); /* the usual fraction to the boundary (Wright, ch. 10) */
-  for (PetscInt i = 0; i < NX * ip->n; i++) {
+  for (PetscInt i = 0; i < ip->nx * ip->n; i++) {
     ip->x[i] += step * ip->dx[i];
     ip->w[i] += step * ip->dw[i];
   }
@@ -327,7 +358,7 @@ static PetscErrorCode Iterate(KergsSolver s, Newton *nt, InteriorPoint *ip, Pets
    working set leaves out of J only contacts without one (newton_working.c): measured on the 300-disk rest step, when
    every contact was in the problem, none left out against 148 without the start. So contacts whose normal pair leans open (rho u_n > r_n)
    lose their impulse, kept if the natural residual at most doubles (measured: it grows by about 5 %). r, u, *res and nt->enorm updated. */
-static PetscErrorCode DropOpenImpulses(KergsSolver s, Newton *nt, PetscInt n, Vec r, Vec u, Vec vd, PetscReal *res)
+static PetscErrorCode DropOpenImpulses(KergsSolver s, Newton *nt, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *res)
 {
   const PetscScalar *rl, *ul;
   PetscScalar       *tl;
@@ -340,15 +371,15 @@ static PetscErrorCode DropOpenImpulses(KergsSolver s, Newton *nt, PetscInt n, Ve
   PetscCall(VecGetArrayRead(u, &ul));
   PetscCall(VecGetArray(nt->rtry, &tl));
   for (PetscInt a = 0; a < n; a++)
-    if (s->active[a] && nt->rho_nat[a] * PetscRealPart(ul[2 * a]) > PetscRealPart(rl[2 * a])) {
-      tl[2 * a] = tl[2 * a + 1] = 0.0;
+    if (s->active[a] && nt->rho_nat[a] * PetscRealPart(ul[nc * a]) > PetscRealPart(rl[nc * a])) {
+      for (PetscInt c = 0; c < nc; c++) tl[nc * a + c] = 0.0;
       dropped++;
     }
   PetscCall(VecRestoreArray(nt->rtry, &tl));
   PetscCall(VecRestoreArrayRead(u, &ul));
   PetscCall(VecRestoreArrayRead(r, &rl));
   PetscCall(MatMultAdd(nt->Wfull, nt->rtry, vd, nt->utry));
-  PetscCall(NewtonNaturalResidual(s, nt, n, 2, nt->rtry, nt->utry, &now));
+  PetscCall(NewtonNaturalResidual(s, nt, n, nc, nt->rtry, nt->utry, &now));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &dropped, 1, MPIU_INT, MPI_SUM, s->comm));
   PetscCall(PetscInfo(NULL, "interior point: %" PetscInt_FMT " open contacts' impulses dropped, natural residual %g -> %g%s\n", dropped,
                       (double)*res, (double)now, now <= 2.0 * *res ? "" : " (not kept)"));
@@ -357,7 +388,7 @@ static PetscErrorCode DropOpenImpulses(KergsSolver s, Newton *nt, PetscInt n, Ve
     PetscCall(VecCopy(nt->utry, u));
     *res = now;
   } else
-    PetscCall(NewtonNaturalResidual(s, nt, n, 2, r, u, res)); /* nt->enorm of r itself, not of the trial */
+    PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, res)); /* nt->enorm of r itself, not of the trial */
   PetscFunctionReturn(0);
 }
 
@@ -428,10 +459,10 @@ static PetscErrorCode JoinClosingContacts(KergsSolver s, Newton *nt, InteriorPoi
   if (!nt->working_set) PetscFunctionReturn(0);
   PetscCall(VecGetArrayRead(u, &ul));
   for (PetscInt a = 0; a < ip->n; a++)
-    if (s->active[a] && !ip->in[a] && PetscRealPart(ul[2 * a]) < 0) {
+    if (s->active[a] && !ip->in[a] && PetscRealPart(ul[nc * a]) < 0) {
       const PetscReal start = PetscSqrtReal(gap);
       ip->in[a] = nt->in_J[a] = PETSC_TRUE;
-      for (PetscInt i = NX * a; i < NX * (a + 1); i++) ip->x[i] = ip->w[i] = start;
+      for (PetscInt i = ip->nx * a; i < ip->nx * (a + 1); i++) ip->x[i] = ip->w[i] = start;
       count++;
     }
   PetscCall(VecRestoreArrayRead(u, &ul));
@@ -493,7 +524,7 @@ static PetscErrorCode Iterations(KergsSolver s, Newton *nt, InteriorPoint *ip, P
 
 /* From r (u = W r + v^d and *res its natural residual on entry): interior-point iterations until the natural residual
    of r = T x is at most max(-solver_newton_ip_tol, -solver_tol); r and u end at the best answer by natural residual
-   (the entry's if none improved on it). Friction only: nc = 2. With newton's working set the problem leaves out the
+   (the entry's if none improved on it). With newton's working set the problem leaves out the
    contacts that the warm start leaves open (newton_working.c), J is set up on the others here and released after:
    measured on the 500-disk pressure scene at dt 5.5e-3, two thirds of the 2,700 contacts within the alert distance are
    open, and with them in J an iteration took up to 140 ms against 4 ms without. An iterate that closes some of them
@@ -507,8 +538,7 @@ PetscErrorCode NewtonInteriorPointStart(KergsSolver s, Newton *nt, PetscInt n, P
   PetscLogDouble  t0, t1;
 
   PetscFunctionBeginUser;
-  if (nt->ip_max_it > 0 && nc != 2) PetscCall(PetscInfo(NULL, "interior-point start skipped: it needs friction's two components\n"));
-  if (nc != 2 || *res <= target || nt->ip_max_it <= 0) PetscFunctionReturn(0);
+  if (*res <= target || nt->ip_max_it <= 0) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(KERGS_InteriorPoint, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   SaveLinearFigures(nt, &counted);
@@ -517,7 +547,7 @@ PetscErrorCode NewtonInteriorPointStart(KergsSolver s, Newton *nt, PetscInt n, P
     PetscCall(NewtonWorkingSetBegin(s, nt, n, nc, r, u));
     PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
   }
-  PetscCall(Create(s, nt, n, &ip));
+  PetscCall(Create(s, nt, n, nc, &ip));
   PetscCall(CreateDirectSolver(s, nt, &ip.ksp));
   PetscCall(Iterations(s, nt, &ip, nc, r, u, vd, target, &best));
   nt->ip_answer = (PetscBool)(best < *res); /* else r goes back to the entry's */
@@ -525,7 +555,7 @@ PetscErrorCode NewtonInteriorPointStart(KergsSolver s, Newton *nt, PetscInt n, P
   PetscCall(VecCopy(nt->rbest, r));
   PetscCall(MatMultAdd(nt->Wfull, r, vd, u));
   PetscCall(NewtonNaturalResidual(s, nt, n, nc, r, u, res));
-  if (nt->ip_its > 0) PetscCall(DropOpenImpulses(s, nt, n, r, u, vd, res));
+  if (nt->ip_its > 0) PetscCall(DropOpenImpulses(s, nt, n, nc, r, u, vd, res));
   RestoreLinearFigures(nt, &counted);
   if (nt->working_set) PetscCall(NewtonDestroyJacobian(nt));
   PetscCall(PetscTime(&t1));
