@@ -785,8 +785,8 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                              "instead of extracted from J at every set-up",
                              "", nt->subdomains_from_w, &nt->subdomains_from_w, NULL));
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-solver_newton_ip_max_it",
-                            "Interior-point iterations on the Stewart-Trinkle LCP before Newton, at most (0: none), until "
-                            "-solver_newton_ip_tol",
+                            "Interior-point iterations on the Stewart-Trinkle LCP (without friction, the normal impulses' LCP) "
+                            "before Newton, at most (0: none), until -solver_newton_ip_tol",
                             "", nt->ip_max_it, &nt->ip_max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_ip_tol",
                              "Natural residual that ends the interior-point iterations before Newton (or -solver_tol if looser)", "",
@@ -906,10 +906,11 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
         viewer, "After %" PetscInt_FMT " Newton steps without a tenfold gain: a second attempt from the same start, rho times %g\n",
         nt->second_window, (double)nt->second_rho));
   if (nt->ip_max_it > 0)
-    PetscCall(PetscViewerASCIIPrintf(viewer,
-                                     "Interior-point start: at most %" PetscInt_FMT
-                                     " Mehrotra iterations on the Stewart-Trinkle LCP until the natural residual is %g\n",
-                                     nt->ip_max_it, (double)nt->ip_tol));
+    PetscCall(PetscViewerASCIIPrintf(
+        viewer,
+        "Interior-point start: at most %" PetscInt_FMT
+        " Mehrotra iterations on the Stewart-Trinkle LCP (without friction, the normal impulses' LCP) until the natural residual is %g\n",
+        nt->ip_max_it, (double)nt->ip_tol));
   if (nt->desaxce_max_it > 0)
     PetscCall(PetscViewerASCIIPrintf(viewer,
                                      "De Saxce start: at most %" PetscInt_FMT
