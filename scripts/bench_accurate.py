@@ -31,6 +31,11 @@ Parts (each prints one JSON line per kergs run, then one comparison line with th
               cases/compact_10k.h5 mirrored 2 x 2 (40,000 disks, scripts/tile_sample.py) at rest under its pressure
               walls without friction (cases/rest_10k.opts -friction 0), one step from zero impulses, newton to 1e-6:
               residuals, Newton steps and speed-up (docs/solver.md, "A dense frictional packing at rest").
+  square100k  (not run by default; about 4 minutes) 1 against 2 ranks at 100,000 disks on a square packing:
+              cases/compact_5k.h5 mirrored 5 x 4 (scripts/tile_sample.py, 11.1 m x 8.5 m) at rest under its pressure
+              walls without friction (cases/rest_10k.opts -friction 0), one step from zero impulses, newton to 1e-8
+              with the interior-point start (-solver_newton_ip_max_it 40; newton alone took 218 Newton steps and 382 s
+              on 2 ranks): residuals, iterations and speed-up (docs/solver.md, "An interior-point start").
   desaxce     (not run by default; about 1 minute) newton's De Saxce start (-solver_newton_desaxce_max_it 6) against
               newton alone on the frictional rest step of cases/rest_10k.opts at 300, 1,200 and 2,700 disks
               (cases/compact_small.h5 and its mirrored tilings), to 1e-8, 300 Newton steps at most: QPs, Newton steps,
@@ -256,10 +261,12 @@ if "ranks100k" in parts:
               "residual_max_2": float(np.max(two["residual"])), "newton_steps_1": [int(x) for x in one["iterations"]],
               "newton_steps_2": [int(x) for x in two["iterations"]], "seconds_1": t1, "seconds_2": t2, "speedup": t1 / t2})
 
-def tiled_sample(sample, tiles):
-    """`sample` mirrored into tiles x tiles by scripts/tile_sample.py (at rest as written): a sample file in tmp."""
-    path = os.path.join(tmp, f"{os.path.splitext(os.path.basename(sample))[0]}_{tiles}x{tiles}.h5")
-    subprocess.run(["/usr/bin/python3", "scripts/tile_sample.py", sample, path, "--tiles", f"{tiles},{tiles}"], check=True,
+def tiled_sample(sample, tiles, tiles_y=None):
+    """`sample` mirrored into tiles x tiles_y (tiles x tiles if not given) by scripts/tile_sample.py (at rest as
+    written): a sample file in tmp."""
+    tiles_y = tiles if tiles_y is None else tiles_y
+    path = os.path.join(tmp, f"{os.path.splitext(os.path.basename(sample))[0]}_{tiles}x{tiles_y}.h5")
+    subprocess.run(["/usr/bin/python3", "scripts/tile_sample.py", sample, path, "--tiles", f"{tiles},{tiles_y}"], check=True,
                    stdout=subprocess.DEVNULL, env=env)
     return path
 
@@ -341,6 +348,19 @@ if "ranks40k" in parts:
     if one is not None and two is not None:
         emit({"bench": "ranks40k", "residual_1": float(one["residual"][0]), "residual_2": float(two["residual"][0]),
               "newton_steps_1": int(one["iterations"][0]), "newton_steps_2": int(two["iterations"][0]),
+              "seconds_1": float(one["solve_seconds"][0]), "seconds_2": float(two["solve_seconds"][0]),
+              "speedup": float(one["solve_seconds"][0] / two["solve_seconds"][0]), "target": "speed-up >= 1.7 at the same residual",
+              "met": bool(one["converged"][0] and two["converged"][0] and one["solve_seconds"][0] >= 1.7 * two["solve_seconds"][0])})
+
+if "square100k" in parts:
+    SQUARE = ["-options_file", "cases/rest_10k.opts", "-sample_input", tiled_sample("cases/compact_5k.h5", 5, 4), "-friction", "0",
+              "-output_every", "1000", "-solver_tol", "1e-8", "-solver_newton_ip_max_it", "40"]
+    one = run("square100k_newton_ip_1rank", 1, SQUARE)
+    two = run("square100k_newton_ip_2ranks", 2, SQUARE)
+    if one is not None and two is not None:
+        emit({"bench": "ranks_square100k", "residual_1": float(one["residual"][0]), "residual_2": float(two["residual"][0]),
+              "ip_iterations": [int(one["ip_iterations"][0]), int(two["ip_iterations"][0])],
+              "newton_steps": [int(one["iterations"][0]), int(two["iterations"][0])],
               "seconds_1": float(one["solve_seconds"][0]), "seconds_2": float(two["solve_seconds"][0]),
               "speedup": float(one["solve_seconds"][0] / two["solve_seconds"][0]), "target": "speed-up >= 1.7 at the same residual",
               "met": bool(one["converged"][0] and two["converged"][0] and one["solve_seconds"][0] >= 1.7 * two["solve_seconds"][0])})
