@@ -11,8 +11,9 @@
    satisfies the 2 x 2 per contact system (I + T K^-1 S W) y = T K^-1 g, which is newton's J = A + B W with A = I and
    B = T K^-1 S: assembled and factored by newton's own linear solver, once per iteration. Then dx = K^-1 (g - S W y).
 
-   Without friction (one component per contact) the LCP is the normal problem alone: x = r_n, w = rho u_n, M = rho W
-   (monotone), G = 0, T = S / rho = 1, and J = 1 + (x / w) rho W.
+   Without friction (one component per contact) the LCP is the normal problem alone: x = r_n, w = rho u_n, T = 1,
+   S = rho, G = 0, so M = rho W (W's LCP scaled row by row, monotone since W is positive semidefinite), K = w / x, and
+   J = 1 + (x / w) rho W.
 
    With newton's working set the problem holds the contacts the working set would put in J at the warm start, and
    those an iterate closes join it (JoinClosingContacts); the others keep r = 0. */
