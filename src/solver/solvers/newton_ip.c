@@ -8,18 +8,19 @@
    the answer on the solution's pieces where Newton from zero stalls (dense frictional packings at rest).
 
    Each iteration solves (M + X^-1 W) dx = g twice (predictor, corrector). With K = G + X^-1 W block diagonal, y = T dx
-   satisfies the 2 x 2 per contact system (I + T K^-1 S W) y = T K^-1 g, which is newton's J = A + B W with A = I and
+   satisfies the nc x nc per contact system (I + T K^-1 S W) y = T K^-1 g, which is newton's J = A + B W with A = I and
    B = T K^-1 S: assembled and factored by newton's own linear solver, once per iteration. Then dx = K^-1 (g - S W y).
 
    Without friction (one component per contact) the LCP is the normal problem alone: x = r_n, w = rho u_n, T = 1,
-   S = rho, G = 0, so M = rho W (W's LCP scaled row by row, monotone since W is positive semidefinite), K = w / x, and
-   J = 1 + (x / w) rho W.
+   S = rho, G = 0, so M = rho W: W's LCP scaled row by row, with the same solutions. A positive diagonal times a positive
+   semidefinite matrix is sufficient (P*), the class for which the interior point's convergence theory holds (Kojima,
+   Megiddo, Noma and Yoshise, LNCS 538, 1991), where the frictional M is not. K = w / x and J = 1 + (x / w) rho W.
 
    With newton's working set the problem holds the contacts the working set would put in J at the warm start, and
    those an iterate closes join it (JoinClosingContacts); the others keep r = 0. */
 #include "newton.h"
 
-#define NX 4 /* unknowns per contact, at most: 4 with friction, 1 without */
+#define NX_MAX 4 /* unknowns of x per contact: 4 with friction (the size of K, Invert4's), 1 without */
 
 typedef struct {
   PetscInt   n;         /* local contacts */
@@ -37,35 +38,35 @@ typedef struct {
 } InteriorPoint;
 
 /* The inverse of a 4 x 4 matrix by Gauss-Jordan elimination with partial pivoting; false if singular. */
-static PetscBool Invert4(const PetscReal a[NX * NX], PetscReal inv[NX * NX])
+static PetscBool Invert4(const PetscReal a[NX_MAX * NX_MAX], PetscReal inv[NX_MAX * NX_MAX])
 {
-  PetscReal m[NX][2 * NX];
+  PetscReal m[NX_MAX][2 * NX_MAX];
 
-  for (PetscInt i = 0; i < NX; i++)
-    for (PetscInt j = 0; j < NX; j++) {
-      m[i][j]      = a[i * NX + j];
-      m[i][NX + j] = i == j ? 1.0 : 0.0;
+  for (PetscInt i = 0; i < NX_MAX; i++)
+    for (PetscInt j = 0; j < NX_MAX; j++) {
+      m[i][j]          = a[i * NX_MAX + j];
+      m[i][NX_MAX + j] = i == j ? 1.0 : 0.0;
     }
-  for (PetscInt c = 0; c < NX; c++) {
+  for (PetscInt c = 0; c < NX_MAX; c++) {
     PetscInt p = c;
-    for (PetscInt i = c + 1; i < NX; i++)
+    for (PetscInt i = c + 1; i < NX_MAX; i++)
       if (PetscAbsReal(m[i][c]) > PetscAbsReal(m[p][c])) p = i;
     if (!(PetscAbsReal(m[p][c]) > 0)) return PETSC_FALSE;
-    for (PetscInt j = 0; j < 2 * NX; j++) {
+    for (PetscInt j = 0; j < 2 * NX_MAX; j++) {
       const PetscReal t = m[c][j];
       m[c][j]           = m[p][j];
       m[p][j]           = t;
     }
     const PetscReal piv = m[c][c];
-    for (PetscInt j = 0; j < 2 * NX; j++) m[c][j] /= piv;
-    for (PetscInt i = 0; i < NX; i++) {
+    for (PetscInt j = 0; j < 2 * NX_MAX; j++) m[c][j] /= piv;
+    for (PetscInt i = 0; i < NX_MAX; i++) {
       if (i == c || m[i][c] == 0) continue;
       const PetscReal f = m[i][c];
-      for (PetscInt j = 0; j < 2 * NX; j++) m[i][j] -= f * m[c][j];
+      for (PetscInt j = 0; j < 2 * NX_MAX; j++) m[i][j] -= f * m[c][j];
     }
   }
-  for (PetscInt i = 0; i < NX; i++)
-    for (PetscInt j = 0; j < NX; j++) inv[i * NX + j] = m[i][NX + j];
+  for (PetscInt i = 0; i < NX_MAX; i++)
+    for (PetscInt j = 0; j < NX_MAX; j++) inv[i * NX_MAX + j] = m[i][NX_MAX + j];
   return PETSC_TRUE;
 }
 
@@ -87,8 +88,8 @@ static PetscErrorCode ImpulsesFromX(Newton *nt, const InteriorPoint *ip, Vec r, 
 }
 
 /* M x + c of contact a, from its x and its u = W r + v^d. */
-static void LCPMap(const KergsSolver s, const Newton *nt, const InteriorPoint *ip, PetscInt a, const PetscReal x[NX],
-                   const PetscScalar ul[], PetscReal mx[NX])
+static void LCPMap(const KergsSolver s, const Newton *nt, const InteriorPoint *ip, PetscInt a, const PetscReal x[NX_MAX],
+                   const PetscScalar ul[], PetscReal mx[NX_MAX])
 {
   const PetscReal rho = nt->rho_nat[a], un = PetscRealPart(ul[ip->nc * a]);
 
@@ -109,7 +110,7 @@ static PetscErrorCode Residuals(KergsSolver s, Newton *nt, InteriorPoint *ip, Ve
   PetscFunctionBeginUser;
   PetscCall(VecGetArrayRead(u, &ul));
   for (PetscInt a = 0; a < ip->n; a++) {
-    PetscReal mx[NX];
+    PetscReal mx[NX_MAX];
     if (!ip->in[a]) continue;
     LCPMap(s, nt, ip, a, ip->x + ip->nx * a, ul, mx);
     for (PetscInt i = 0; i < ip->nx; i++) {
@@ -139,24 +140,24 @@ static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
     if (!ip->in[a]) continue;
     const PetscReal *x = ip->x + nx * a, *w = ip->w + nx * a, rho = nt->rho_nat[a];
     if (nc == 1) {
-      if (!(w[0] > 0)) return PETSC_FALSE;
+      if (!(x[0] > 0 && w[0] > 0)) return PETSC_FALSE; /* x or w underflowed to 0 */
       Ki[0] = x[0] / w[0];
       B[0]  = rho * Ki[0];
       continue;
     }
-    PetscReal K[NX * NX] = {0};
-    K[1 * NX + 3] = K[2 * NX + 3] = 1.0;
-    K[3 * NX + 0]                 = s->mu[a];
-    K[3 * NX + 1] = K[3 * NX + 2] = -1.0;
-    for (PetscInt i = 0; i < NX; i++) K[i * NX + i] += w[i] / x[i];
+    PetscReal K[NX_MAX * NX_MAX] = {0};
+    K[1 * NX_MAX + 3] = K[2 * NX_MAX + 3] = 1.0;
+    K[3 * NX_MAX + 0]                     = s->mu[a];
+    K[3 * NX_MAX + 1] = K[3 * NX_MAX + 2] = -1.0;
+    for (PetscInt i = 0; i < NX_MAX; i++) K[i * NX_MAX + i] += w[i] / x[i];
     /* K is nonsingular while x, w > 0 (its row 0 is diagonal, its lower 3 x 3 block a positive diagonal plus a skew
        part); the check guards against x underflowing to 0 */
     if (!Invert4(K, Ki)) return PETSC_FALSE;
     /* B = T K^-1 S: K^-1 S's column col is K^-1 times S's column, rho (1, 0, 0, 0) for col 0 and rho (0, 1, -1, 0) for
        col 1; T then takes its entry 0, and its entry 1 minus entry 2 */
     for (PetscInt col = 0; col < 2; col++) {
-      PetscReal Kcol[NX];
-      for (PetscInt i = 0; i < NX; i++) Kcol[i] = rho * (col == 0 ? Ki[i * NX + 0] : Ki[i * NX + 1] - Ki[i * NX + 2]);
+      PetscReal Kcol[NX_MAX];
+      for (PetscInt i = 0; i < NX_MAX; i++) Kcol[i] = rho * (col == 0 ? Ki[i * NX_MAX + 0] : Ki[i * NX_MAX + 1] - Ki[i * NX_MAX + 2]);
       B[0 * 2 + col] = Kcol[0];
       B[1 * 2 + col] = Kcol[1] - Kcol[2];
     }
@@ -189,7 +190,7 @@ static PetscErrorCode Direction(Newton *nt, InteriorPoint *ip, const PetscReal *
     for (PetscInt c = 0; c < nc; c++) Fl[nc * a + c] = 0.0;
     if (!ip->in[a]) continue;
     const PetscReal *x = ip->x + nx * a, *w = ip->w + nx * a;
-    PetscReal       *g = ip->g + nx * a, Kg[NX];
+    PetscReal       *g = ip->g + nx * a, Kg[NX_MAX];
     for (PetscInt i = 0; i < nx; i++) g[i] = ip->f1[nx * a + i] - (x[i] * w[i] - (target ? target[nx * a + i] : 0.0)) / x[i];
     ApplyKinv(ip, a, g, Kg);
     Fl[nc * a] = -Kg[0];
@@ -208,7 +209,7 @@ static PetscErrorCode Direction(Newton *nt, InteriorPoint *ip, const PetscReal *
   for (PetscInt a = 0; a < ip->n; a++) {
     if (!ip->in[a]) continue;
     const PetscReal *x = ip->x + nx * a, *w = ip->w + nx * a, *g = ip->g + nx * a, rho = nt->rho_nat[a];
-    PetscReal        v[NX];
+    PetscReal        v[NX_MAX];
     v[0] = g[0] - rho * PetscRealPart(wy[nc * a]);
     if (nc == 2) {
       const PetscReal swt = rho * PetscRealPart(wy[2 * a + 1]);
@@ -282,7 +283,7 @@ static PetscErrorCode FirstPoint(KergsSolver s, Newton *nt, InteriorPoint *ip, V
   PetscCall(ImpulsesFromX(nt, ip, r, u, vd));
   PetscCall(VecGetArrayRead(u, &ul));
   for (PetscInt a = 0; a < ip->n; a++) {
-    PetscReal mx[NX];
+    PetscReal mx[NX_MAX];
     if (!ip->in[a]) continue;
     LCPMap(s, nt, ip, a, ip->x + ip->nx * a, ul, mx);
     for (PetscInt i = 0; i < ip->nx; i++) ip->w[ip->nx * a + i] = PetscMax(mx[i], 0.0) + scale;
@@ -293,20 +294,23 @@ static PetscErrorCode FirstPoint(KergsSolver s, Newton *nt, InteriorPoint *ip, V
 
 static PetscErrorCode Create(KergsSolver s, const Newton *nt, PetscInt n, PetscInt nc, InteriorPoint *ip)
 {
-  PetscInt m = 0;
+  const PetscInt nx = nc == 2 ? NX_MAX : 1;
+  PetscInt       m  = 0;
 
   PetscFunctionBeginUser;
+  PetscCheck(nc == 1 || nc == 2, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "interior-point start: %" PetscInt_FMT " components per contact, not 1 or 2", nc);
   ip->n  = n;
   ip->nc = nc;
-  ip->nx = nc == 2 ? NX : 1;
+  ip->nx = nx;
   PetscCall(PetscMalloc1(n + 1, &ip->in));
   for (PetscInt a = 0; a < n; a++) {
     ip->in[a] = (PetscBool)(s->active[a] && (!nt->working_set || nt->in_J[a]));
     if (ip->in[a]) m++;
   }
   PetscCall(MPIU_Allreduce(&m, &ip->nglobal, 1, MPIU_INT, MPI_SUM, s->comm));
-  PetscCall(PetscCalloc5(NX * n + 1, &ip->x, NX * n + 1, &ip->w, NX * n + 1, &ip->f1, NX * NX * n + 1, &ip->Kinv, NX * n + 1, &ip->g));
-  PetscCall(PetscCalloc5(NX * n + 1, &ip->dxa, NX * n + 1, &ip->dwa, NX * n + 1, &ip->dx, NX * n + 1, &ip->dw, NX * n + 1, &ip->target));
+  PetscCall(PetscCalloc5(nx * n + 1, &ip->x, nx * n + 1, &ip->w, nx * n + 1, &ip->f1, nx * nx * n + 1, &ip->Kinv, nx * n + 1, &ip->g));
+  PetscCall(PetscCalloc5(nx * n + 1, &ip->dxa, nx * n + 1, &ip->dwa, nx * n + 1, &ip->dx, nx * n + 1, &ip->dw, nx * n + 1, &ip->target));
   PetscFunctionReturn(0);
 }
 
@@ -450,7 +454,7 @@ static PetscErrorCode CreateDirectSolver(KergsSolver s, Newton *nt, KSP *ksp)
    Measured: starting them at the larger of that and rho |u_n| (the impulse that would stop the contact) took the
    1,200-disk rest step from 5 Newton steps after the start to 28, and the 500-disk pressure scene at dt 5.5e-3 from
    5.0 s to 7.2 s with a step unconverged. */
-static PetscErrorCode JoinClosingContacts(KergsSolver s, Newton *nt, InteriorPoint *ip, PetscInt nc, Vec u, PetscReal gap, PetscInt *added)
+static PetscErrorCode JoinClosingContacts(KergsSolver s, Newton *nt, InteriorPoint *ip, Vec u, PetscReal gap, PetscInt *added)
 {
   const PetscScalar *ul;
   PetscInt           count = 0;
@@ -460,7 +464,7 @@ static PetscErrorCode JoinClosingContacts(KergsSolver s, Newton *nt, InteriorPoi
   if (!nt->working_set) PetscFunctionReturn(0);
   PetscCall(VecGetArrayRead(u, &ul));
   for (PetscInt a = 0; a < ip->n; a++)
-    if (s->active[a] && !ip->in[a] && PetscRealPart(ul[nc * a]) < 0) {
+    if (s->active[a] && !ip->in[a] && PetscRealPart(ul[ip->nc * a]) < 0) {
       const PetscReal start = PetscSqrtReal(gap);
       ip->in[a] = nt->in_J[a] = PETSC_TRUE;
       for (PetscInt i = ip->nx * a; i < ip->nx * (a + 1); i++) ip->x[i] = ip->w[i] = start;
@@ -472,7 +476,7 @@ static PetscErrorCode JoinClosingContacts(KergsSolver s, Newton *nt, InteriorPoi
   ip->nglobal += *added;
   PetscCall(PetscInfo(NULL, "interior point: %" PetscInt_FMT " contacts left out are closing: they join the problem\n", *added));
   PetscCall(NewtonDestroyJacobian(nt));
-  PetscCall(NewtonSetUpJacobian(s, nt, ip->n, nc));
+  PetscCall(NewtonSetUpJacobian(s, nt, ip->n, ip->nc));
   PetscCall(KSPDestroy(&ip->ksp));
   PetscCall(CreateDirectSolver(s, nt, &ip->ksp));
   PetscFunctionReturn(0);
@@ -482,8 +486,7 @@ static PetscErrorCode JoinClosingContacts(KergsSolver s, Newton *nt, InteriorPoi
    most `target`; *best and nt->rbest hold the best r by natural residual over the entry and every iterate. An iterate
    that brings contacts into the problem restarts the rules that watch the residual's growth (its residual counts the
    contacts it closes while they were left out). */
-static PetscErrorCode Iterations(KergsSolver s, Newton *nt, InteriorPoint *ip, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal target,
-                                 PetscReal *best)
+static PetscErrorCode Iterations(KergsSolver s, Newton *nt, InteriorPoint *ip, Vec r, Vec u, Vec vd, PetscReal target, PetscReal *best)
 {
   PetscReal ip_best    = PETSC_MAX_REAL; /* over these iterates */
   PetscInt  since_best = 0;              /* iterations since ip_best last fell */
@@ -494,7 +497,7 @@ static PetscErrorCode Iterations(KergsSolver s, Newton *nt, InteriorPoint *ip, P
     PetscReal now, gap = 0.0;
     PetscBool ok    = PETSC_FALSE;
     PetscInt  added = 0;
-    PetscCall(NewtonNaturalResidual(s, nt, ip->n, nc, r, u, &now));
+    PetscCall(NewtonNaturalResidual(s, nt, ip->n, ip->nc, r, u, &now));
     PetscCall(PetscInfo(NULL, "interior point %" PetscInt_FMT ": natural residual %g\n", k, (double)now));
     if (now < *best) {
       *best = now;
@@ -502,7 +505,7 @@ static PetscErrorCode Iterations(KergsSolver s, Newton *nt, InteriorPoint *ip, P
     }
     if (!(now < PETSC_MAX_REAL) || *best <= target || k >= nt->ip_max_it) break;
     PetscCall(Residuals(s, nt, ip, u, &gap));
-    PetscCall(JoinClosingContacts(s, nt, ip, nc, u, gap, &added));
+    PetscCall(JoinClosingContacts(s, nt, ip, u, gap, &added));
     if (added) {
       PetscCall(ImpulsesFromX(nt, ip, r, u, vd));
       PetscCall(Residuals(s, nt, ip, u, &gap));
@@ -550,7 +553,7 @@ PetscErrorCode NewtonInteriorPointStart(KergsSolver s, Newton *nt, PetscInt n, P
   }
   PetscCall(Create(s, nt, n, nc, &ip));
   PetscCall(CreateDirectSolver(s, nt, &ip.ksp));
-  PetscCall(Iterations(s, nt, &ip, nc, r, u, vd, target, &best));
+  PetscCall(Iterations(s, nt, &ip, r, u, vd, target, &best));
   nt->ip_answer = (PetscBool)(best < *res); /* else r goes back to the entry's */
   PetscCall(Destroy(&ip));
   PetscCall(VecCopy(nt->rbest, r));
