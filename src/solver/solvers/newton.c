@@ -849,6 +849,12 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
              "-solver_newton_desaxce_tol %g must be positive", (double)nt->desaxce_tol);
   PetscCheck(nt->desaxce_qp_tol > 0 && PetscIsNormalReal(nt->desaxce_qp_tol), s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-solver_newton_desaxce_qp_tol %g must be positive", (double)nt->desaxce_qp_tol);
+  if (nt->ip_max_it > 0) { /* the interior-point start's KSP options read once here, for -help and the unused-option check */
+    KSP ksp;
+    PetscCall(NewtonInteriorPointCreateKSP(s, KERGS_DIM, &ksp));
+    PetscCall(KSPSetFromOptions(ksp));
+    PetscCall(KSPDestroy(&ksp));
+  }
   if (nt->desaxce_max_it > 0) { /* the QPs' Tao options read once here, for -help and the unused-option check */
     Tao tao;
     PetscCall(NewtonDeSaxceCreateTao(s, &tao));

@@ -142,6 +142,7 @@ PETSC_INTERN PetscErrorCode NewtonDeSaxceStart(KergsSolver, Newton *, PetscInt n
                                                Vec u, Vec vd, PetscReal *res);
 /* newton_ip.c */
 PETSC_INTERN PetscErrorCode NewtonInteriorPointStart(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u, Vec vd, PetscReal *res);
+PETSC_INTERN PetscErrorCode NewtonInteriorPointCreateKSP(KergsSolver, PetscInt nc, KSP *);
 /* newton_residual.c */
 PETSC_INTERN PetscErrorCode NewtonNaturalResidual(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u, PetscReal *res);
 /* newton_subdomain.c */

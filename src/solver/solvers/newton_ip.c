@@ -14,7 +14,8 @@
    Without friction (one component per contact) the LCP is the normal problem alone: x = r_n, w = rho u_n, T = 1,
    S = rho, G = 0, so M = rho W: W's LCP scaled row by row, with the same solutions. A positive diagonal times a positive
    semidefinite matrix is sufficient (P*), the class for which the interior point's convergence theory holds (Kojima,
-   Megiddo, Noma and Yoshise, LNCS 538, 1991), where the frictional M is not. K = w / x and J = 1 + (x / w) rho W.
+   Megiddo, Noma and Yoshise, LNCS 538, 1991), where the frictional M is not. K = w / x, and J = 1 + (x / w) rho W with
+   each row divided by rho x / w is w / (rho x) + W: symmetric positive definite, factored by Cholesky.
 
    With newton's working set the problem holds the contacts the working set would put in J at the warm start, and
    those an iterate closes join it (JoinClosingContacts); the others keep r = 0. */
@@ -34,7 +35,7 @@ typedef struct {
   PetscReal *g;         /* the right-hand side of (M + X^-1 W) dx = g */
   PetscReal *target;    /* the corrector's target for x.w */
   PetscInt   nglobal;   /* contacts in the problem, all ranks */
-  KSP        ksp;       /* J's direct solver where newton's is a Krylov method (CreateDirectSolver); else NULL */
+  KSP        ksp;       /* the start's own direct solver for J (CreateDirectSolver), or NULL: newton's */
 } InteriorPoint;
 
 /* The inverse of a 4 x 4 matrix by Gauss-Jordan elimination with partial pivoting; false if singular. */
@@ -124,9 +125,11 @@ static PetscErrorCode Residuals(KergsSolver s, Newton *nt, InteriorPoint *ip, Ve
   PetscFunctionReturn(0);
 }
 
-/* Per contact K = G + X^-1 W, its inverse, and J's blocks A = I, B = T K^-1 S (S = rho [[1, 0], [0, 1], [0, -1], [0, 0]];
-   without friction K = w / x and B = rho x / w). Contacts outside the problem keep r = 0: A = I, B = 0. False on a rank
-   where some K is singular. */
+/* Per contact K = G + X^-1 W, its inverse, and J's blocks A = I, B = T K^-1 S (S = rho [[1, 0], [0, 1], [0, -1], [0, 0]]).
+   Without friction K = w / x, and the row is divided by B = rho x / w: A = w / (rho x), B = 1, so that J = A + W is
+   symmetric positive definite over the problem's contacts (CreateDirectSolver factors it by Cholesky; the right-hand
+   side is divided alike, in Direction). Contacts outside the problem keep r = 0: A = I, B = 0. False on a rank where some
+   K is singular. */
 static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
 {
   const PetscInt nc = ip->nc, nx = ip->nx;
@@ -142,7 +145,8 @@ static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
     if (nc == 1) {
       if (!(x[0] > 0 && w[0] > 0)) return PETSC_FALSE; /* x or w underflowed to 0 */
       Ki[0] = x[0] / w[0];
-      B[0]  = rho * Ki[0];
+      A[0]  = 1.0 / (rho * Ki[0]);
+      B[0]  = 1.0;
       continue;
     }
     PetscReal K[NX_MAX * NX_MAX] = {0};
@@ -176,8 +180,9 @@ static void ApplyKinv(const InteriorPoint *ip, PetscInt a, const PetscReal v[], 
   }
 }
 
-/* One direction: g = f1 - (x.w - target) / x, J y = T K^-1 g (newton's linear solver; F = -T K^-1 g), then
-   dx = K^-1 (g - S W y) and dw = (target - x.w - w.dx) / x. target NULL: 0 (the predictor). */
+/* One direction: g = f1 - (x.w - target) / x, J y = T K^-1 g (newton's linear solver or the start's; F = -T K^-1 g, and
+   without friction F = -g / rho, as J's rows are divided by rho x / w), then dx = K^-1 (g - S W y) and
+   dw = (target - x.w - w.dx) / x. target NULL: 0 (the predictor). */
 static PetscErrorCode Direction(Newton *nt, InteriorPoint *ip, const PetscReal *target, PetscReal *dx, PetscReal *dw, PetscBool *solved)
 {
   const PetscInt     nc = ip->nc, nx = ip->nx;
@@ -193,7 +198,7 @@ static PetscErrorCode Direction(Newton *nt, InteriorPoint *ip, const PetscReal *
     PetscReal       *g = ip->g + nx * a, Kg[NX_MAX];
     for (PetscInt i = 0; i < nx; i++) g[i] = ip->f1[nx * a + i] - (x[i] * w[i] - (target ? target[nx * a + i] : 0.0)) / x[i];
     ApplyKinv(ip, a, g, Kg);
-    Fl[nc * a] = -Kg[0];
+    Fl[nc * a] = nc == 1 ? -g[0] / nt->rho_nat[a] : -Kg[0];
     if (nc == 2) Fl[2 * a + 1] = -(Kg[1] - Kg[2]);
   }
   PetscCall(VecRestoreArray(nt->F, &Fl));
@@ -424,27 +429,68 @@ static void RestoreLinearFigures(Newton *nt, const LinearFigures *f)
   nt->linear_seconds = f->linear_seconds;
 }
 
-/* Where newton's KSP is a Krylov method (GMRES with additive Schwarz on several ranks above
-   -solver_newton_redundant_max rows, or a method chosen by option), the interior point solves J by its own direct
-   solver, MUMPS's LU: its directions must be accurate, and J's scales spread as X^-1 W does. Measured on the 300-disk
-   rest step on 2 ranks with additive Schwarz: at GMRES's rtol 1e-3 the iterates turned back after 5 iterations; at
-   1e-10 GMRES needed 7 iterations at the first and 700 at the tenth, reached its cap, and Newton then needed 37 steps
-   instead of 5. NULL where newton's KSP solves directly. Created again whenever J's rows change. */
-static PetscErrorCode CreateDirectSolver(KergsSolver s, Newton *nt, KSP *ksp)
+/* The start's own direct solver for J, or NULL where it uses newton's (its LU on one rank, or its gathered LU).
+   With friction, where newton's KSP is a Krylov method (GMRES with additive Schwarz on several ranks above
+   -solver_newton_redundant_max rows, or a method chosen by option), MUMPS's LU: the interior point's directions must be
+   accurate, and J's scales spread as X^-1 W does. Measured on the 300-disk rest step on 2 ranks with additive Schwarz:
+   at GMRES's rtol 1e-3 the iterates turned back after 5 iterations; at 1e-10 GMRES needed 7 iterations at the first and
+   700 at the tenth, reached its cap, and Newton then needed 37 steps instead of 5.
+   Without friction J = w / (rho x) + W is symmetric positive definite (SetBlocks), so always a Cholesky factorization:
+   CHOLMOD on one rank, MUMPS on several. Measured on the 40,000-disk frictionless rest step, one rank: the start's 16
+   iterations took 5.2 s by CHOLMOD against 16.1 s by newton's LU.
+   MUMPS orders by AMD (ICNTL(7) = 0): on the 100,000-disk frictionless rest step, 2 ranks, the start's 20 Cholesky
+   factorizations took 24 s by AMD, 25 s by AMF, 28 s by QAMD, 43 s by PORD and by METIS (MUMPS's own choice there);
+   with friction, the 5,000-disk rest step's 30 LU factorizations 3.0 s against 3.3 s.
+   Options under -solver_newton_ip_ (-solver_newton_ip_pc_factor_mat_solver_type, MUMPS's -solver_newton_ip_mat_mumps_icntl_*).
+   Created again whenever J's rows change. */
+static PetscErrorCode CreateDirectSolver(KergsSolver s, Newton *nt, PetscInt nc, KSP *ksp)
 {
-  PetscBool direct;
-  PC        pc;
+  PetscBool   direct;
+  PetscMPIInt size;
+  PC          pc;
 
   PetscFunctionBeginUser;
   *ksp = NULL;
   PetscCall(PetscObjectTypeCompare((PetscObject)nt->ksp, KSPPREONLY, &direct));
-  if (direct) PetscFunctionReturn(0);
-  PetscCall(KSPCreate(s->comm, ksp));
+  if (nc == 2 && direct) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscCall(NewtonInteriorPointCreateKSP(s, nc, ksp));
   PetscCall(KSPSetOperators(*ksp, nt->J, nt->J));
+  PetscCall(KSPGetPC(*ksp, &pc));
+  if (nc == 1 && size == 1)
+    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERCHOLMOD));
+  else {
+    const char *prefix;
+    PetscBool   given;
+    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+    PetscCall(KSPGetOptionsPrefix(*ksp, &prefix));
+    PetscCall(PetscOptionsHasName(NULL, prefix, "-mat_mumps_icntl_7", &given));
+    if (!given) { /* AMD: MUMPS's own choice took 1.8 times as long (above); a value set here would override the option */
+      Mat F;
+      PetscCall(PCFactorSetUpMatSolverType(pc));
+      PetscCall(PCFactorGetMatrix(pc, &F));
+      PetscCall(MatMumpsSetIcntl(F, 7, 0));
+    }
+  }
+  PetscCall(KSPSetFromOptions(*ksp));
+  PetscFunctionReturn(0);
+}
+
+/* The start's own KSP, without operators: options prefix -solver_newton_ip_, a direct solve (LU with friction,
+   Cholesky without). Also called once at newton's set-up so that -help lists its options and the unused-option check
+   knows them. */
+PetscErrorCode NewtonInteriorPointCreateKSP(KergsSolver s, PetscInt nc, KSP *ksp)
+{
+  PC   pc;
+  char prefix[256];
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsSolverInnerPrefix(s, "solver_newton_ip_", prefix, sizeof(prefix)));
+  PetscCall(KSPCreate(s->comm, ksp));
+  PetscCall(KSPSetOptionsPrefix(*ksp, prefix));
   PetscCall(KSPSetType(*ksp, KSPPREONLY));
   PetscCall(KSPGetPC(*ksp, &pc));
-  PetscCall(PCSetType(pc, PCLU));
-  PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+  PetscCall(PCSetType(pc, nc == 2 ? PCLU : PCCHOLESKY));
   PetscFunctionReturn(0);
 }
 
@@ -478,7 +524,7 @@ static PetscErrorCode JoinClosingContacts(KergsSolver s, Newton *nt, InteriorPoi
   PetscCall(NewtonDestroyJacobian(nt));
   PetscCall(NewtonSetUpJacobian(s, nt, ip->n, ip->nc));
   PetscCall(KSPDestroy(&ip->ksp));
-  PetscCall(CreateDirectSolver(s, nt, &ip->ksp));
+  PetscCall(CreateDirectSolver(s, nt, ip->nc, &ip->ksp));
   PetscFunctionReturn(0);
 }
 
@@ -552,7 +598,7 @@ PetscErrorCode NewtonInteriorPointStart(KergsSolver s, Newton *nt, PetscInt n, P
     PetscCall(NewtonSetUpJacobian(s, nt, n, nc));
   }
   PetscCall(Create(s, nt, n, nc, &ip));
-  PetscCall(CreateDirectSolver(s, nt, &ip.ksp));
+  PetscCall(CreateDirectSolver(s, nt, nc, &ip.ksp));
   PetscCall(Iterations(s, nt, &ip, r, u, vd, target, &best));
   nt->ip_answer = (PetscBool)(best < *res); /* else r goes back to the entry's */
   PetscCall(Destroy(&ip));
