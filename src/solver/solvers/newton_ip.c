@@ -329,6 +329,25 @@ static PetscErrorCode Destroy(InteriorPoint *ip)
   PetscFunctionReturn(0);
 }
 
+/* Without friction, J's rows of contacts outside the problem (A = 1, B = 0: d = 0 there) become rows and columns of the
+   identity, so that J is symmetric for its Cholesky factorization: the problem's rows have W's entries in those
+   columns, which multiply d = 0. J holds such rows for the contacts the gap rule leaves inactive, and without the
+   working set for every contact. */
+static PetscErrorCode DecoupleRowsOutside(Newton *nt, const InteriorPoint *ip)
+{
+  PetscInt rstart, nout = 0, *rows;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetOwnershipRange(nt->J, &rstart, NULL));
+  PetscCall(PetscMalloc1(nt->nrows + 1, &rows));
+  for (PetscInt i = 0; i < nt->nrows; i++)
+    if (!ip->in[nt->order ? nt->order[i] : i]) rows[nout++] = rstart + i;
+  PetscCall(MatSetOption(nt->J, MAT_KEEP_NONZERO_PATTERN, PETSC_TRUE)); /* the next assembly writes every entry again */
+  PetscCall(MatZeroRowsColumns(nt->J, nout, rows, 1.0, NULL, NULL));
+  PetscCall(PetscFree(rows));
+  PetscFunctionReturn(0);
+}
+
 /* One predictor-corrector iteration; *ok false when a K is singular, a linear solve failed or the step vanished. */
 static PetscErrorCode Iterate(KergsSolver s, Newton *nt, InteriorPoint *ip, PetscReal gap, PetscBool *ok)
 {
@@ -342,6 +361,7 @@ static PetscErrorCode Iterate(KergsSolver s, Newton *nt, InteriorPoint *ip, Pets
   *ok = (PetscBool)good;
   if (!*ok) PetscFunctionReturn(0);
   PetscCall(NewtonAssembleJacobian(s, nt, ip->n, ip->nc, nt->shift, 0.0));
+  if (ip->nc == 1) PetscCall(DecoupleRowsOutside(nt, ip));
   PetscCall(Direction(nt, ip, NULL, ip->dxa, ip->dwa, &solved));
   if (!solved) {
     *ok = PETSC_FALSE;
