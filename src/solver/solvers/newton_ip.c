@@ -128,8 +128,8 @@ static PetscErrorCode Residuals(KergsSolver s, Newton *nt, InteriorPoint *ip, Ve
 /* Per contact K = G + X^-1 W, its inverse, and J's blocks A = I, B = T K^-1 S (S = rho [[1, 0], [0, 1], [0, -1], [0, 0]]).
    Without friction K = w / x, and the row is divided by B = rho x / w: A = w / (rho x), B = 1, so that J = A + W is
    symmetric positive definite over the problem's contacts (CreateDirectSolver factors it by Cholesky; the right-hand
-   side is divided alike, in Direction). Contacts outside the problem keep r = 0: A = I, B = 0. False on a rank where some
-   K is singular. */
+   side is divided alike, in Direction; newton's shift, 1e-8, is then added to a diagonal of order W_nn, not 1). Contacts outside the
+   problem keep r = 0: A = I, B = 0. False on a rank where some K is singular. */
 static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
 {
   const PetscInt nc = ip->nc, nx = ip->nx;
@@ -143,10 +143,11 @@ static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
     if (!ip->in[a]) continue;
     const PetscReal *x = ip->x + nx * a, *w = ip->w + nx * a, rho = nt->rho_nat[a];
     if (nc == 1) {
-      if (!(x[0] > 0 && w[0] > 0)) return PETSC_FALSE; /* x or w underflowed to 0 */
       Ki[0] = x[0] / w[0];
       A[0]  = 1.0 / (rho * Ki[0]);
       B[0]  = 1.0;
+      /* x or w underflowed to 0, or A overflowed: a Cholesky factorization fails with an error, not a reason */
+      if (!(x[0] > 0 && w[0] > 0 && PetscIsNormalReal(A[0]))) return PETSC_FALSE;
       continue;
     }
     PetscReal K[NX_MAX * NX_MAX] = {0};
@@ -455,8 +456,8 @@ static void RestoreLinearFigures(Newton *nt, const LinearFigures *f)
    accurate, and J's scales spread as X^-1 W does. Measured on the 300-disk rest step on 2 ranks with additive Schwarz:
    at GMRES's rtol 1e-3 the iterates turned back after 5 iterations; at 1e-10 GMRES needed 7 iterations at the first and
    700 at the tenth, reached its cap, and Newton then needed 37 steps instead of 5.
-   Without friction J = w / (rho x) + W is symmetric positive definite (SetBlocks), so always a Cholesky factorization:
-   CHOLMOD on one rank, MUMPS on several. Measured on the 40,000-disk frictionless rest step, one rank: the start's 16
+   Without friction J = w / (rho x) + W is symmetric positive definite (SetBlocks), so always a symmetric factorization:
+   CHOLMOD's Cholesky on one rank, MUMPS's LDL^T on several. Measured on the 40,000-disk frictionless rest step, one rank: the start's 16
    iterations took 5.2 s by CHOLMOD against 16.1 s by newton's LU.
    MUMPS orders by AMD (ICNTL(7) = 0): on the 100,000-disk frictionless rest step, 2 ranks, the start's 20 Cholesky
    factorizations took 24 s by AMD, 25 s by AMF, 28 s by QAMD, 43 s by PORD and by METIS (MUMPS's own choice there);
@@ -477,22 +478,16 @@ static PetscErrorCode CreateDirectSolver(KergsSolver s, Newton *nt, PetscInt nc,
   PetscCall(NewtonInteriorPointCreateKSP(s, nc, ksp));
   PetscCall(KSPSetOperators(*ksp, nt->J, nt->J));
   PetscCall(KSPGetPC(*ksp, &pc));
-  if (nc == 1 && size == 1)
-    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERCHOLMOD));
-  else {
-    const char *prefix;
-    PetscBool   given;
-    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
-    PetscCall(KSPGetOptionsPrefix(*ksp, &prefix));
-    PetscCall(PetscOptionsHasName(NULL, prefix, "-mat_mumps_icntl_7", &given));
-    if (!given) { /* AMD: MUMPS's own choice took 1.8 times as long (above); a value set here would override the option */
-      Mat F;
-      PetscCall(PCFactorSetUpMatSolverType(pc));
-      PetscCall(PCFactorGetMatrix(pc, &F));
-      PetscCall(MatMumpsSetIcntl(F, 7, 0));
-    }
+  PetscCall(PCFactorSetMatSolverType(pc, nc == 1 && size == 1 ? MATSOLVERCHOLMOD : MATSOLVERMUMPS));
+  PetscCall(KSPSetFromOptions(*ksp)); /* first, so that the factor takes the prefix for its own options */
+  PetscCall(PCFactorSetUpMatSolverType(pc));
+  if (!(nc == 1 && size == 1)) {
+    Mat F;
+    PetscCall(PCFactorGetMatrix(pc, &F));
+    /* AMD: MUMPS's own choice took 1.8 times as long (above); -solver_newton_ip_mat_mumps_icntl_7, applied after this
+       value at the symbolic factorization, still wins */
+    PetscCall(MatMumpsSetIcntl(F, 7, 0));
   }
-  PetscCall(KSPSetFromOptions(*ksp));
   PetscFunctionReturn(0);
 }
 
