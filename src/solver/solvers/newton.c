@@ -789,8 +789,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                             "before Newton, at most (0: none), until -solver_newton_ip_tol",
                             "", nt->ip_max_it, &nt->ip_max_it, NULL));
   PetscCall(PetscOptionsReal("-solver_newton_ip_tol",
-                             "Natural residual that ends the interior-point iterations before Newton (or -solver_tol if looser)", "",
-                             nt->ip_tol, &nt->ip_tol, NULL));
+                             "Natural residual that ends the interior-point iterations before Newton (or -solver_tol if looser; "
+                             "without friction -solver_tol unless given)",
+                             "", nt->ip_tol, &nt->ip_tol, &nt->ip_tol_set));
   PetscCall(
       KergsOptionsInt(PetscOptionsObject, "-solver_newton_desaxce_max_it",
                       "De Saxce QPs (convex, by TAO's interior point) before Newton, at most (0: none), until -solver_newton_desaxce_tol",
@@ -915,8 +916,8 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(
         viewer,
         "Interior-point start: at most %" PetscInt_FMT
-        " Mehrotra iterations on the Stewart-Trinkle LCP (without friction, the normal impulses' LCP) until the natural residual is %g\n",
-        nt->ip_max_it, (double)nt->ip_tol));
+        " Mehrotra iterations on the Stewart-Trinkle LCP (without friction, the normal impulses' LCP) until the natural residual is %g%s\n",
+        nt->ip_max_it, (double)nt->ip_tol, nt->ip_tol_set ? "" : " (without friction: -solver_tol)"));
   if (nt->desaxce_max_it > 0)
     PetscCall(PetscViewerASCIIPrintf(viewer,
                                      "De Saxce start: at most %" PetscInt_FMT

@@ -97,6 +97,7 @@ typedef struct {
   PetscReal desaxce_seconds;       /* and their time */
   PetscInt  ip_max_it;             /* -solver_newton_ip_max_it: interior-point iterations before Newton (0: none) */
   PetscReal ip_tol;                /* -solver_newton_ip_tol: natural residual that ends them */
+  PetscBool ip_tol_set;            /* given: without friction too (else -solver_tol there) */
   PetscInt  ip_its;                /* the last solve's interior-point iterations */
   PetscBool ip_answer;             /* the last solve went on from the interior point's answer (it improved on the entry) */
   PetscReal ip_seconds;            /* and their time */
