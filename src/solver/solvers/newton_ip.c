@@ -128,8 +128,10 @@ static PetscErrorCode Residuals(KergsSolver s, Newton *nt, InteriorPoint *ip, Ve
 /* Per contact K = G + X^-1 W, its inverse, and J's blocks A = I, B = T K^-1 S (S = rho [[1, 0], [0, 1], [0, -1], [0, 0]]).
    Without friction K = w / x, and the row is divided by B = rho x / w: A = w / (rho x), B = 1, so that J = A + W is
    symmetric positive definite over the problem's contacts (CreateDirectSolver factors it by Cholesky; the right-hand
-   side is divided alike, in Direction; newton's shift, 1e-8, is then added to a diagonal of order W_nn, not 1). Contacts outside the
-   problem keep r = 0: A = I, B = 0. False on a rank where some K is singular. */
+   side is divided alike, in Direction). J's other rows are those of inactive contacts, which newton's W does not
+   couple (W over the active pairs: StoredBlock, delassus.c, by the rule that sets s->active), so they are rows and
+   columns of the identity and J stays symmetric. Newton's shift, 1e-8, is then added to a diagonal of order W_nn, not 1.
+   Contacts outside the problem keep r = 0: A = I, B = 0. False on a rank where some K is singular. */
 static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
 {
   const PetscInt nc = ip->nc, nx = ip->nx;
@@ -330,25 +332,6 @@ static PetscErrorCode Destroy(InteriorPoint *ip)
   PetscFunctionReturn(0);
 }
 
-/* Without friction, J's rows of contacts outside the problem (A = 1, B = 0: d = 0 there) become rows and columns of the
-   identity, so that J is symmetric for its Cholesky factorization: the problem's rows have W's entries in those
-   columns, which multiply d = 0. J holds such rows for the contacts the gap rule leaves inactive, and without the
-   working set for every contact. */
-static PetscErrorCode DecoupleRowsOutside(Newton *nt, const InteriorPoint *ip)
-{
-  PetscInt rstart, nout = 0, *rows;
-
-  PetscFunctionBeginUser;
-  PetscCall(MatGetOwnershipRange(nt->J, &rstart, NULL));
-  PetscCall(PetscMalloc1(nt->nrows + 1, &rows));
-  for (PetscInt i = 0; i < nt->nrows; i++)
-    if (!ip->in[nt->order ? nt->order[i] : i]) rows[nout++] = rstart + i;
-  PetscCall(MatSetOption(nt->J, MAT_KEEP_NONZERO_PATTERN, PETSC_TRUE)); /* the next assembly writes every entry again */
-  PetscCall(MatZeroRowsColumns(nt->J, nout, rows, 1.0, NULL, NULL));
-  PetscCall(PetscFree(rows));
-  PetscFunctionReturn(0);
-}
-
 /* One predictor-corrector iteration; *ok false when a K is singular, a linear solve failed or the step vanished. */
 static PetscErrorCode Iterate(KergsSolver s, Newton *nt, InteriorPoint *ip, PetscReal gap, PetscBool *ok)
 {
@@ -362,7 +345,6 @@ static PetscErrorCode Iterate(KergsSolver s, Newton *nt, InteriorPoint *ip, Pets
   *ok = (PetscBool)good;
   if (!*ok) PetscFunctionReturn(0);
   PetscCall(NewtonAssembleJacobian(s, nt, ip->n, ip->nc, nt->shift, 0.0));
-  if (ip->nc == 1) PetscCall(DecoupleRowsOutside(nt, ip));
   PetscCall(Direction(nt, ip, NULL, ip->dxa, ip->dwa, &solved));
   if (!solved) {
     *ok = PETSC_FALSE;
