@@ -441,16 +441,17 @@ static void RestoreLinearFigures(Newton *nt, const LinearFigures *f)
    Without friction J = w / (rho x) + W is symmetric positive definite (SetBlocks), so always a symmetric factorization:
    CHOLMOD's Cholesky on one rank, MUMPS's LDL^T on several. Measured on the 40,000-disk frictionless rest step, one rank: the start's 16
    iterations took 5.2 s by CHOLMOD against 16.1 s by newton's LU.
-   MUMPS orders by AMD (ICNTL(7) = 0): on the 100,000-disk frictionless rest step, 2 ranks, the start's 20 Cholesky
+   MUMPS orders by AMD (ICNTL(7) = 0): on the 100,000-disk frictionless rest step, 2 ranks, the start's 20 symmetric
    factorizations took 24 s by AMD, 25 s by AMF, 28 s by QAMD, 43 s by PORD and by METIS (MUMPS's own choice there);
    with friction, the 5,000-disk rest step's 30 LU factorizations 3.0 s against 3.3 s.
    Options under -solver_newton_ip_ (-solver_newton_ip_pc_factor_mat_solver_type, MUMPS's -solver_newton_ip_mat_mumps_icntl_*).
    Created again whenever J's rows change. */
 static PetscErrorCode CreateDirectSolver(KergsSolver s, Newton *nt, PetscInt nc, KSP *ksp)
 {
-  PetscBool   direct;
-  PetscMPIInt size;
-  PC          pc;
+  PetscBool     direct, mumps;
+  PetscMPIInt   size;
+  PC            pc;
+  MatSolverType package;
 
   PetscFunctionBeginUser;
   *ksp = NULL;
@@ -463,7 +464,9 @@ static PetscErrorCode CreateDirectSolver(KergsSolver s, Newton *nt, PetscInt nc,
   PetscCall(PCFactorSetMatSolverType(pc, nc == 1 && size == 1 ? MATSOLVERCHOLMOD : MATSOLVERMUMPS));
   PetscCall(KSPSetFromOptions(*ksp)); /* first, so that the factor takes the prefix for its own options */
   PetscCall(PCFactorSetUpMatSolverType(pc));
-  if (!(nc == 1 && size == 1)) {
+  PetscCall(PCFactorGetMatSolverType(pc, &package)); /* the option's, if given */
+  PetscCall(PetscStrcmp(package, MATSOLVERMUMPS, &mumps));
+  if (mumps) {
     Mat F;
     PetscCall(PCFactorGetMatrix(pc, &F));
     /* AMD: MUMPS's own choice took 1.8 times as long (above); -solver_newton_ip_mat_mumps_icntl_7, applied after this
