@@ -150,6 +150,11 @@ static PetscErrorCode TestList(MPI_Comm comm)
   PetscCall(CheckTrue(comm, (PetscBool)!s->frictional, "frictional = FALSE when only material 0 is present"));
   PetscCall(CheckTrue(comm, (PetscBool)(s->alert == 0.02), "-alert overrides the default"));
   PetscCall(KergsSceneDestroy(&s));
+  /* the word default brings back the automatic alert over an options file's value */
+  PetscCall(SceneGood(comm, "-disks_x 0,0,1,0 -disks_radius 0.5 -alert default", &s));
+  if (!s) PetscFunctionReturn(0);
+  PetscCall(CheckTrue(comm, (PetscBool)(Close(s->alert, 0.05, 1e-14) && s->alert_auto), "-alert default: automatic, 0.1 * mean radius"));
+  PetscCall(KergsSceneDestroy(&s));
   PetscCall(SceneGood(
       comm, "-materials 2 -friction_pairs 0,1,0.4 -disks_x 0,0,1,0 -disks_radius 0.5 -box -1,-1,2,1 -wall_box_bottom_material 1", &s));
   if (!s) PetscFunctionReturn(0);
@@ -492,6 +497,7 @@ static PetscErrorCode TestErrors(MPI_Comm comm)
       {"-disks_x 0,0 -disks_radius 0.1 -theta 1.5", "-theta"},
       {"-disks_x 0,0 -disks_radius 0.1 -steps -1", "-steps"},
       {"-disks_x 0,0 -disks_radius 0.1 -alert -1", "-alert"},
+      {"-disks_x 0,0 -disks_radius 0.1 -alert -2", "-alert"}, /* PETSC_DEFAULT's value typed as a number */
       {"-walls w -wall_w_a 1,1 -wall_w_b 1,1", "Wall w is degenerate"},
       {"-walls w -wall_w_a 0,0", "-wall_w_b"},
       {"-walls w -wall_w_a 0,0 -wall_w_b 1,0 -wall_w_type free", "Free wall w: mass"},

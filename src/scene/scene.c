@@ -440,6 +440,24 @@ PetscErrorCode KergsSceneAdvance(KergsScene sc, const PetscReal vold[], const Pe
 /* ------------------------------------------------------------------------------------------------ */
 /* Options: numerics, materials                                                                    */
 
+/* Whether -alert was given as the word "default" (PETSc reads it as PETSC_DEFAULT), which brings back the automatic
+   alert over an options file's value. The string is checked, so that a negative number typed by mistake is still
+   refused by SceneCheckNumerics. */
+static PetscErrorCode AlertGivenAsDefault(PetscBool *automatic)
+{
+  char      value[32] = "";
+  PetscBool set, word, petsc_word;
+
+  PetscFunctionBeginUser;
+  *automatic = PETSC_FALSE;
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-alert", value, sizeof(value), &set));
+  if (!set) PetscFunctionReturn(0);
+  PetscCall(PetscStrcasecmp(value, "default", &word));
+  PetscCall(PetscStrcasecmp(value, "petsc_default", &petsc_word));
+  *automatic = (PetscBool)(word || petsc_word);
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject, KergsScene scene, PetscBool *alert_set)
 {
   PetscFunctionBeginUser;
@@ -461,9 +479,15 @@ static PetscErrorCode SceneNumericsOptions(PetscOptionItems *PetscOptionsObject,
       NULL, KergsGapRules, (PetscEnum)scene->gaprule, (PetscEnum *)&scene->gaprule, NULL));
   PetscCall(PetscOptionsReal(
       "-alert",
-      "Alert distance >= 0: potential contacts have gap < alert (default: 0.1 * mean radius, raised at each step to twice the distance "
-      "the fastest pair closes in a step, at most twice the mean radius, KergsSceneAdaptAlert)",
+      "Alert distance >= 0: potential contacts have gap < alert (default, or the word default: 0.1 * mean radius, raised at each step "
+      "to twice the distance the fastest pair closes in a step, at most twice the mean radius, KergsSceneAdaptAlert)",
       NULL, scene->alert, &scene->alert, alert_set));
+  if (*alert_set) {
+    PetscBool automatic;
+
+    PetscCall(AlertGivenAsDefault(&automatic));
+    if (automatic) *alert_set = PETSC_FALSE;
+  }
   PetscCall(PetscOptionsReal("-ghost_skin",
                              "Skin of the ghost layer: ghosts are rebuilt once the alert distance plus twice a disk's displacement "
                              "exceeds the build's alert plus skin (negative: the alert distance)",
