@@ -41,6 +41,10 @@ kergs_test(NAME malloc_dump_rest_newton_ip NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_D
 kergs_test(NAME malloc_dump_rest_newton_ip_frictionless NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/rest_10k.opts -sample_input cases/compact_small.h5 -blowup_energy 0 -friction 0 -quiet -malloc_debug
                 -malloc_dump -output_none -solver_newton_ip_max_it 30)
+# newton without friction on one rank: J in its symmetric form, factored by CHOLMOD, its work vectors, per step
+kergs_test(NAME malloc_dump_rest_newton_cholesky NPROCS 1 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
+           ARGS -options_file cases/rest_10k.opts -sample_input cases/compact_small.h5 -blowup_energy 0 -friction 0 -steps 2 -quiet
+                -malloc_debug -malloc_dump -output_none -solver_newton_smoothing 0)
 # newton's working set: J rebuilt over a subset of the contacts when the answer closes a deferred one
 kergs_test(NAME malloc_dump_confine5_newton_working_set NPROCS 2 FAIL_REGEX "${KERGS_MALLOC_DUMP_LEAK}"
            ARGS -options_file cases/confine5.opts -steps 5 -quiet -malloc_debug -malloc_dump -output_none -solver_type newton

@@ -12,6 +12,6 @@ kergs_test(NAME straight_row_tresca SOURCE test_regularised.c NPROCS 1 ARGS -str
 kergs_test(NAME solver_help NPROCS 1 ARGS -help
            EXPECT_OUTPUT "Contact solver type nlkergs options" -solver_nlkergs_max_size "Contact solver type nlgsjac options"
                        "Contact solver type newton options" -solver_newton_rho -solver_newton_redundant_max -solver_newton_ip_max_it
-                       -solver_newton_desaxce_max_it
+                       -solver_newton_desaxce_max_it -solver_newton_cholesky
                        "Contact solver type tresca options" -solver_tresca_tao_type "Contact solver type snesvi options"
                        -solver_snesvi_shift)

@@ -805,6 +805,10 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
       KergsOptionsBool(PetscOptionsObject, "-solver_newton_working_set",
                        "Leave the contacts that the warm start leaves open out of J while they stay open (not with -solver_prox kernel)",
                        "", working_set, &working_set, &working_set_given));
+  PetscCall(KergsOptionsBool(PetscOptionsObject, "-solver_newton_cholesky",
+                             "Without friction, on one rank with the default linear solver: J's rows divided by B make it symmetric "
+                             "positive definite, factored by CHOLMOD's Cholesky instead of LU",
+                             "", nt->cholesky, &nt->cholesky, NULL));
   PetscOptionsHeadEnd();
   nt->working_set = (PetscBool)(working_set && (working_set_given || nt->prox != NEWTON_PROX_KERNEL)); /* the default gives way */
   PetscCheck(nt->alpha > 0 && PetscIsNormalReal(nt->alpha), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-solver_prox_alpha %g must be positive",
@@ -928,7 +932,11 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(
         viewer,
         "Working set: contacts the warm start leaves open are left out of J until an iterate takes them off the law's open piece\n"));
-  if (nt->presort) PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
+  if (nt->presort && !nt->symmetric)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
+  if (nt->cholesky_ok)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "Without friction: J's rows divided by B, symmetric, factored by Cholesky%s\n",
+                                     nt->symmetric ? " (CHOLMOD) in the last step" : ""));
   PetscCall(NewtonSubdomainsFromW(nt, &from_w));
   if (from_w)
     PetscCall(PetscViewerASCIIPrintf(viewer,
@@ -993,6 +1001,7 @@ PetscErrorCode KergsSolverCreate_Newton(KergsSolver s)
   nt->smooth_kappa        = 0.3;
   nt->smoothing           = PETSC_TRUE;
   nt->subdomains_from_w   = PETSC_TRUE;
+  nt->cholesky            = PETSC_TRUE;
   nt->smooth_eps          = 4.0;
   nt->smooth_raises       = 1;
   nt->second_rho          = 0.1;

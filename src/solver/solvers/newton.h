@@ -26,6 +26,12 @@ typedef struct {
   PetscBool presort; /* decided once the linear solver's options are read (NewtonChoosePresorting) */
   Mat       Wsorted; /* W over J's rows in that AMD order: J's template */
   Vec       Fs, ds;  /* -F and d on J's rows, in J's order */
+  /* without friction on one rank with kergs's LU (-solver_newton_cholesky): J's rows divided by B, the open contacts'
+     columns moved to the right-hand side, J symmetric positive definite and factored by CHOLMOD (newton_linear.c) */
+  PetscBool cholesky;    /* the option */
+  PetscBool cholesky_ok; /* allowed by the linear solver's options (NewtonChoosePresorting) */
+  PetscBool symmetric;   /* this step's J is in that form */
+  Vec       zs, ts;      /* work on J's rows: the open contacts' d, and W times it */
   /* -solver_newton_working_set: contacts open at the warm start and not closed by it are left out of J while they
      stay on the law's open piece (newton_working.c) */
   PetscBool  working_set; /* the option */

@@ -93,6 +93,91 @@ PetscErrorCode NewtonScaleRows(Mat Wpart, Mat P, PetscInt nrows, PetscInt nc, co
   PetscFunctionReturn(0);
 }
 
+/* Without friction, on one rank (nt->symmetric): J d = -F with each row of J = A + B (W + sigma I) + eps I divided by
+   its B where B > 0, (A + eps) / B + W_ii + sigma on its diagonal and W_ij elsewhere, except in the columns of the
+   contacts with B = 0 (the open piece, A = 1), whose rows are the identity's: their d = -F / (A + eps) is known and
+   moved to the right-hand side (SymmetricRightHandSide). A and B are nonnegative on every piece of the frictionless law
+   and of its smoothing, W is positive semi-definite and sigma > 0, so J is symmetric positive definite: Cholesky
+   instead of LU, the same d. T is J's template (W over J's rows, in J's order), P is J; both sequential AIJ on one
+   pattern. */
+static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal sigma, PetscReal eps)
+{
+  const PetscInt    *ia, *ja;
+  PetscInt           nrow;
+  PetscBool          done;
+  const PetscScalar *w;
+  PetscScalar       *v;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetRowIJ(P, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &ia, &ja, &done));
+  PetscCheck(done && nrow == nt->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the rows of J");
+  PetscCall(MatSeqAIJGetArrayRead(T, &w));
+  PetscCall(MatSeqAIJGetArray(P, &v));
+  for (PetscInt a = 0; a < nrow; a++) {
+    const PetscInt  k = nt->order ? nt->order[a] : a;
+    const PetscReal A = nt->A[k], B = nt->B[k];
+    PetscCheck(A >= 0 && B >= 0 && A + B > 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: a frictionless row with A %g, B %g", (double)A,
+               (double)B);
+    for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
+      const PetscInt col = nt->order ? nt->order[ja[j]] : ja[j];
+      if (ja[j] == a)
+        v[j] = B > 0 ? w[j] + sigma + (A + eps) / B : 1.0;
+      else
+        v[j] = B > 0 && nt->B[col] > 0 ? w[j] : 0.0;
+    }
+  }
+  PetscCall(MatSeqAIJRestoreArray(P, &v));
+  PetscCall(MatSeqAIJRestoreArrayRead(T, &w));
+  PetscCall(MatRestoreRowIJ(P, 0, PETSC_FALSE, PETSC_FALSE, &nrow, &ia, &ja, &done));
+  PetscFunctionReturn(0);
+}
+
+/* The right-hand side of the symmetric J (SymmetricRows), from -F on J's rows (Fs): divided by B on the rows
+   with B > 0, by A + eps on the others (their d), and W times those d taken off the first. A, B and eps are those of
+   the J last assembled, which every solve of this J uses (the stale factor's GMRES included). */
+static PetscErrorCode SymmetricRightHandSide(Newton *nt)
+{
+  PetscScalar       *b, *z;
+  const PetscScalar *t;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArray(nt->Fs, &b));
+  PetscCall(VecGetArray(nt->zs, &z));
+  for (PetscInt i = 0; i < nt->nrows; i++) {
+    const PetscInt  k = nt->order ? nt->order[i] : i;
+    const PetscReal B = nt->Bused[k];
+    b[i]              = B > 0 ? b[i] / B : b[i] / (nt->Aused[k] + nt->eps_used);
+    z[i]              = B > 0 ? 0.0 : b[i];
+  }
+  PetscCall(VecRestoreArray(nt->zs, &z));
+  PetscCall(MatMult(JacobianTemplate(nt), nt->zs, nt->ts));
+  PetscCall(VecGetArrayRead(nt->ts, &t));
+  for (PetscInt i = 0; i < nt->nrows; i++)
+    if (nt->Bused[nt->order ? nt->order[i] : i] > 0) b[i] -= t[i];
+  PetscCall(VecRestoreArrayRead(nt->ts, &t));
+  PetscCall(VecRestoreArray(nt->Fs, &b));
+  PetscFunctionReturn(0);
+}
+
+/* The factorization of this step's J on one rank with kergs's LU: Cholesky by CHOLMOD when J is symmetric, else PETSc's
+   LU in J's presorted (natural) order. */
+static PetscErrorCode ChooseFactorization(Newton *nt)
+{
+  PC pc;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  if (nt->symmetric) {
+    PetscCall(PCSetType(pc, PCCHOLESKY));
+    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERCHOLMOD));
+  } else {
+    PetscCall(PCSetType(pc, PCLU));
+    PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERPETSC));
+    PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGNATURAL));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Position of each block row's own block in a sequential (B)AIJ matrix whose row a's own block is in column a (J's
    diagonal part, a subdomain's matrix). */
 PetscErrorCode NewtonLocateOwnBlocks(Mat M, PetscInt nc, PetscInt *own)
@@ -144,8 +229,12 @@ PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pet
   nt->stale = PETSC_TRUE;
   PetscCall(GetParts(JacobianTemplate(nt), nc, &Wd, &Wo));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
-  PetscCall(NewtonScaleRows(Wd, Ad, nt->nrows, nc, nt->A, nt->B, nc * nc, nt->order, nt->diagblock, sigma, eps));
-  if (Ao) PetscCall(NewtonScaleRows(Wo, Ao, nt->nrows, nc, nt->A, nt->B, nc * nc, nt->order, NULL, 0.0, 0.0));
+  if (nt->symmetric)
+    PetscCall(SymmetricRows(Wd, Ad, nt, sigma, eps));
+  else {
+    PetscCall(NewtonScaleRows(Wd, Ad, nt->nrows, nc, nt->A, nt->B, nc * nc, nt->order, nt->diagblock, sigma, eps));
+    if (Ao) PetscCall(NewtonScaleRows(Wo, Ao, nt->nrows, nc, nt->A, nt->B, nc * nc, nt->order, NULL, 0.0, 0.0));
+  }
   /* values changed through the arrays: assembling again tells PETSc (and the factorization) that J changed */
   PetscCall(MatAssemblyBegin(nt->J, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(nt->J, MAT_FINAL_ASSEMBLY));
@@ -279,7 +368,8 @@ PetscErrorCode NewtonChoosePresorting(KergsSolver s, Newton *nt)
   PetscBool     preonly, lu, petsc, chosen;
 
   PetscFunctionBeginUser;
-  nt->presort = PETSC_FALSE;
+  nt->presort     = PETSC_FALSE;
+  nt->cholesky_ok = PETSC_FALSE;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
   PetscCall(KSPGetOptionsPrefix(nt->ksp, &prefix));
   PetscCall(PetscOptionsHasName(NULL, prefix, "-pc_factor_mat_ordering_type", &chosen));
@@ -291,7 +381,8 @@ PetscErrorCode NewtonChoosePresorting(KergsSolver s, Newton *nt)
   PetscCall(PetscStrcmp(ktype, KSPPREONLY, &preonly));
   PetscCall(PetscStrcmp(ptype, PCLU, &lu));
   PetscCall(PetscStrcmp(stype, MATSOLVERPETSC, &petsc));
-  nt->presort = (PetscBool)(preonly && lu && petsc);
+  nt->presort     = (PetscBool)(preonly && lu && petsc);
+  nt->cholesky_ok = (PetscBool)(nt->presort && nt->cholesky);
   PetscFunctionReturn(0);
 }
 
@@ -361,7 +452,7 @@ static PetscErrorCode PresortContacts(Newton *nt, PetscInt nc)
   Mat             T = JacobianTemplate(nt); /* W, or W over the working contacts: not yet sorted */
 
   PetscFunctionBeginUser;
-  if (!nt->presort || nt->nrows == 0) PetscFunctionReturn(0);
+  if (!nt->presort || nt->symmetric || nt->nrows == 0) PetscFunctionReturn(0); /* CHOLMOD orders J itself */
   PetscCall(MatGetOrdering(T, MATORDERINGAMD, &rows, &cols));
   PetscCall(ISGetLocalSize(rows, &m));
   PetscCheck(m == nt->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB,
@@ -421,6 +512,8 @@ PetscErrorCode NewtonDestroyJacobian(Newton *nt)
   PetscCall(PetscFree(nt->order));
   PetscCall(VecDestroy(&nt->Fs));
   PetscCall(VecDestroy(&nt->ds));
+  PetscCall(VecDestroy(&nt->zs));
+  PetscCall(VecDestroy(&nt->ts));
   PetscCall(MatDestroy(&nt->Pschwarz));
   PetscCall(VecDestroy(&nt->row_AB));
   PetscCall(MatDestroy(&nt->J));
@@ -435,10 +528,13 @@ PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscI
   Mat Ad, Ao;
 
   PetscFunctionBeginUser;
+  nt->symmetric = (PetscBool)(nt->cholesky_ok && nc == 1);
   PetscCall(SelectRows(s, nt, n, nc));
   PetscCall(PresortContacts(nt, nc));
   PetscCall(MatDuplicate(JacobianTemplate(nt), MAT_COPY_VALUES, &nt->J));
-  if (nt->order) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
+  if (nt->order || nt->symmetric) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
+  if (nt->symmetric) PetscCall(MatCreateVecs(nt->J, &nt->zs, &nt->ts));
+  if (nt->cholesky_ok) PetscCall(ChooseFactorization(nt));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
   PetscCall(NewtonLocateOwnBlocks(Ad, nc, nt->diagblock));
   nt->sigma_used = -1.0;
@@ -480,7 +576,7 @@ PetscErrorCode NewtonSolveSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason
   PetscInt its;
 
   PetscFunctionBeginUser;
-  if (nt->order) { /* J's rows are order[]'s contacts (W's AMD order, the working set): -F into them, d back */
+  if (nt->order || nt->symmetric) { /* J's rows are order[]'s contacts (W's AMD order, the working set): -F into them, d back */
     PetscInt           n, nc, local;
     const PetscScalar *f, *xs;
     PetscScalar       *bs, *x;
@@ -495,14 +591,15 @@ PetscErrorCode NewtonSolveSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason
     PetscCall(VecGetArrayRead(nt->F, &f));
     PetscCall(VecGetArray(nt->Fs, &bs));
     for (PetscInt i = 0; i < n; i++)
-      for (PetscInt c = 0; c < nc; c++) bs[i * nc + c] = -f[nt->order[i] * nc + c];
+      for (PetscInt c = 0; c < nc; c++) bs[i * nc + c] = -f[(nt->order ? nt->order[i] : i) * nc + c];
     PetscCall(VecRestoreArray(nt->Fs, &bs));
     PetscCall(VecRestoreArrayRead(nt->F, &f));
+    if (nt->symmetric) PetscCall(SymmetricRightHandSide(nt));
     PetscCall(KSPSolve(ksp, nt->Fs, nt->ds));
     PetscCall(VecGetArrayRead(nt->ds, &xs));
     PetscCall(VecGetArray(nt->d, &x));
     for (PetscInt i = 0; i < n; i++)
-      for (PetscInt c = 0; c < nc; c++) x[nt->order[i] * nc + c] = xs[i * nc + c];
+      for (PetscInt c = 0; c < nc; c++) x[(nt->order ? nt->order[i] : i) * nc + c] = xs[i * nc + c];
     PetscCall(VecRestoreArray(nt->d, &x));
     PetscCall(VecRestoreArrayRead(nt->ds, &xs));
   } else {
