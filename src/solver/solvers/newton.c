@@ -8,7 +8,8 @@
    piecewise linear, and an element of its generalized Jacobian is J = A + B W with A, B block diagonal (one ncomp x
    ncomp block per contact). W over the active contacts is stored whole (both triangles) and J is built on its pattern;
    J d = -F is solved through a KSP (prefix solver_; its set-up and solves are in newton_linear.c): a direct LU by default
-   (PETSc's; on several ranks see ChooseLinearSolver there),
+   (PETSc's; without friction on one rank CHOLMOD's Cholesky of J's rows divided by B; on several ranks see
+   ChooseLinearSolver there),
    any Krylov method and preconditioner by options.
 
    W is singular in a confined packing (its kernel: the self-equilibrated force networks), and so is J where stick
@@ -806,8 +807,9 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
                        "Leave the contacts that the warm start leaves open out of J while they stay open (not with -solver_prox kernel)",
                        "", working_set, &working_set, &working_set_given));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-solver_newton_cholesky",
-                             "Without friction, on one rank with the default linear solver: J's rows divided by B make it symmetric "
-                             "positive definite, factored by CHOLMOD's Cholesky instead of LU",
+                             "Without friction, on one rank with the default linear solver (not with -solver_prox kernel, nor "
+                             "-solver_newton_shift 0): J's rows divided by B make it symmetric positive definite, factored by CHOLMOD's "
+                             "Cholesky instead of LU",
                              "", nt->cholesky, &nt->cholesky, NULL));
   PetscOptionsHeadEnd();
   nt->working_set = (PetscBool)(working_set && (working_set_given || nt->prox != NEWTON_PROX_KERNEL)); /* the default gives way */
@@ -932,8 +934,9 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(
         viewer,
         "Working set: contacts the warm start leaves open are left out of J until an iterate takes them off the law's open piece\n"));
-  if (nt->presort && !nt->symmetric)
-    PetscCall(PetscViewerASCIIPrintf(viewer, "J stored in W's AMD order at every step, and factored in that order\n"));
+  if (nt->presort)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "%sJ stored in W's AMD order at every step, and factored in that order\n",
+                                     nt->cholesky_ok ? "With friction: " : ""));
   if (nt->cholesky_ok)
     PetscCall(PetscViewerASCIIPrintf(viewer, "Without friction: J's rows divided by B, symmetric, factored by Cholesky%s\n",
                                      nt->symmetric ? " (CHOLMOD) in the last step" : ""));

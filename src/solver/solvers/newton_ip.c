@@ -597,8 +597,9 @@ PetscErrorCode NewtonInteriorPointStart(KergsSolver s, Newton *nt, PetscInt n, P
   PetscCall(PetscTime(&t0));
   SaveLinearFigures(nt, &counted);
   PetscCall(VecCopy(r, nt->rbest));
-  /* Without friction the start's Cholesky orders J itself: the AMD presorting of newton's own LU (one rank) would be
-     computed for nothing at every set-up of J, 12 of them on the 100,000-disk frictionless rest step (3.3 of 45 s) */
+  /* Without friction the start's Cholesky orders J itself: the AMD presorting of newton's own LU (one rank, with
+     -solver_newton_cholesky 0: else J is not presorted anyway) would be computed for nothing at every set-up of J, 12
+     of them on the 100,000-disk frictionless rest step (3.3 of 45 s) */
   if (nc == 1) nt->presort = PETSC_FALSE;
   if (nt->working_set) {
     PetscCall(NewtonWorkingSetBegin(s, nt, n, nc, r, u));

@@ -1,6 +1,7 @@
 /* The linear algebra of solver type "newton" (newton.c): the Jacobian J = A + B (W + sigma I) + eps I of the
    Alart-Curnier function, built on W's pattern (A, B block diagonal, one ncomp x ncomp block per contact), and the
-   solves of J d = -F. One rank: PETSc's LU, J stored in W's AMD order (PresortContacts); several ranks: J gathered
+   solves of J d = -F. One rank: PETSc's LU, J stored in W's AMD order (PresortContacts), or without friction CHOLMOD's
+   Cholesky of J's rows divided by B (SymmetricRows); several ranks: J gathered
    whole up to -solver_newton_redundant_max rows, else GMRES with additive Schwarz (ChooseLinearSolver); a stale
    factorization reused by GMRES while few contacts changed piece (ReuseDirection). docs/solver.md, "Linear algebra". */
 #include "newton.h"
@@ -97,7 +98,7 @@ PetscErrorCode NewtonScaleRows(Mat Wpart, Mat P, PetscInt nrows, PetscInt nc, co
    its B where B > 0, (A + eps) / B + W_ii + sigma on its diagonal and W_ij elsewhere, except in the columns of the
    contacts with B = 0 (the open piece, A = 1), whose rows are the identity's: their d = -F / (A + eps) is known and
    moved to the right-hand side (SymmetricRightHandSide). A and B are nonnegative on every piece of the frictionless law
-   and of its smoothing, W is positive semi-definite and sigma > 0, so J is symmetric positive definite: Cholesky
+   and of its smoothing, W is positive semi-definite and s > 0 (NewtonChoosePresorting), so J is symmetric positive definite: Cholesky
    instead of LU, the same d. T is J's template (W over J's rows, in J's order), P is J; both sequential AIJ on one
    pattern. */
 static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal sigma, PetscReal eps)
@@ -116,8 +117,9 @@ static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal si
   for (PetscInt a = 0; a < nrow; a++) {
     const PetscInt  k = nt->order ? nt->order[a] : a;
     const PetscReal A = nt->A[k], B = nt->B[k];
-    PetscCheck(A >= 0 && B >= 0 && A + B > 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: a frictionless row with A %g, B %g", (double)A,
-               (double)B);
+    PetscCheck(!(A < 0 || B < 0 || A + B == 0), PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: a frictionless row with A %g, B %g", (double)A,
+               (double)B); /* NaN goes on to a failed solve, as with the LU */
+
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
       const PetscInt col = nt->order ? nt->order[ja[j]] : ja[j];
       if (ja[j] == a)
@@ -175,6 +177,7 @@ static PetscErrorCode ChooseFactorization(Newton *nt)
     PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERPETSC));
     PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGNATURAL));
   }
+  PetscCall(PCSetFromOptions(pc)); /* -solver_pc_factor_* options, for the new factorization */
   PetscFunctionReturn(0);
 }
 
@@ -365,7 +368,7 @@ PetscErrorCode NewtonChoosePresorting(KergsSolver s, Newton *nt)
   PCType        ptype;
   MatSolverType stype;
   const char   *prefix;
-  PetscBool     preonly, lu, petsc, chosen;
+  PetscBool     preonly, lu, petsc, chosen, package;
 
   PetscFunctionBeginUser;
   nt->presort     = PETSC_FALSE;
@@ -381,8 +384,11 @@ PetscErrorCode NewtonChoosePresorting(KergsSolver s, Newton *nt)
   PetscCall(PetscStrcmp(ktype, KSPPREONLY, &preonly));
   PetscCall(PetscStrcmp(ptype, PCLU, &lu));
   PetscCall(PetscStrcmp(stype, MATSOLVERPETSC, &petsc));
-  nt->presort     = (PetscBool)(preonly && lu && petsc);
-  nt->cholesky_ok = (PetscBool)(nt->presort && nt->cholesky);
+  PetscCall(PetscOptionsHasName(NULL, prefix, "-pc_factor_mat_solver_type", &package));
+  nt->presort = (PetscBool)(preonly && lu && petsc);
+  /* J is positive definite through the shift s > 0 (sigma may be 0: -solver_prox none, or the smoothing phase with
+     -solver_newton_smoothing_kappa 0), and CHOLMOD stops with an error, not a reason, on a matrix that is not */
+  nt->cholesky_ok = (PetscBool)(nt->presort && nt->cholesky && !package && nt->shift > 0);
   PetscFunctionReturn(0);
 }
 
@@ -615,11 +621,11 @@ PetscErrorCode NewtonSolveSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason
 
 /* J d = -F with the factorization of an earlier J of this step. With sigma unchanged, J changes between Newton steps
    only in the rows of the contacts that changed piece: a low-rank change, which GMRES absorbs in about one iteration
-   per changed row, each costing one triangular solve where a factorization costs far more. When ksp solves directly
-   (KSPPREONLY: LU, or LU gathered by PCREDUNDANT), by at most -solver_newton_reuse_its GMRES iterations preconditioned
-   by that factorization (kreuse); when ksp is kergs's GMRES with additive Schwarz (several ranks), by ksp with its
-   preconditioner kept, to ksp's own tolerance (a Krylov method chosen by option sets up every changed J). Tried only
-   when few contacts changed. *solved is false when it did not converge: then J is factored again. */
+   per changed row (two in J's symmetric form: a row and its column), each costing one triangular solve where a
+   factorization costs far more. When ksp solves directly (KSPPREONLY: LU or Cholesky, or LU gathered by PCREDUNDANT), by at most
+   -solver_newton_reuse_its GMRES iterations preconditioned by that factorization (kreuse); when ksp is kergs's GMRES with additive Schwarz
+   (several ranks), by ksp with its preconditioner kept, to ksp's own tolerance (a Krylov method chosen by option sets up every changed J).
+   Tried only when few contacts changed. *solved is false when it did not converge: then J is factored again. */
 static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBool *solved)
 {
   KSPConvergedReason reason;
@@ -634,7 +640,7 @@ static PetscErrorCode ReuseDirection(Newton *nt, PetscInt n, PetscInt nc, PetscB
   /* GMRES needs about one iteration per changed block row: try only when few changed */
   changed = ChangedBlocks(nt, n, nc, nt->Afact, nt->Bfact);
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &changed, 1, MPIU_INT, MPI_SUM, PetscObjectComm((PetscObject)nt->ksp)));
-  if (2 * changed > nt->reuse_its) PetscFunctionReturn(0);
+  if ((nt->symmetric ? 4 : 2) * changed > nt->reuse_its) PetscFunctionReturn(0); /* symmetric: a row and its column */
   PetscCall(PetscObjectTypeCompare((PetscObject)nt->ksp, KSPPREONLY, &direct));
   if (direct)
     PetscCall(NewtonSolveSystem(nt, nt->kreuse, &reason));
@@ -778,9 +784,9 @@ static PetscErrorCode CreateFactorPreconditionedGMRES(KergsSolver s, Newton *nt,
 }
 
 /* One rank: a direct LU, PETSc's own with an AMD ordering (the fastest measured on the Jacobians of confine500 and
-   biaxial 20k). Several ranks: chosen each step by ChooseLinearSolver. -solver_ksp_type, -solver_pc_type,
-   -solver_pc_factor_mat_solver_type mumps (then with its null-pivot detection, EnableNullPivots) and the like choose
-   otherwise. */
+   biaxial 20k), or Cholesky without friction (ChooseFactorization, at each step's set-up). Several ranks: chosen each step by
+   ChooseLinearSolver. -solver_ksp_type, -solver_pc_type, -solver_pc_factor_mat_solver_type mumps (then with its null-pivot detection,
+   EnableNullPivots) and the like choose otherwise. */
 PetscErrorCode NewtonCreateLinearSolver(KergsSolver s, Newton *nt)
 {
   PC          pc;
