@@ -96,7 +96,7 @@ PetscErrorCode NewtonScaleRows(Mat Wpart, Mat P, PetscInt nrows, PetscInt nc, co
 
 /* Without friction, on one rank (nt->symmetric): J d = -F with each row of J = A + B (W + sigma I) + eps I divided by
    its B where B > 0, (A + eps) / B + W_ii + sigma on its diagonal and W_ij elsewhere, except in the columns of the
-   contacts with B = 0 (the open piece, A = 1), whose rows are the identity's: their d = -F / (A + eps) is known and
+   contacts with B = 0 (the open piece, A = 1), whose rows are W_ii times the identity's: their d = -F / (A + eps) is known and
    moved to the right-hand side (SymmetricRightHandSide). A and B are nonnegative on every piece of the frictionless law
    and of its smoothing, W is positive semi-definite and s > 0 (NewtonChoosePresorting), so J is symmetric positive definite: Cholesky
    instead of LU, the same d. T is J's template (W over J's rows, in J's order), P is J; both sequential AIJ on one
@@ -123,7 +123,7 @@ static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal si
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
       const PetscInt col = nt->order ? nt->order[ja[j]] : ja[j];
       if (ja[j] == a)
-        v[j] = B > 0 ? w[j] + sigma + (A + eps) / B : 1.0;
+        v[j] = B > 0 ? w[j] + sigma + (A + eps) / B : 1.0 / nt->rho_nat[k]; /* W_ii: every row in one unit */
       else
         v[j] = B > 0 && nt->B[col] > 0 ? w[j] : 0.0;
     }
@@ -135,12 +135,14 @@ static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal si
 }
 
 /* The right-hand side of the symmetric J (SymmetricRows), from -F on J's rows (Fs): divided by B on the rows
-   with B > 0, by A + eps on the others (their d), and W times those d taken off the first. A, B and eps are those of
+   with B > 0, by A + eps on the others (their d, times W_ii: those rows' diagonal, so that every row is in velocity
+   units and GMRES's relative tolerance weighs them alike), and W times those d taken off the first. A, B and eps are those of
    the J last assembled, which every solve of this J uses (the stale factor's GMRES included). */
 static PetscErrorCode SymmetricRightHandSide(Newton *nt)
 {
   PetscScalar       *b, *z;
   const PetscScalar *t;
+  PetscInt           moved = 0;
 
   PetscFunctionBeginUser;
   PetscCall(VecGetArray(nt->Fs, &b));
@@ -148,10 +150,15 @@ static PetscErrorCode SymmetricRightHandSide(Newton *nt)
   for (PetscInt i = 0; i < nt->nrows; i++) {
     const PetscInt  k = nt->order ? nt->order[i] : i;
     const PetscReal B = nt->Bused[k];
-    b[i]              = B > 0 ? b[i] / B : b[i] / (nt->Aused[k] + nt->eps_used);
-    z[i]              = B > 0 ? 0.0 : b[i];
+    z[i]              = B > 0 ? 0.0 : b[i] / (nt->Aused[k] + nt->eps_used);
+    b[i]              = B > 0 ? b[i] / B : z[i] / nt->rho_nat[k]; /* the row's diagonal W_ii times its d */
+    if (z[i] != 0.0) moved++;
   }
   PetscCall(VecRestoreArray(nt->zs, &z));
+  if (!moved) { /* the usual case once the open contacts carry no impulse */
+    PetscCall(VecRestoreArray(nt->Fs, &b));
+    PetscFunctionReturn(0);
+  }
   PetscCall(MatMult(JacobianTemplate(nt), nt->zs, nt->ts));
   PetscCall(VecGetArrayRead(nt->ts, &t));
   for (PetscInt i = 0; i < nt->nrows; i++)
