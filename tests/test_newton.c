@@ -658,9 +658,9 @@ static PetscErrorCode TestPresorted(PetscBool frictionless, PetscReal vtol, cons
    newton_linear.c); -solver_newton_cholesky 0 keeps PETSc's LU of J = A + B W. The frictionless packing at rest (300
    disks) from zero impulses to 1e-8, newton alone: the view says which ran, and both take the same Newton steps to
    the same contact velocities (unique without friction). Measured: 18 Newton steps both with the smoothing phase, 19
-   without (`extra` -solver_newton_smoothing 0), velocities within 2e-15 of their size. Without smoothing the Newton
-   steps meet rows of contacts on the open piece that still carry an impulse, whose known d the symmetric form moves
-   to the right-hand side: with that move left out, 26 Newton steps instead of 19. */
+   without (`extra` -solver_newton_smoothing 0) and 19 without the working set, velocities within 2e-15 of their size. Without smoothing the
+   Newton steps meet rows of contacts on the open piece that still carry an impulse, whose known d the symmetric form moves to the
+   right-hand side: with that move left out, 26 Newton steps instead of 19. */
 static PetscErrorCode TestCholesky(const char *extra)
 {
   KergsStepper st[2];
@@ -911,6 +911,7 @@ int main(int argc, char **argv)
     PetscCall(TestPresorted(PETSC_FALSE, 1e-6, "confine500 with friction"));
     PetscCall(TestCholesky(""));
     PetscCall(TestCholesky("-solver_newton_smoothing 0"));
+    PetscCall(TestCholesky("-solver_newton_working_set 0")); /* every contact a row of J, in the contacts' order */
     PetscCall(TestLineSearch());
     PetscCall(TestProxKernel());
   } else {
