@@ -130,6 +130,9 @@ PETSC_INTERN PetscErrorCode NewtonDestroyJacobian(Newton *);
 /* newton_working.c */
 PETSC_INTERN PetscErrorCode NewtonWorkingSetBegin(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u);
 PETSC_INTERN PetscErrorCode NewtonWorkingSetGrow(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscBool *grown);
+/* The local contact of J's block row i (order[i], or i when J's rows are the contacts in their own order). */
+static inline PetscInt NewtonRowContact(const Newton *nt, PetscInt i) { return nt->order ? nt->order[i] : i; }
+
 /* Contact a's impulse ra and natural map e (KergsLawNaturalMap) from the arrays of r and u = W r + v^d. */
 static inline void NewtonContactNaturalMap(KergsSolver s, const Newton *nt, PetscInt nc, PetscInt a, const PetscScalar rl[],
                                            const PetscScalar ul[], PetscReal ra[], PetscReal e[])

@@ -115,13 +115,13 @@ static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal si
   PetscCall(MatSeqAIJGetArrayRead(T, &w));
   PetscCall(MatSeqAIJGetArray(P, &v));
   for (PetscInt a = 0; a < nrow; a++) {
-    const PetscInt  k = nt->order ? nt->order[a] : a;
+    const PetscInt  k = NewtonRowContact(nt, a);
     const PetscReal A = nt->A[k], B = nt->B[k];
     PetscCheck(!(A < 0 || B < 0 || A + B == 0), PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: a frictionless row with A %g, B %g", (double)A,
                (double)B); /* NaN goes on to a failed solve, as with the LU */
 
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
-      const PetscInt col = nt->order ? nt->order[ja[j]] : ja[j];
+      const PetscInt col = NewtonRowContact(nt, ja[j]);
       if (ja[j] == a)
         v[j] = B > 0 ? w[j] + sigma + (A + eps) / B : 1.0 / nt->rho_nat[k]; /* W_ii: every row in one unit */
       else
@@ -148,7 +148,7 @@ static PetscErrorCode SymmetricRightHandSide(Newton *nt)
   PetscCall(VecGetArray(nt->Fs, &b));
   PetscCall(VecGetArray(nt->zs, &z));
   for (PetscInt i = 0; i < nt->nrows; i++) {
-    const PetscInt  k = nt->order ? nt->order[i] : i;
+    const PetscInt  k = NewtonRowContact(nt, i);
     const PetscReal B = nt->Bused[k];
     z[i]              = B > 0 ? 0.0 : b[i] / (nt->Aused[k] + nt->eps_used);
     b[i]              = B > 0 ? b[i] / B : z[i] / nt->rho_nat[k]; /* the row's diagonal W_ii times its d */
@@ -162,7 +162,7 @@ static PetscErrorCode SymmetricRightHandSide(Newton *nt)
   PetscCall(MatMult(JacobianTemplate(nt), nt->zs, nt->ts));
   PetscCall(VecGetArrayRead(nt->ts, &t));
   for (PetscInt i = 0; i < nt->nrows; i++)
-    if (nt->Bused[nt->order ? nt->order[i] : i] > 0) b[i] -= t[i];
+    if (nt->Bused[NewtonRowContact(nt, i)] > 0) b[i] -= t[i];
   PetscCall(VecRestoreArrayRead(nt->ts, &t));
   PetscCall(VecRestoreArray(nt->Fs, &b));
   PetscFunctionReturn(0);
@@ -472,7 +472,7 @@ static PetscErrorCode PresortContacts(Newton *nt, PetscInt nc)
              "newton: the ordering of J's template has %" PetscInt_FMT " entries for %" PetscInt_FMT " rows of J", m, nt->nrows);
   PetscCall(PetscMalloc1(m, &order));
   PetscCall(ISGetIndices(rows, &idx));
-  for (PetscInt i = 0; i < m; i++) order[i] = nt->order ? nt->order[idx[i]] : idx[i];
+  for (PetscInt i = 0; i < m; i++) order[i] = NewtonRowContact(nt, idx[i]);
   PetscCall(ISCreateBlock(PETSC_COMM_SELF, nc, m, idx, PETSC_COPY_VALUES, &points));
   PetscCall(ISRestoreIndices(rows, &idx));
   PetscCall(PetscFree(nt->order));
@@ -604,7 +604,7 @@ PetscErrorCode NewtonSolveSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason
     PetscCall(VecGetArrayRead(nt->F, &f));
     PetscCall(VecGetArray(nt->Fs, &bs));
     for (PetscInt i = 0; i < n; i++)
-      for (PetscInt c = 0; c < nc; c++) bs[i * nc + c] = -f[(nt->order ? nt->order[i] : i) * nc + c];
+      for (PetscInt c = 0; c < nc; c++) bs[i * nc + c] = -f[NewtonRowContact(nt, i) * nc + c];
     PetscCall(VecRestoreArray(nt->Fs, &bs));
     PetscCall(VecRestoreArrayRead(nt->F, &f));
     if (nt->symmetric) PetscCall(SymmetricRightHandSide(nt));
@@ -612,7 +612,7 @@ PetscErrorCode NewtonSolveSystem(Newton *nt, KSP ksp, KSPConvergedReason *reason
     PetscCall(VecGetArrayRead(nt->ds, &xs));
     PetscCall(VecGetArray(nt->d, &x));
     for (PetscInt i = 0; i < n; i++)
-      for (PetscInt c = 0; c < nc; c++) x[(nt->order ? nt->order[i] : i) * nc + c] = xs[i * nc + c];
+      for (PetscInt c = 0; c < nc; c++) x[NewtonRowContact(nt, i) * nc + c] = xs[i * nc + c];
     PetscCall(VecRestoreArray(nt->d, &x));
     PetscCall(VecRestoreArrayRead(nt->ds, &xs));
   } else {

@@ -436,7 +436,7 @@ PetscErrorCode NewtonSubdomainSetBlocks(Newton *nt, PetscInt nc)
   if (!nt->Pschwarz) PetscFunctionReturn(0);
   PetscCall(VecGetArray(nt->row_AB, &ab));
   for (PetscInt a = 0; a < nt->nrows; a++) {
-    const PetscInt contact = nt->order ? nt->order[a] : a;
+    const PetscInt contact = NewtonRowContact(nt, a);
     for (PetscInt k = 0; k < nc * nc; k++) {
       ab[a * 2 * nc * nc + k]           = nt->Aused[contact * nc * nc + k];
       ab[a * 2 * nc * nc + nc * nc + k] = nt->Bused[contact * nc * nc + k];
