@@ -169,13 +169,17 @@ static PetscErrorCode SymmetricRightHandSide(Newton *nt)
 }
 
 /* The factorization of this step's J on one rank with kergs's LU: Cholesky by CHOLMOD when J is symmetric, else PETSc's
-   LU in J's presorted (natural) order. */
+   LU in J's presorted (natural) order. Switched only when J's form changed (friction is the scene's, so at most once
+   a run): KSPReset keeps the preconditioner's type and package. */
 static PetscErrorCode ChooseFactorization(Newton *nt)
 {
-  PC pc;
+  PC        pc;
+  PetscBool current;
 
   PetscFunctionBeginUser;
   PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc, nt->symmetric ? PCCHOLESKY : PCLU, &current));
+  if (current) PetscFunctionReturn(0);
   if (nt->symmetric) {
     PetscCall(PCSetType(pc, PCCHOLESKY));
     PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERCHOLMOD));
