@@ -883,13 +883,35 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCall(NewtonChoosePresorting(s, nt));
   PetscCall(NewtonChooseSortedSubdomains(nt));
   if (nt->presort) { /* J arrives in W's AMD order (PresortContacts, newton_linear.c) */
-    PC pc;
+    PC        pc;
+    PetscBool lu;
     PetscCall(KSPGetPC(nt->ksp, &pc));
-    PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGNATURAL));
+    PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCLU, &lu));
+    /* LU only: kergs's Cholesky of a frictionless step (the options read again) orders J itself, and
+       ChooseFactorization sets this order when it goes back to LU */
+    if (lu) PetscCall(PCFactorSetMatOrderingType(pc, MATORDERINGNATURAL));
   }
   PetscCall(KSPSetTolerances(nt->kreuse, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, nt->reuse_its));
   PetscCall(KSPGMRESSetRestart(nt->kreuse, PetscMax(nt->reuse_its, 1)));
   PetscCall(KSPSetFromOptions(nt->kreuse));
+  PetscFunctionReturn(0);
+}
+
+/* Without friction: the symmetric form, and the factorization that PETSc's preconditioner last held (its type and
+   package, read from the PC: what ran, not what was meant to). */
+static PetscErrorCode ViewSymmetricForm(Newton *nt, PetscViewer viewer)
+{
+  PC            pc;
+  PCType        ptype;
+  MatSolverType stype = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Without friction: J's rows divided by B, symmetric, factored by Cholesky\n"));
+  if (!nt->symmetric) PetscFunctionReturn(0);
+  PetscCall(KSPGetPC(nt->ksp, &pc));
+  PetscCall(PCGetType(pc, &ptype));
+  PetscCall(PCFactorGetMatSolverType(pc, &stype));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "  in the last step: PC %s, package %s\n", ptype, stype ? stype : "none"));
   PetscFunctionReturn(0);
 }
 
@@ -937,9 +959,7 @@ static PetscErrorCode SolverView_Newton(KergsSolver s, PetscViewer viewer)
   if (nt->presort)
     PetscCall(PetscViewerASCIIPrintf(viewer, "%sJ stored in W's AMD order at every step, and factored in that order\n",
                                      nt->cholesky_ok ? "With friction: " : ""));
-  if (nt->cholesky_ok)
-    PetscCall(PetscViewerASCIIPrintf(viewer, "Without friction: J's rows divided by B, symmetric, factored by Cholesky%s\n",
-                                     nt->symmetric ? " (CHOLMOD) in the last step" : ""));
+  if (nt->cholesky_ok) PetscCall(ViewSymmetricForm(nt, viewer));
   PetscCall(NewtonSubdomainsFromW(nt, &from_w));
   if (from_w)
     PetscCall(PetscViewerASCIIPrintf(viewer,

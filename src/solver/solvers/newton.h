@@ -31,6 +31,7 @@ typedef struct {
   PetscBool cholesky;    /* the option */
   PetscBool cholesky_ok; /* allowed by the linear solver's options (NewtonChoosePresorting) */
   PetscBool symmetric;   /* this step's J is in that form */
+  PetscBool finite;      /* the J last assembled in that form is finite: else its solve fails without CHOLMOD */
   Vec       zs, ts;      /* work on J's rows: the open contacts' d, and W times it */
   /* -solver_newton_working_set: contacts open at the warm start and not closed by it are left out of J while they
      stay on the law's open piece (newton_working.c) */
@@ -127,11 +128,11 @@ PETSC_INTERN PetscErrorCode NewtonAssembleJacobian(KergsSolver, Newton *, PetscI
 PETSC_INTERN PetscErrorCode NewtonSolveDirection(Newton *, PetscInt n, PetscInt nc, PetscBool *solved);
 PETSC_INTERN PetscErrorCode NewtonSolveSystem(Newton *, KSP, KSPConvergedReason *);
 PETSC_INTERN PetscErrorCode NewtonDestroyJacobian(Newton *);
+/* The local contact of J's block row i (order[i], or i when J's rows are the contacts in their own order). */
+static inline PetscInt NewtonRowContact(const Newton *nt, PetscInt i) { return nt->order ? nt->order[i] : i; }
 /* newton_working.c */
 PETSC_INTERN PetscErrorCode NewtonWorkingSetBegin(KergsSolver, Newton *, PetscInt n, PetscInt nc, Vec r, Vec u);
 PETSC_INTERN PetscErrorCode NewtonWorkingSetGrow(KergsSolver, Newton *, PetscInt n, PetscInt nc, PetscBool *grown);
-/* The local contact of J's block row i (order[i], or i when J's rows are the contacts in their own order). */
-static inline PetscInt NewtonRowContact(const Newton *nt, PetscInt i) { return nt->order ? nt->order[i] : i; }
 
 /* Contact a's impulse ra and natural map e (KergsLawNaturalMap) from the arrays of r and u = W r + v^d. */
 static inline void NewtonContactNaturalMap(KergsSolver s, const Newton *nt, PetscInt nc, PetscInt a, const PetscScalar rl[],

@@ -130,8 +130,9 @@ static PetscErrorCode Residuals(KergsSolver s, Newton *nt, InteriorPoint *ip, Ve
    symmetric positive definite over the problem's contacts (CreateDirectSolver factors it by Cholesky; the right-hand
    side is divided alike, in Direction). J's other rows are those of inactive contacts, which newton's W does not
    couple (W over the active pairs: StoredBlock, delassus.c, by the rule that sets s->active), so they are rows and
-   columns of the identity and J stays symmetric. Newton's shift, 1e-8, is then added to a diagonal of order W_nn, not 1.
-   Contacts outside the problem keep r = 0: A = I, B = 0. False on a rank where some K is singular. */
+   columns of the identity (W_ii times it in newton's symmetric form, SymmetricRows) and J stays symmetric. Newton's shift, 1e-8, is then
+   added to a diagonal of order W_nn, not 1. Contacts outside the problem keep r = 0: A = I, B = 0. False on a rank where some K is
+   singular. */
 static PetscBool SetBlocks(KergsSolver s, Newton *nt, InteriorPoint *ip)
 {
   const PetscInt nc = ip->nc, nx = ip->nx;

@@ -98,10 +98,12 @@ PetscErrorCode NewtonScaleRows(Mat Wpart, Mat P, PetscInt nrows, PetscInt nc, co
    its B where B > 0, (A + eps) / B + W_ii + sigma on its diagonal and W_ij elsewhere, except in the columns of the
    contacts with B = 0 (the open piece, A = 1), whose rows are W_ii times the identity's: their d = -F / (A + eps) is known and
    moved to the right-hand side (SymmetricRightHandSide). A and B are nonnegative on every piece of the frictionless law
-   and of its smoothing, W is positive semi-definite and s > 0 (NewtonChoosePresorting), so J is symmetric positive definite: Cholesky
+   and of its smoothing, W is positive semi-definite and eps > 0 (NewtonChoosePresorting), so J is symmetric positive definite: Cholesky
    instead of LU, the same d. T is J's template (W over J's rows, in J's order), P is J; both sequential AIJ on one
-   pattern. */
-static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal sigma, PetscReal eps)
+   pattern. A and B are those being assembled (Aused, Bused), which SymmetricRightHandSide reads too. *finite is false
+   when a value is not: CHOLMOD stops with an error on such a J, where a failed solve should lead to a larger proximal
+   term (NewtonSolveDirection). */
+static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal sigma, PetscReal eps, PetscBool *finite)
 {
   const PetscInt    *ia, *ja;
   PetscInt           nrow;
@@ -114,18 +116,20 @@ static PetscErrorCode SymmetricRows(Mat T, Mat P, const Newton *nt, PetscReal si
   PetscCheck(done && nrow == nt->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: cannot read the rows of J");
   PetscCall(MatSeqAIJGetArrayRead(T, &w));
   PetscCall(MatSeqAIJGetArray(P, &v));
+  *finite = PETSC_TRUE;
   for (PetscInt a = 0; a < nrow; a++) {
     const PetscInt  k = NewtonRowContact(nt, a);
-    const PetscReal A = nt->A[k], B = nt->B[k];
+    const PetscReal A = nt->Aused[k], B = nt->Bused[k];
     PetscCheck(!(A < 0 || B < 0 || A + B == 0), PETSC_COMM_SELF, PETSC_ERR_PLIB, "newton: a frictionless row with A %g, B %g", (double)A,
-               (double)B); /* NaN goes on to a failed solve, as with the LU */
+               (double)B);
 
     for (PetscInt j = ia[a]; j < ia[a + 1]; j++) {
       const PetscInt col = NewtonRowContact(nt, ja[j]);
-      if (ja[j] == a)
+      if (ja[j] == a) {
         v[j] = B > 0 ? w[j] + sigma + (A + eps) / B : 1.0 / nt->rho_nat[k]; /* W_ii: every row in one unit */
-      else
-        v[j] = B > 0 && nt->B[col] > 0 ? w[j] : 0.0;
+        if (PetscIsInfOrNanReal(PetscRealPart(v[j]))) *finite = PETSC_FALSE;
+      } else
+        v[j] = B > 0 && nt->Bused[col] > 0 ? w[j] : 0.0;
     }
   }
   PetscCall(MatSeqAIJRestoreArray(P, &v));
@@ -244,7 +248,7 @@ PetscErrorCode NewtonAssembleJacobian(KergsSolver s, Newton *nt, PetscInt n, Pet
   PetscCall(GetParts(JacobianTemplate(nt), nc, &Wd, &Wo));
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
   if (nt->symmetric)
-    PetscCall(SymmetricRows(Wd, Ad, nt, sigma, eps));
+    PetscCall(SymmetricRows(Wd, Ad, nt, sigma, eps, &nt->finite));
   else {
     PetscCall(NewtonScaleRows(Wd, Ad, nt->nrows, nc, nt->A, nt->B, nc * nc, nt->order, nt->diagblock, sigma, eps));
     if (Ao) PetscCall(NewtonScaleRows(Wo, Ao, nt->nrows, nc, nt->A, nt->B, nc * nc, nt->order, NULL, 0.0, 0.0));
@@ -396,6 +400,12 @@ PetscErrorCode NewtonChoosePresorting(KergsSolver s, Newton *nt)
   PetscCall(PetscStrcmp(ptype, PCLU, &lu));
   PetscCall(PetscStrcmp(stype, MATSOLVERPETSC, &petsc));
   PetscCall(PetscOptionsHasName(NULL, prefix, "-pc_factor_mat_solver_type", &package));
+  if (!package && !lu) { /* kergs's own Cholesky of the last step's symmetric J (ChooseFactorization), options read again */
+    PetscBool cholesky, cholmod;
+    PetscCall(PetscStrcmp(ptype, PCCHOLESKY, &cholesky));
+    PetscCall(PetscStrcmp(stype, MATSOLVERCHOLMOD, &cholmod));
+    lu = petsc = (PetscBool)(cholesky && cholmod);
+  }
   nt->presort = (PetscBool)(preonly && lu && petsc);
   /* J is positive definite through the shift s > 0 (sigma may be 0: -solver_prox none, or the smoothing phase with
      -solver_newton_smoothing_kappa 0), and CHOLMOD stops with an error, not a reason, on a matrix that is not */
@@ -546,12 +556,13 @@ PetscErrorCode NewtonSetUpJacobian(KergsSolver s, Newton *nt, PetscInt n, PetscI
 
   PetscFunctionBeginUser;
   nt->symmetric = (PetscBool)(nt->cholesky_ok && nc == 1);
+  nt->finite    = PETSC_TRUE;
   PetscCall(SelectRows(s, nt, n, nc));
   PetscCall(PresortContacts(nt, nc));
   PetscCall(MatDuplicate(JacobianTemplate(nt), MAT_COPY_VALUES, &nt->J));
   if (nt->order || nt->symmetric) PetscCall(MatCreateVecs(nt->J, &nt->ds, &nt->Fs));
   if (nt->symmetric) PetscCall(MatCreateVecs(nt->J, &nt->zs, &nt->ts));
-  if (nt->cholesky_ok) PetscCall(ChooseFactorization(nt));
+  if (nt->presort) PetscCall(ChooseFactorization(nt)); /* kergs's own factorization: LU, or Cholesky of the symmetric form */
   PetscCall(GetParts(nt->J, nc, &Ad, &Ao));
   PetscCall(NewtonLocateOwnBlocks(Ad, nc, nt->diagblock));
   nt->sigma_used = -1.0;
@@ -748,6 +759,10 @@ PetscErrorCode NewtonSolveDirection(Newton *nt, PetscInt n, PetscInt nc, PetscBo
     PetscCall(KernelDirection(nt, &reason));
     *solved = (PetscBool)(reason > 0);
     if (!*solved) nt->failed_linear++;
+  } else if (nt->symmetric && !nt->finite) {
+    *solved = PETSC_FALSE;
+    nt->failed_linear++;
+    PetscCall(PetscInfo(NULL, "newton: J has a value that is not finite: a larger proximal term next\n"));
   } else {
     PetscCall(ReuseDirection(nt, n, nc, solved));
     if (!*solved) {
