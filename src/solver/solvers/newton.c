@@ -713,6 +713,23 @@ static PetscErrorCode SolverStats_Newton(KergsSolver s, KergsSolveStats *st)
   PetscFunctionReturn(0);
 }
 
+/* A KSP whose options select PCREDUNDANT: the options of its inner KSP (prefix ..._redundant_), which PETSc creates
+   and reads only at the first set-up, read now, for -help and the unused-option check. */
+static PetscErrorCode ReadRedundantOptions(KSP ksp)
+{
+  PC        pc;
+  KSP       inner;
+  PetscBool redundant;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCREDUNDANT, &redundant));
+  if (!redundant) PetscFunctionReturn(0);
+  PetscCall(PCRedundantGetKSP(pc, &inner));
+  PetscCall(KSPSetFromOptions(inner));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptionsObject, KergsSolver s)
 {
   Newton   *nt          = (Newton *)s->data;
@@ -860,6 +877,7 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
     KSP ksp;
     PetscCall(NewtonInteriorPointCreateKSP(s, KERGS_DIM, &ksp));
     PetscCall(KSPSetFromOptions(ksp));
+    PetscCall(ReadRedundantOptions(ksp));
     PetscCall(KSPDestroy(&ksp));
   }
   if (nt->desaxce_max_it > 0) { /* the QPs' Tao options read once here, for -help and the unused-option check */
