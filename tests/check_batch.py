@@ -8,7 +8,8 @@ TEST is one of:
             2 -> 1 and 1 -> 2 ranks, against the uninterrupted 8, frictionless and solved to 1e-10 (velocities unique): the
             first 4 rows bit for bit, the end within the solver's tolerance; a pressure-controlled wall over a closed box's
             moving height, 10 + 10 steps against 20 bit for bit; the radius-ratio-100 pile, whose automatic alert
-            distance grows with the grains' speed, 120 + 120 steps against 240 bit for bit
+            distance grows with the grains' speed, 120 + 120 steps against 240 bit for bit; a checkpoint edited to a
+            negative row count, a time that is not a number or an infinite wall displacement: refused, no output
   signals   SIGTERM and SIGINT sent to the ranks, SIGUSR1 to mpiexec (which forwards it) and to both at once: exit status 4, the results file
             complete under its final name, the checkpoint of the last step; a restart continues the same file
   kill      SIGKILL: the .tmp left is readable and holds every flushed row and snapshot; a restart from the last
@@ -133,6 +134,35 @@ def test_restart(k):
     test_restart_pressure(k)
     test_restart_alert(k)
     test_restart_monitors(k)
+    test_restart_corrupt(k, k.path("B.checkpoint.h5"))
+
+
+def test_restart_corrupt(k, good):
+    """A checkpoint edited to hold what no run writes is refused before any step or output, naming the file and the
+    value: a negative count of result rows (the run then wrote rows without end: 19 GB in 13 minutes), a time that is not
+    a number, a wall displacement that is infinite."""
+    def rows(f):
+        f["state"].attrs["results_rows"] = np.array(-1, dtype=f["state"].attrs["results_rows"].dtype)
+
+    def nan_time(f):
+        f.attrs["time"] = np.array(np.nan, dtype=f.attrs["time"].dtype)
+
+    def disp(f):
+        d = f["walls/disp"][()]
+        d.flat[0] = np.inf
+        f["walls/disp"][...] = d
+
+    for name, edit, message in (("rows", rows, "attribute results_rows on /state is -1, not a count"),
+                                ("time", nan_time, "attribute time on / is nan"),
+                                ("disp", disp, "dataset /walls/disp holds a value that is not finite")):
+        bad, out = k.path(f"bad_{name}.checkpoint.h5"), k.path(f"bad_{name}.h5")
+        shutil.copyfile(good, bad)
+        with h5py.File(bad, "r+") as f:
+            edit(f)
+        p = k.run(1, "-restart", bad, "-steps", 12, "-output", out, log=f"bad_{name}.log")
+        text = p.stdout + p.stderr
+        check(p.returncode == 1 and message in text and bad in text and not os.path.exists(out) and not os.path.exists(out + ".tmp"),
+              f"restart from a checkpoint with a bad {name}: refused with '{message}', naming the file, no output (exit {p.returncode})")
 
 
 def test_restart_monitors(k):

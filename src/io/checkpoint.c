@@ -320,6 +320,18 @@ static PetscErrorCode ReadReal(PetscViewer v, const char path[], const char grou
 {
   PetscFunctionBeginUser;
   PetscCall(ReadAttribute(v, path, group, name, PETSC_REAL, value));
+  PetscCheck(!PetscIsInfOrNanReal(*value), PetscObjectComm((PetscObject)v), PETSC_ERR_FILE_UNEXPECTED,
+             "Checkpoint file %s: attribute %s on %s is %g, not a finite number", path, name, group, (double)*value);
+  PetscFunctionReturn(0);
+}
+
+/* A count the checkpoint holds (rows, snapshots, steps not converged): refused when negative, which no run writes. */
+static PetscErrorCode ReadCount(PetscViewer v, const char path[], const char group[], const char name[], PetscInt *value)
+{
+  PetscFunctionBeginUser;
+  PetscCall(ReadInt(v, path, group, name, value));
+  PetscCheck(*value >= 0, PetscObjectComm((PetscObject)v), PETSC_ERR_FILE_UNEXPECTED,
+             "Checkpoint file %s: attribute %s on %s is %" PetscInt_FMT ", not a count", path, name, group, *value);
   PetscFunctionReturn(0);
 }
 
@@ -639,7 +651,7 @@ PetscErrorCode KergsCheckpointRead(const char path[], KergsScene sc, KergsContac
     PetscCall(KergsPartitionSetState(p, &ps));
   } else
     PetscCall(RestoreRepartitioned(v, comm, path, &h, sc, ct, p));
-  PetscCall(ReadInt(v, path, "/state", "nonconverged", &run->nonconverged));
+  PetscCall(ReadCount(v, path, "/state", "nonconverged", &run->nonconverged));
   PetscCall(ReadReal(v, path, "/state", "max_violation", &run->max_violation));
   PetscCall(ReadInt(v, path, "/state", "moved", &flag));
   run->moved = flag ? PETSC_TRUE : PETSC_FALSE;
@@ -648,8 +660,8 @@ PetscErrorCode KergsCheckpointRead(const char path[], KergsScene sc, KergsContac
   if (has) PetscCall(ReadInt(v, path, "/state", "inertial_armed", &flag));
   run->armed = flag ? PETSC_TRUE : PETSC_FALSE;
   PetscCall(ReadInt(v, path, "/state", "results_enabled", &flag));
-  PetscCall(ReadInt(v, path, "/state", "results_rows", &rs.nrows));
-  PetscCall(ReadInt(v, path, "/state", "results_snapshots", &rs.nsnapshots));
+  PetscCall(ReadCount(v, path, "/state", "results_rows", &rs.nrows));
+  PetscCall(ReadCount(v, path, "/state", "results_snapshots", &rs.nsnapshots));
   PetscCall(ReadInt(v, path, "/state", "results_last_snapshot_step", &rs.last_snapshot_step));
   PetscCall(PetscViewerHDF5ReadAttribute(v, "/state", "results_path", PETSC_STRING, NULL, &source));
   PetscCall(KergsResultsGetPath(res, NULL, &enabled));

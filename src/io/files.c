@@ -563,7 +563,7 @@ PetscErrorCode KergsLoadBlocks(PetscViewer v, MPI_Comm comm, const char path[], 
                                PetscInt bs, PetscInt *nlocal, PetscReal **local)
 {
   Vec                vec;
-  PetscInt           fbs, fN, n;
+  PetscInt           fbs, fN, n, start, bad = PETSC_MAX_INT; /* the first entry that is not finite */
   const PetscScalar *a;
 
   PetscFunctionBeginUser;
@@ -582,10 +582,18 @@ PetscErrorCode KergsLoadBlocks(PetscViewer v, MPI_Comm comm, const char path[], 
   PetscCall(VecSetType(vec, VECMPI));
   PetscCall(PetscObjectSetName((PetscObject)vec, name));
   PetscCall(VecLoad(vec, v));
+  PetscCall(VecGetOwnershipRange(vec, &start, NULL));
   PetscCall(VecGetArrayRead(vec, &a));
-  for (PetscInt i = 0; i < n * bs; i++) (*local)[i] = PetscRealPart(a[i]);
+  for (PetscInt i = 0; i < n * bs; i++) {
+    (*local)[i] = PetscRealPart(a[i]);
+    if (bad == PETSC_MAX_INT && PetscIsInfOrNanReal((*local)[i])) bad = start + i;
+  }
   PetscCall(VecRestoreArrayRead(vec, &a));
   PetscCall(VecDestroy(&vec));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT, MPI_MIN, comm));
+  PetscCheck(bad == PETSC_MAX_INT, comm, PETSC_ERR_FILE_UNEXPECTED,
+             "File %s: dataset %s/%s holds a value that is not finite (entry %" PetscInt_FMT ", block %" PetscInt_FMT ")", path, group,
+             name, bad, bad / bs);
   PetscFunctionReturn(0);
 }
 
