@@ -546,6 +546,15 @@ def test_statuses(k):
           and not os.path.exists(out) and not os.path.exists(k.path("overlap.xdmf")),
           f"statuses: overlapping grains at start: exit status 1, no results file, no .tmp, no XDMF left (got {p.returncode}, "
           f"{sorted(f for f in os.listdir(k.dir) if f.startswith('overlap.'))})")
+    # ... and the results of an earlier run under that name, its XDMF included, are left as they were
+    prev = k.path("previous.h5")
+    k.run(1, "-options_file", CONFINE5, "-steps", 2, "-quiet", "-output", prev, log="previous.log")
+    before = {f: sha(k.path(f)) for f in ("previous.h5", "previous.xdmf")}
+    p = k.run(2, "-options_file", CONFINE5, "-disks_x", "0.5,0.5,1.5,0.5,2.2,0.5,3.5,0.5,4.5,0.5", "-output", prev, log="previous-overlap.log")
+    after = {f: sha(k.path(f)) if os.path.exists(k.path(f)) else None for f in before}
+    check(p.returncode == 1 and after == before and not os.path.exists(prev + ".tmp"),
+          f"statuses: overlapping grains refused with -output of an earlier run: its results file and XDMF unchanged, no .tmp "
+          f"(got {p.returncode}, changed: {[f for f in before if after[f] != before[f]]})")
     # restarts that cannot be what the user meant: -steps below the checkpoint's step, a checkpoint of another format
     out = k.path("short.h5")
     k.run(1, "-options_file", CONFINE5, "-steps", 4, "-quiet", "-output", out, "-checkpoint_every", 4, log="short.log")

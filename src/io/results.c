@@ -221,7 +221,8 @@ static PetscErrorCode ResultsReadSnapshot(hid_t file, PetscInt k, KergsXdmfSnaps
    once, then at most every -output_flush_seconds (at every call with 0) and every 20 times the last rewrite's duration
    (each rewrite writes the whole list, about 50 us per snapshot here: this keeps its cost under 5 % of the run), and
    always when `now` is set. It references the file under the name it has now: the .tmp while the run goes, the final
-   name once closed. */
+   name once closed. Not before a step's row is flushed: a run refused at its first detection (grains that overlap)
+   leaves the XDMF of an earlier run under that name as it was. */
 static PetscErrorCode ResultsRefreshXdmf(KergsResults res, PetscBool now, PetscBool final)
 {
   PetscMPIInt    rank;
@@ -229,7 +230,7 @@ static PetscErrorCode ResultsRefreshXdmf(KergsResults res, PetscBool now, PetscB
   const char    *h5 = final ? res->path : res->tmppath, *slash = strrchr(h5, '/');
 
   PetscFunctionBeginUser;
-  if (!res->enabled || !res->xdmf) PetscFunctionReturn(0);
+  if (!res->enabled || !res->xdmf || (!final && res->nflushed == 0)) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Comm_rank(res->comm, &rank));
   if (rank != 0) PetscFunctionReturn(0);
   PetscCall(PetscTime(&t));
