@@ -108,6 +108,35 @@ static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **arg
   PetscFunctionReturn(0);
 }
 
+/* A PETSc viewer opens its file when its option is read (-solver_monitor ascii:FILE truncates FILE), before the run's
+   own path checks: the viewers' files are checked first against the inputs, the options files included. */
+static PetscErrorCode CheckViewerFiles(int argc, char **argv)
+{
+  static OptionsFiles files;
+  static const char  *named[] = {"-sample_input", "-restart", "-fclib_input"};
+  static char         given[3][PETSC_MAX_PATH_LEN];
+  KergsViewerFiles   *vf;
+  KergsFileRole       outputs[KERGS_MAX_VIEWER_FILES], inputs[3 + 9];
+  PetscInt            nin = 0;
+  char                msg[256];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscNew(&vf));
+  PetscCall(KergsFileViewerFiles(vf));
+  files.n = 0;
+  (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
+  for (int i = 0; i < files.n; i++) inputs[nin++] = (KergsFileRole){"-options_file", files.path[i]};
+  for (int k = 0; k < 3; k++) {
+    given[k][0] = 0;
+    PetscCall(PetscOptionsGetString(NULL, NULL, named[k], given[k], sizeof(given[k]), NULL));
+    inputs[nin++] = (KergsFileRole){named[k], given[k]};
+  }
+  for (PetscInt k = 0; k < vf->n; k++) outputs[k] = (KergsFileRole){vf->option[k], vf->path[k]};
+  PetscCall(KergsFileCheckPaths(PETSC_COMM_WORLD, vf->n, outputs, nin, inputs, 0, NULL));
+  PetscCall(PetscFree(vf));
+  PetscFunctionReturn(0);
+}
+
 /* -fclib_input FILE: one FCLib problem instead of a scene */
 static PetscErrorCode RunFCLib(KergsExitStatus *status)
 {
@@ -155,6 +184,7 @@ static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
   PetscFunctionBeginUser;
   PetscCall(KergsInitializePackage());
   PetscCall(PetscOptionsHasHelp(NULL, &want_help));
+  PetscCall(CheckViewerFiles(argc, argv));
   if (!want_help) PetscCall(KergsOptionsCheckValues(PETSC_COMM_WORLD, ReadAllOptions, NULL)); /* "-dt" alone is an error */
   PetscCall(PetscOptionsHasName(NULL, NULL, "-fclib_input", &fclib));
   if (fclib && !want_help) {

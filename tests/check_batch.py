@@ -14,8 +14,9 @@ TEST is one of:
             complete under its final name, the checkpoint of the last step; a restart continues the same file
   kill      SIGKILL: the .tmp left is readable and holds every flushed row and snapshot; a restart from the last
             checkpoint continues it into one run's file
-  paths     outputs that would replace an input or another output (links resolved), a directory, a path under a
-            file: refused before any work, inputs untouched; a 300-character path on 2 ranks works
+  paths     outputs that would replace an input or another output (links resolved), PETSc viewers' files included
+            (-solver_monitor ascii:FILE, -log_view :FILE), a directory, a path under a file: refused before any work,
+            inputs untouched; a 300-character path on 2 ranks works
   enospc    a full file system (a 200 KB tmpfs; skipped when it cannot be mounted): "No space left on device", the
             file named, the partial .tmp removed
   fclib     -fclib_step N exports the problem solved in the step whose line says "step N"
@@ -465,6 +466,15 @@ def test_paths(k):
          "is the input -sample_input", "-sample_output new/er/../../sample.h5 replacing -sample_input"),
         (["-output", os.path.join(sub, "a.h5"), "-checkpoint_path", os.path.join(sub, ".", "sub", "..", "a.h5")], "are the same file",
          "-output D/a.h5 -checkpoint_path D/./sub/../a.h5"),
+    ]
+    # a PETSc viewer opens (an ASCII one truncates) its file when its option is read: checked against the inputs first
+    bad += [
+        (["-output", os.path.join(d, "r.h5"), "-solver_monitor", "ascii:" + sample], "Output -solver_monitor " + sample + " is the input -sample_input",
+         "a viewer's file (-solver_monitor ascii:FILE) on the input"),
+        (["-output", os.path.join(d, "r.h5"), "-solver_converged_reason", "ascii:" + os.path.join(d, "link", "sample.h5") + "::append"],
+         "is the input -sample_input", "a viewer's file through a link to the input, with a format and a mode"),
+        (["-options_file", opts, "-output", os.path.join(d, "r.h5"), "-log_view", ":" + opts], "is the input -options_file",
+         "-log_view's file on the options file"),
     ]
     # a file name of 253 characters: its .tmp (257) would exceed the file system's 255; refused before any work, named
     bad.append((["-output", os.path.join(d, "n" * 250 + ".h5")], "its file name has 253 characters", "a 253-character file name"))

@@ -50,6 +50,18 @@ typedef struct {
 PETSC_EXTERN PetscErrorCode KergsFileCheckPaths(MPI_Comm, PetscInt nout, const KergsFileRole outputs[], PetscInt nin,
                                                 const KergsFileRole inputs[], PetscInt nsame, const char *const same[][2]);
 
+/* The files that PETSc viewers named by option values write: "type:file[:format[:mode]]" of the ASCII, binary, HDF5,
+   VTK and MATLAB viewers, and -log_view's ":file" (stdout and stderr are streams, not files), read from the options
+   database; each file once, with the first option that names it (viewers of one file share it), at most
+   KERGS_MAX_VIEWER_FILES. A viewer opens its file (an ASCII one truncates it) when its option is read, so these are
+   checked against the inputs before anything reads the options. */
+#define KERGS_MAX_VIEWER_FILES 16
+typedef struct {
+  PetscInt n;
+  char     option[KERGS_MAX_VIEWER_FILES][64], path[KERGS_MAX_VIEWER_FILES][PETSC_MAX_PATH_LEN];
+} KergsViewerFiles;
+PETSC_EXTERN PetscErrorCode KergsFileViewerFiles(KergsViewerFiles *);
+
 /* Every options file of the command line (-options_file FILE) and those they include, in PETSc's order (visit, when
    not NULL, is called with each path as written). A file that includes itself, directly or through others, makes PETSc
    recurse until the stack overflows: then msg names the chain and the function returns 1, else 0. Plain C, before

@@ -433,6 +433,49 @@ PetscErrorCode KergsFileCheckPaths(MPI_Comm comm, PetscInt nout, const KergsFile
   PetscFunctionReturn(0);
 }
 
+static void AddViewerFile(KergsViewerFiles *vf, const char option[], const char value[])
+{
+  static const char *types[] = {"", "ascii", "binary", "hdf5", "vtk", "matlab"};
+  const char        *colon   = strchr(value, ':');
+  char               file[PETSC_MAX_PATH_LEN];
+  size_t             len;
+  PetscBool          known = PETSC_FALSE;
+
+  if (!colon) return;
+  for (size_t t = 0; t < sizeof(types) / sizeof(types[0]); t++)
+    if (strlen(types[t]) == (size_t)(colon - value) && !strncmp(value, types[t], (size_t)(colon - value))) known = PETSC_TRUE;
+  len = strcspn(colon + 1, ":");
+  if (!known || len == 0 || len >= sizeof(file)) return;
+  memcpy(file, colon + 1, len);
+  file[len] = 0;
+  if (!strcmp(file, "stdout") || !strcmp(file, "stderr")) return;
+  for (PetscInt k = 0; k < vf->n; k++)
+    if (!strcmp(vf->path[k], file)) return;
+  if (vf->n == KERGS_MAX_VIEWER_FILES) return;
+  snprintf(vf->option[vf->n], sizeof(vf->option[0]), "%s", option);
+  snprintf(vf->path[vf->n++], sizeof(vf->path[0]), "%s", file);
+}
+
+/* From PetscOptionsGetAll's text: "-name value -flag -name2 value". */
+PetscErrorCode KergsFileViewerFiles(KergsViewerFiles *vf)
+{
+  char *all, *save = NULL, name[64] = "";
+
+  PetscFunctionBeginUser;
+  vf->n = 0;
+  PetscCall(PetscOptionsGetAll(NULL, &all));
+  for (char *tok = strtok_r(all, " ", &save); tok; tok = strtok_r(NULL, " ", &save)) {
+    if (tok[0] == '-' && ((tok[1] >= 'a' && tok[1] <= 'z') || (tok[1] >= 'A' && tok[1] <= 'Z')))
+      snprintf(name, sizeof(name), "%s", tok);
+    else if (name[0]) {
+      AddViewerFile(vf, name, tok);
+      name[0] = 0;
+    }
+  }
+  PetscCall(PetscFree(all));
+  PetscFunctionReturn(0);
+}
+
 /* ------------------------------------------------------------------------------------------------ */
 /* Options files                                                                                    */
 
