@@ -79,7 +79,7 @@ set_tests_properties(tile_sample_wall_friction PROPERTIES TIMEOUT 30 LABELS bad_
 # A sample's contact forces (/sample/contacts, the first step's warm start) are checked before the run writes anything:
 # a NaN force, a contact of a grain the sample does not hold and a pair given twice are refused, naming the file. The
 # forces (rows a_id, kind, b_id, normal force) are added to a copy of cases/compact_small.h5, which records none.
-foreach(case "nan|contact 0 of /sample/contacts is not a contact of a grain with a grain of larger id or a named wall, with a finite force that pushes|(0, 0, 1, float('nan'))"
+foreach(case "nan|dataset /sample/contacts/force holds a value that is not finite .entry 0, block 0.|(0, 0, 1, float('nan'))"
              "unknown_grain|1 of its 1 contacts belong to no grain of the sample|(10**6, 0, 10**6 + 1, 1.0)"
              "repeated|1 of its contacts repeat a pair given before|(0, 0, 1, 1.0), (0, 0, 1, 2.0)")
   string(REPLACE "|" ";" parts "${case}")
@@ -88,7 +88,7 @@ foreach(case "nan|contact 0 of /sample/contacts is not a contact of a grain with
   list(GET parts 2 row)
   add_test(NAME sample_contacts_${name}
            COMMAND sh -c "cp cases/compact_small.h5 \"$0/contacts_${name}.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; g = h5py.File('$0/contacts_${name}.h5', 'r+')['sample'].create_group('contacts'); t = np.array([${row}], dtype=float); g.attrs['ncontacts'] = np.int32(len(t)); g.attrs['walls'] = np.bytes_('box_bottom,box_right,box_top,box_left'); [g.create_dataset(n, data=t[:, j]) for j, n in enumerate(('a_id', 'kind', 'b_id'))]; g.create_dataset('force', data=np.column_stack([t[:, 3], 0 * t[:, 3]]))\" && script=\"$1\" regex=\"$2\" && shift 2 && exec \"$script\" \"$regex\" \"$@\" -sample_input \"$0/contacts_${name}.h5\" -output \"$0/contacts_${name}_out.h5\""
-                   ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "Sample file .*contacts_${name}\\.h5: ${regex}"
+                   ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "[Ff]ile .*contacts_${name}\\.h5: ${regex}"
                    ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} 2 ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS}
                    -options_file cases/biaxial_small.opts -steps 1
            WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
@@ -103,3 +103,19 @@ add_test(NAME sample_contacts_ncontacts_array
                  -options_file cases/biaxial_1m.opts -steps 1
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(sample_contacts_ncontacts_array PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
+# A sample file is checked for what it must be before its grains are read: its format (root attribute kergs_format),
+# its dimension, at least one grain. Each is an edited copy of cases/compact_small.h5, refused naming the file.
+foreach(case "format|File .*sample_format\\.h5 is not a kergs sample|del f.attrs['kergs_format']"
+             "dim|Sample file .*sample_dim\\.h5 is of dimension 3|f['sample'].attrs['dim'] = np.int32(3)"
+             "empty|Sample file .*sample_empty\\.h5: ndisks = 0: a sample holds at least one grain|f['sample'].attrs['ndisks'] = np.int32(0)")
+  string(REPLACE "|" ";" parts "${case}")
+  list(GET parts 0 name)
+  list(GET parts 1 regex)
+  list(GET parts 2 edit)
+  add_test(NAME sample_bad_${name}
+           COMMAND sh -c "cp cases/compact_small.h5 \"$0/sample_${name}.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; f = h5py.File('$0/sample_${name}.h5', 'r+'); ${edit}\" && script=\"$1\" regex=\"$2\" && shift 2 && exec \"$script\" \"$regex\" \"$@\" -sample_input \"$0/sample_${name}.h5\" -output \"$0/sample_${name}_out.h5\""
+                   ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "${regex}" $<TARGET_FILE:kergs_exe>
+                   -options_file cases/biaxial_small.opts -steps 1
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(sample_bad_${name} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60 LABELS bad_input)
+endforeach()

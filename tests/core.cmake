@@ -14,6 +14,11 @@ endfunction()
 kergs_bad_input(malformed_file "malformed.opts" -options_file tests/data/malformed.opts)
 kergs_bad_input(unknown_option "unknown option -disks_radios" -options_file cases/confine5.opts -disks_radios 0.5)
 kergs_bad_input(negative_radius "radius.*-0.5" -options_file cases/confine5.opts -disks_radius -0.5)
+# a grain whose mass or moment of inertia double precision cannot invert (M^-1 enters every step); a random packing of
+# no grain
+kergs_bad_input(grain_mass_underflow "Grain 0: radius 0.5 and density .* give a mass .* that double precision cannot invert"
+                -options_file cases/confine5.opts -material_density 1e-320)
+kergs_bad_input(random_none "-random_n 0 must be at least 1" -disks_source random -random_n 0 -random_box 0,0,1,1 -random_radius 0.01,0.02 -steps 0)
 kergs_bad_input(radius_ratio_area "random_radius_law area: the ratio rmax/rmin = 20" -disks_source random -random_n 10 -random_box 0,0,1,1
                 -random_radius 0.01,0.2 -random_radius_law area -steps 0)
 kergs_bad_input(nan_position "(nan|finite)" -options_file cases/confine5.opts -disks_x 0.5,nan,1.5,0.52,2.5,0.49,3.5,0.515,4.5,0.5)

@@ -96,7 +96,7 @@ PetscErrorCode KergsSampleWrite(KergsScene scene, KergsContacts contacts, const 
   PetscCall(PetscViewerHDF5Open(comm, tmp, FILE_MODE_WRITE, &viewer));
   PetscCall(PetscViewerHDF5SetBaseDimension2(viewer, PETSC_FALSE)); /* the documented layout: 1-D scalars, float64 */
   PetscCall(PetscViewerHDF5SetSPOutput(viewer, PETSC_FALSE));
-  PetscCall(PetscViewerHDF5WriteAttribute(viewer, "/", "kergs_format", PETSC_STRING, "kergs sample 1"));
+  PetscCall(PetscViewerHDF5WriteAttribute(viewer, "/", "kergs_format", PETSC_STRING, KERGS_SAMPLE_FORMAT));
   PetscCall(PetscViewerHDF5PushGroup(viewer, KERGS_SAMPLE_GROUP));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "ndisks", PETSC_INT, &n));
   PetscCall(PetscViewerHDF5WriteAttribute(viewer, NULL, "time", PETSC_REAL, &sctime));
@@ -270,7 +270,7 @@ static PetscErrorCode SampleContactsOpen(MPI_Comm comm, const char path[], Petsc
   PetscBool group, other;
 
   PetscFunctionBeginUser;
-  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL));
+  PetscCall(KergsH5CheckFile(comm, path, "Sample file", KERGS_SAMPLE_FORMAT, "kergs sample"));
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, viewer));
   PetscCall(PetscViewerHDF5HasGroup(*viewer, KERGS_CONTACTS_GROUP, &group));
   PetscCall(PetscViewerHDF5HasDataset(*viewer, KERGS_CONTACTS_GROUP, &other));

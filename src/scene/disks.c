@@ -197,7 +197,7 @@ static PetscErrorCode DisksFromRandom(KergsScene scene, const DiskOptions *o)
   PetscRandom     rnd;
 
   PetscFunctionBeginUser;
-  PetscCheck(n >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-random_n %" PetscInt_FMT " must be >= 0", n);
+  PetscCheck(n >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-random_n %" PetscInt_FMT " must be at least 1: a packing of no grain", n);
   PetscCheck(n <= KERGS_MAX_DISKS, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-random_n %" PetscInt_FMT ": this build counts in %d-bit integers (PetscInt) and holds at most %" PetscInt_FMT " disks", n,
              (int)(8 * sizeof(PetscInt)), (PetscInt)KERGS_MAX_DISKS);

@@ -76,15 +76,22 @@ static PetscErrorCode SampleLoadField(PetscViewer viewer, MPI_Comm comm, const c
 static PetscErrorCode SampleLoad(PetscViewer viewer, MPI_Comm comm, const char path[], SampleData *s)
 {
   PetscBool has;
+  PetscInt  dim;
 
   PetscFunctionBeginUser;
   PetscCall(PetscViewerHDF5HasGroup(viewer, KERGS_SAMPLE_GROUP, &has));
   PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no group %s", path, KERGS_SAMPLE_GROUP);
   PetscCall(PetscViewerHDF5PushGroup(viewer, KERGS_SAMPLE_GROUP));
+  PetscCall(PetscViewerHDF5HasAttribute(viewer, NULL, "dim", &has));
+  PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute dim on %s", path, KERGS_SAMPLE_GROUP);
+  PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "dim", PETSC_INT, NULL, &dim));
+  PetscCheck(dim == KERGS_DIM, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s is of dimension %" PetscInt_FMT ", kergs computes in %d",
+             path, dim, KERGS_DIM);
   PetscCall(PetscViewerHDF5HasAttribute(viewer, NULL, "ndisks", &has));
   PetscCheck(has, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s has no attribute ndisks on %s", path, KERGS_SAMPLE_GROUP);
   PetscCall(PetscViewerHDF5ReadAttribute(viewer, NULL, "ndisks", PETSC_INT, NULL, &s->n));
-  PetscCheck(s->n >= 0, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: ndisks = %" PetscInt_FMT " is negative", path, s->n);
+  PetscCheck(s->n >= 1, comm, PETSC_ERR_FILE_UNEXPECTED, "Sample file %s: ndisks = %" PetscInt_FMT ": a sample holds at least one grain",
+             path, s->n);
   PetscCheck(s->n <= KERGS_MAX_DISKS, comm, PETSC_ERR_FILE_UNEXPECTED,
              "Sample file %s: ndisks = %" PetscInt_FMT " is more than this build holds (%" PetscInt_FMT ", 32-bit PetscInt)", path, s->n,
              (PetscInt)KERGS_MAX_DISKS);
@@ -204,7 +211,7 @@ static PetscErrorCode SampleOpen(MPI_Comm comm, const char path[], PetscViewer *
 {
   PetscFunctionBeginUser;
   PetscCheck(path && path[0], comm, PETSC_ERR_ARG_WRONG, "Sample file name is empty");
-  PetscCall(KergsH5CheckFile(comm, path, "Sample file", NULL, NULL));
+  PetscCall(KergsH5CheckFile(comm, path, "Sample file", KERGS_SAMPLE_FORMAT, "kergs sample"));
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, viewer));
   PetscFunctionReturn(0);
 }

@@ -645,7 +645,7 @@ static void GetDiskCheckRecord(KergsScene scene, PetscInt i, DiskCheckRecord *d)
 }
 
 /* Every fault of one disk, named by grain id; comm is the communicator that errors. */
-static PetscErrorCode CheckDisk(MPI_Comm comm, PetscInt nmaterials, const DiskCheckRecord *d)
+static PetscErrorCode CheckDisk(MPI_Comm comm, PetscInt nmaterials, const PetscReal density[], const DiskCheckRecord *d)
 {
   PetscFunctionBeginUser;
   PetscCheck(KergsSceneFinite(d->radius) && d->radius > 0.0, comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -664,6 +664,15 @@ static PetscErrorCode CheckDisk(MPI_Comm comm, PetscInt nmaterials, const DiskCh
   PetscCheck(d->material >= 0 && d->material < nmaterials, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "Grain %" PetscInt_FMT ": material %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ") (see -materials)", d->id, d->material,
              nmaterials);
+  {
+    /* M^-1 enters every step: a mass or a moment of inertia that underflows to 0 or overflows makes the first update
+       non-finite, which the watch then reports as a blow-up that names no cause */
+    const PetscReal mass = density[d->material] * PETSC_PI * d->radius * d->radius, inertia = 0.5 * mass * d->radius * d->radius;
+    PetscCheck(PetscIsNormalReal(mass) && PetscIsNormalReal(inertia) && PetscIsNormalReal(1.0 / inertia), comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "Grain %" PetscInt_FMT ": radius %g and density %g (material %" PetscInt_FMT ") give a mass %g and a moment of inertia %g "
+               "that double precision cannot invert",
+               d->id, (double)d->radius, (double)density[d->material], d->material, (double)mass, (double)inertia);
+  }
   PetscFunctionReturn(0);
 }
 
@@ -679,7 +688,7 @@ static PetscErrorCode SceneCheckDisks(KergsScene scene)
   PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL)); /* quiet: the message comes below, on every rank */
   for (PetscInt i = 0; i < scene->nowned && bad == PETSC_MAX_INT; i++) {
     GetDiskCheckRecord(scene, i, &d);
-    if (CheckDisk(PETSC_COMM_SELF, scene->nmaterials, &d) != 0) bad = scene->dstart + i;
+    if (CheckDisk(PETSC_COMM_SELF, scene->nmaterials, scene->density, &d) != 0) bad = scene->dstart + i;
   }
   PetscCall(PetscPopErrorHandler());
   PetscCall(MPIU_Allreduce(&bad, &gbad, 1, MPIU_INT, MPI_MIN, scene->comm));
@@ -691,7 +700,7 @@ static PetscErrorCode SceneCheckDisks(KergsScene scene)
   }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &owner, 1, MPI_INT, MPI_MAX, scene->comm));
   PetscCallMPI(MPI_Bcast(&d, (PetscMPIInt)sizeof(d), MPI_BYTE, owner, scene->comm));
-  PetscCall(CheckDisk(scene->comm, scene->nmaterials, &d));
+  PetscCall(CheckDisk(scene->comm, scene->nmaterials, scene->density, &d));
   PetscFunctionReturn(0);
 }
 
@@ -701,8 +710,8 @@ PetscErrorCode KergsSceneCheck(KergsScene scene)
   PetscFunctionBeginUser;
   PetscCheck(scene->ndisks > 0 || scene->nwalls > 0, scene->comm, PETSC_ERR_ARG_WRONGSTATE,
              "Scene %s has no disks and no walls (give -disks_source and its options, -box or -walls)", scene->name);
+  PetscCall(SceneCheckMaterials(scene)); /* first: the disks' check reads the densities */
   PetscCall(SceneCheckDisks(scene));
-  PetscCall(SceneCheckMaterials(scene));
   PetscCall(SceneCheckNumerics(scene));
   PetscCall(KergsSceneCheckWalls(scene));
   PetscFunctionReturn(0);

@@ -9,6 +9,9 @@
 #include <petscsys.h>
 #include <hdf5.h>
 
+/* The root attribute kergs_format of a sample file (written by src/io/sample.c, read by src/scene/sample_read.c). */
+#define KERGS_SAMPLE_FORMAT "kergs sample 1"
+
 /* HDF5's automatic error printing, saved by KergsH5QuietBegin and restored by KergsH5QuietEnd. */
 typedef struct {
   H5E_auto2_t handler;
