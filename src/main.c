@@ -7,6 +7,7 @@ static const char help[] =
 #include <limits.h>
 #include <signal.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Options that PETSc itself reads late (at finalize) or that tune PETSc, and so may legitimately look unused. */
 static PetscBool IsPetscOption(const char *name)
@@ -108,6 +109,25 @@ static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **arg
   PetscFunctionReturn(0);
 }
 
+/* An option's value (empty if not given or given without one) from the database's text, without marking the option
+   as read: KergsOptionsCheckValues looks for options given without their value among those not read yet. */
+static PetscErrorCode OptionValueUnread(const char name[], char value[], size_t len)
+{
+  char *all, *save = NULL;
+
+  PetscFunctionBeginUser;
+  value[0] = 0;
+  PetscCall(PetscOptionsGetAll(NULL, &all));
+  for (char *tok = strtok_r(all, " ", &save); tok; tok = strtok_r(NULL, " ", &save)) {
+    if (strcmp(tok, name)) continue;
+    tok = strtok_r(NULL, " ", &save);
+    if (tok && tok[0] != '-') snprintf(value, len, "%s", tok);
+    break;
+  }
+  PetscCall(PetscFree(all));
+  PetscFunctionReturn(0);
+}
+
 /* A PETSc viewer opens its file when its option is read (-solver_monitor ascii:FILE truncates FILE), before the run's
    own path checks: the viewers' files are checked first against the inputs, the options files included. */
 static PetscErrorCode CheckViewerFiles(int argc, char **argv)
@@ -127,8 +147,7 @@ static PetscErrorCode CheckViewerFiles(int argc, char **argv)
   (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
   for (int i = 0; i < files.n; i++) inputs[nin++] = (KergsFileRole){"-options_file", files.path[i]};
   for (int k = 0; k < 3; k++) {
-    given[k][0] = 0;
-    PetscCall(PetscOptionsGetString(NULL, NULL, named[k], given[k], sizeof(given[k]), NULL));
+    PetscCall(OptionValueUnread(named[k], given[k], sizeof(given[k])));
     inputs[nin++] = (KergsFileRole){named[k], given[k]};
   }
   for (PetscInt k = 0; k < vf->n; k++) outputs[k] = (KergsFileRole){vf->option[k], vf->path[k]};
