@@ -76,6 +76,22 @@ add_test(NAME tile_sample_wall_friction
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(tile_sample_wall_friction PROPERTIES TIMEOUT 30 LABELS bad_input)
 
+# A refused sample: test `name` copies `source` to <build>/tests/<name>.h5, edits it with Python (`edit`, h5py's file
+# open as f), runs kergs on `nprocs` ranks with it as -sample_input and the options that follow, and expects the
+# error `regex`.
+function(kergs_edited_sample name source edit regex nprocs)
+  if(nprocs GREATER 1)
+    set(run ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${nprocs} ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS})
+  else()
+    set(run $<TARGET_FILE:kergs_exe>)
+  endif()
+  add_test(NAME ${name}
+           COMMAND sh -c "cp ${source} \"$0/${name}.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; f = h5py.File('$0/${name}.h5', 'r+'); ${edit}\" && script=\"$1\" regex=\"$2\" && shift 2 && exec \"$script\" \"$regex\" \"$@\" -sample_input \"$0/${name}.h5\" -output \"$0/${name}_out.h5\""
+                   ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "${regex}" ${run} ${ARGN}
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(${name} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS ${nprocs} TIMEOUT 60 LABELS bad_input)
+endfunction()
+
 # A sample's contact forces (/sample/contacts, the first step's warm start) are checked before the run writes anything:
 # a NaN force, a contact of a grain the sample does not hold and a pair given twice are refused, naming the file. The
 # forces (rows a_id, kind, b_id, normal force) are added to a copy of cases/compact_small.h5, which records none.
@@ -86,36 +102,21 @@ foreach(case "nan|dataset /sample/contacts/force holds a value that is not finit
   list(GET parts 0 name)
   list(GET parts 1 regex)
   list(GET parts 2 row)
-  add_test(NAME sample_contacts_${name}
-           COMMAND sh -c "cp cases/compact_small.h5 \"$0/contacts_${name}.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; g = h5py.File('$0/contacts_${name}.h5', 'r+')['sample'].create_group('contacts'); t = np.array([${row}], dtype=float); g.attrs['ncontacts'] = np.int32(len(t)); g.attrs['walls'] = np.bytes_('box_bottom,box_right,box_top,box_left'); [g.create_dataset(n, data=t[:, j]) for j, n in enumerate(('a_id', 'kind', 'b_id'))]; g.create_dataset('force', data=np.column_stack([t[:, 3], 0 * t[:, 3]]))\" && script=\"$1\" regex=\"$2\" && shift 2 && exec \"$script\" \"$regex\" \"$@\" -sample_input \"$0/contacts_${name}.h5\" -output \"$0/contacts_${name}_out.h5\""
-                   ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "[Ff]ile .*contacts_${name}\\.h5: ${regex}"
-                   ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} 2 ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS}
-                   -options_file cases/biaxial_small.opts -steps 1
-           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-  set_tests_properties(sample_contacts_${name} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
+  kergs_edited_sample(sample_contacts_${name} cases/compact_small.h5
+                      "g = f['sample'].create_group('contacts'); t = np.array([${row}], dtype=float); g.attrs['ncontacts'] = np.int32(len(t)); g.attrs['walls'] = np.bytes_('box_bottom,box_right,box_top,box_left'); [g.create_dataset(n, data=t[:, j]) for j, n in enumerate(('a_id', 'kind', 'b_id'))]; g.create_dataset('force', data=np.column_stack([t[:, 3], 0 * t[:, 3]]))"
+                      "[Ff]ile .*sample_contacts_${name}\\.h5: ${regex}" 2 -options_file cases/biaxial_small.opts -steps 1)
 endforeach()
 # An attribute that is an array where one value is expected crashed PETSc's attribute reader (a segmentation fault with
 # ncontacts as 1,000 integers): the file is now probed before the viewer reads it.
-add_test(NAME sample_contacts_ncontacts_array
-         COMMAND sh -c "cp cases/compact_10k.h5 \"$0/contacts_array.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; g = h5py.File('$0/contacts_array.h5', 'r+')['sample/contacts']; g.attrs['ncontacts'] = np.arange(1000)\" && script=\"$1\" && shift && exec \"$script\" \"Sample file .*contacts_array\\.h5: attribute ncontacts of /sample/contacts is not a single integer\" \"$@\" -sample_input \"$0/contacts_array.h5\" -output \"$0/contacts_array_out.h5\""
-                 ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
-                 ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} 2 ${MPIEXEC_PREFLAGS} $<TARGET_FILE:kergs_exe> ${MPIEXEC_POSTFLAGS}
-                 -options_file cases/biaxial_1m.opts -steps 1
-         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-set_tests_properties(sample_contacts_ncontacts_array PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" PROCESSORS 2 TIMEOUT 60 LABELS bad_input)
+kergs_edited_sample(sample_contacts_ncontacts_array cases/compact_10k.h5 "f['sample/contacts'].attrs['ncontacts'] = np.arange(1000)"
+                    "Sample file .*sample_contacts_ncontacts_array\\.h5: attribute ncontacts of /sample/contacts is not a single integer" 2
+                    -options_file cases/biaxial_1m.opts -steps 1)
 # A sample file is checked for what it must be before its grains are read: its format (root attribute kergs_format),
 # its dimension, at least one grain. Each is an edited copy of cases/compact_small.h5, refused naming the file.
-foreach(case "format|File .*sample_format\\.h5 is not a kergs sample|del f.attrs['kergs_format']"
-             "dim|Sample file .*sample_dim\\.h5 is of dimension 3|f['sample'].attrs['dim'] = np.int32(3)"
-             "empty|Sample file .*sample_empty\\.h5: ndisks = 0: a sample holds at least one grain|f['sample'].attrs['ndisks'] = np.int32(0)")
-  string(REPLACE "|" ";" parts "${case}")
-  list(GET parts 0 name)
-  list(GET parts 1 regex)
-  list(GET parts 2 edit)
-  add_test(NAME sample_bad_${name}
-           COMMAND sh -c "cp cases/compact_small.h5 \"$0/sample_${name}.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; f = h5py.File('$0/sample_${name}.h5', 'r+'); ${edit}\" && script=\"$1\" regex=\"$2\" && shift 2 && exec \"$script\" \"$regex\" \"$@\" -sample_input \"$0/sample_${name}.h5\" -output \"$0/sample_${name}_out.h5\""
-                   ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "${regex}" $<TARGET_FILE:kergs_exe>
-                   -options_file cases/biaxial_small.opts -steps 1
-           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-  set_tests_properties(sample_bad_${name} PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60 LABELS bad_input)
-endforeach()
+kergs_edited_sample(sample_bad_format cases/compact_small.h5 "del f.attrs['kergs_format']"
+                    "File .*sample_bad_format\\.h5 is not a kergs sample" 1 -options_file cases/biaxial_small.opts -steps 1)
+kergs_edited_sample(sample_bad_dim cases/compact_small.h5 "f['sample'].attrs['dim'] = np.int32(3)"
+                    "Sample file .*sample_bad_dim\\.h5 is of dimension 3" 1 -options_file cases/biaxial_small.opts -steps 1)
+kergs_edited_sample(sample_bad_empty cases/compact_small.h5 "f['sample'].attrs['ndisks'] = np.int32(0)"
+                    "Sample file .*sample_bad_empty\\.h5: ndisks = 0: a sample holds at least one grain" 1
+                    -options_file cases/biaxial_small.opts -steps 1)
