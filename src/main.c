@@ -109,49 +109,46 @@ static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **arg
   PetscFunctionReturn(0);
 }
 
-/* An option's value (empty if not given or given without one) from the database's text, without marking the option
-   as read: KergsOptionsCheckValues looks for options given without their value among those not read yet. */
-static PetscErrorCode OptionValueUnread(const char name[], char value[], size_t len)
+/* A PETSc viewer opens its file when its option is read (-solver_monitor ascii:FILE truncates FILE), before the run's
+   own path checks: the viewers' files are checked first against the inputs, the options files included. */
+#define NAMED_INPUTS 3
+static const char *NamedInputs[NAMED_INPUTS] = {"-sample_input", "-restart", "-fclib_input"};
+
+/* The values of NamedInputs, read from the database's text: not marked as read, since KergsOptionsCheckValues looks
+   for options given without their value among those not read yet. */
+static PetscErrorCode TakeNamedInput(const char name[], const char value[], void *ctx)
 {
-  char *all, *save = NULL;
+  char(*given)[PETSC_MAX_PATH_LEN] = (char(*)[PETSC_MAX_PATH_LEN])ctx;
 
   PetscFunctionBeginUser;
-  value[0] = 0;
-  PetscCall(PetscOptionsGetAll(NULL, &all));
-  for (char *tok = strtok_r(all, " ", &save); tok; tok = strtok_r(NULL, " ", &save)) {
-    if (strcmp(tok, name)) continue;
-    tok = strtok_r(NULL, " ", &save);
-    if (tok && tok[0] != '-') snprintf(value, len, "%s", tok);
-    break;
-  }
-  PetscCall(PetscFree(all));
+  for (int k = 0; k < NAMED_INPUTS; k++)
+    if (!strcmp(name, NamedInputs[k])) snprintf(given[k], PETSC_MAX_PATH_LEN, "%s", value);
   PetscFunctionReturn(0);
 }
 
-/* A PETSc viewer opens its file when its option is read (-solver_monitor ascii:FILE truncates FILE), before the run's
-   own path checks: the viewers' files are checked first against the inputs, the options files included. */
 static PetscErrorCode CheckViewerFiles(int argc, char **argv)
 {
   static OptionsFiles files;
-  static const char  *named[] = {"-sample_input", "-restart", "-fclib_input"};
-  static char         given[3][PETSC_MAX_PATH_LEN];
+  static char         given[NAMED_INPUTS][PETSC_MAX_PATH_LEN];
   KergsViewerFiles   *vf;
-  KergsFileRole       outputs[KERGS_MAX_VIEWER_FILES], inputs[3 + 9];
+  KergsFileRole       outputs[KERGS_MAX_VIEWER_FILES], inputs[NAMED_INPUTS + 9];
   PetscInt            nin = 0;
-  char                msg[256];
+  char                msg[256], *all;
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&vf));
   PetscCall(KergsFileViewerFiles(vf));
-  files.n = 0;
-  (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
-  for (int i = 0; i < files.n; i++) inputs[nin++] = (KergsFileRole){"-options_file", files.path[i]};
-  for (int k = 0; k < 3; k++) {
-    PetscCall(OptionValueUnread(named[k], given[k], sizeof(given[k])));
-    inputs[nin++] = (KergsFileRole){named[k], given[k]};
+  if (vf->n) { /* no viewer's file, nothing to check */
+    files.n = 0;
+    (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
+    for (int i = 0; i < files.n; i++) inputs[nin++] = (KergsFileRole){"-options_file", files.path[i]};
+    PetscCall(PetscOptionsGetAll(NULL, &all));
+    PetscCall(KergsOptionsTextWalk(all, TakeNamedInput, given));
+    PetscCall(PetscFree(all));
+    for (int k = 0; k < NAMED_INPUTS; k++) inputs[nin++] = (KergsFileRole){NamedInputs[k], given[k]};
+    for (PetscInt k = 0; k < vf->n; k++) outputs[k] = (KergsFileRole){vf->option[k], vf->path[k]};
+    PetscCall(KergsFileCheckPaths(PETSC_COMM_WORLD, vf->n, outputs, nin, inputs, 0, NULL));
   }
-  for (PetscInt k = 0; k < vf->n; k++) outputs[k] = (KergsFileRole){vf->option[k], vf->path[k]};
-  PetscCall(KergsFileCheckPaths(PETSC_COMM_WORLD, vf->n, outputs, nin, inputs, 0, NULL));
   PetscCall(PetscFree(vf));
   PetscFunctionReturn(0);
 }

@@ -71,6 +71,11 @@ PETSC_EXTERN PetscErrorCode KergsViewFromOptions(MPI_Comm, const char prefix[], 
    some option has no value. Flags, viewers (whose value is optional), PETSc's own options and those of PETSc objects
    pass. */
 PETSC_EXTERN PetscErrorCode KergsOptionsCheckValues(MPI_Comm, PetscErrorCode (*read_all)(MPI_Comm, void *), void *ctx);
+/* The options of PetscOptionsGetAll's text ("-name value words -flag -name2 value"), in order: visit(name, value, ctx),
+   the value's words joined by one space ("" for a flag). A token is a name when it is '-' then a letter (a negative
+   number such as -0.05 is a value). Reads nothing from the database: no option is marked as read. */
+typedef PetscErrorCode (*KergsOptionVisitor)(const char name[], const char value[], void *ctx);
+PETSC_EXTERN PetscErrorCode KergsOptionsTextWalk(const char text[], KergsOptionVisitor visit, void *ctx);
 /* The largest number of disks this build can hold: KERGS_DIM values per disk must be indexable by PetscInt. */
 #define KERGS_MAX_DISKS (PETSC_MAX_INT / KERGS_DIM)
 /* Provenance of a run, as the output files record it (docs/results.md): the version of the sources, captured at build

@@ -180,3 +180,30 @@ PetscErrorCode KergsOptionsBool(PetscOptionItems *PetscOptionsObject, const char
   PetscCall(PetscOptionsBool(opt, text, man, current, value, set));
   PetscFunctionReturn(0);
 }
+
+static PetscBool IsOptionName(const char *t)
+{
+  return t[0] == '-' && ((t[1] >= 'a' && t[1] <= 'z') || (t[1] >= 'A' && t[1] <= 'Z')) ? PETSC_TRUE : PETSC_FALSE;
+}
+
+PetscErrorCode KergsOptionsTextWalk(const char text[], KergsOptionVisitor visit, void *ctx)
+{
+  char  *copy, *save = NULL, *tok, name[256] = "", value[4096] = "";
+  size_t len;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscStrallocpy(text, &copy));
+  for (tok = strtok_r(copy, " \t\n", &save);; tok = strtok_r(NULL, " \t\n", &save)) {
+    if (!tok || IsOptionName(tok)) {
+      if (name[0]) PetscCall((*visit)(name, value, ctx));
+      if (!tok) break;
+      PetscCall(PetscStrncpy(name, tok, sizeof(name)));
+      value[0] = 0;
+      continue;
+    }
+    PetscCall(PetscStrlen(value, &len));
+    PetscCall(PetscSNPrintf(value + len, sizeof(value) - len, "%s%s", len ? " " : "", tok));
+  }
+  PetscCall(PetscFree(copy));
+  PetscFunctionReturn(0);
+}

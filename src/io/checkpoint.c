@@ -678,13 +678,6 @@ PetscErrorCode KergsCheckpointRead(const char path[], KergsScene sc, KergsContac
 /* ------------------------------------------------------------------------------------------------ */
 /* Options                                                                                          */
 
-/* Whether token starts an option: '-' then a letter (a negative number such as -0.05 is a value). */
-static PetscBool IsOptionName(const char *t)
-{
-  return t[0] == '-' && ((t[1] >= 'a' && t[1] <= 'z') || (t[1] >= 'A' && t[1] <= 'Z')) ? PETSC_TRUE : PETSC_FALSE;
-}
-
-/* The pairs of PetscOptionsGetAll's text: "-name value words -name2 -name3 value". */
 /* Options that make the packing and the container: a restart takes them from the checkpoint (its disks and walls),
    so that a different value on the command line would be ignored while the results record it. */
 static PetscBool IsGeometryOption(const char name[])
@@ -737,31 +730,18 @@ static PetscErrorCode InsertCheckpointOption(const char name[], const char value
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode InsertOptions(const char text[])
+/* One option of the checkpointed run: inserted unless the command line gives it (which wins; a geometry option must
+   then be the same), -restart never. */
+static PetscErrorCode InsertOption(const char name[], const char value[], void *ctx)
 {
-  char  *copy, *save = NULL, *tok, name[256] = "", value[4096] = "";
-  size_t len;
+  PetscBool set, skip;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscStrallocpy(text, &copy));
-  for (tok = strtok_r(copy, " \t\n", &save);; tok = strtok_r(NULL, " \t\n", &save)) {
-    if (!tok || IsOptionName(tok)) {
-      if (name[0]) {
-        PetscBool set, skip;
-        PetscCall(PetscStrcmp(name, "-restart", &skip));
-        PetscCall(PetscOptionsHasName(NULL, NULL, name, &set));
-        if (!skip && set) PetscCall(CheckGeometryOption(name, value));
-        if (!skip && !set) PetscCall(InsertCheckpointOption(name, value[0] ? value : NULL)); /* the command line wins */
-      }
-      if (!tok) break;
-      PetscCall(PetscStrncpy(name, tok, sizeof(name)));
-      value[0] = 0;
-      continue;
-    }
-    PetscCall(PetscStrlen(value, &len));
-    PetscCall(PetscSNPrintf(value + len, sizeof(value) - len, "%s%s", len ? " " : "", tok));
-  }
-  PetscCall(PetscFree(copy));
+  (void)ctx;
+  PetscCall(PetscStrcmp(name, "-restart", &skip));
+  PetscCall(PetscOptionsHasName(NULL, NULL, name, &set));
+  if (!skip && set) PetscCall(CheckGeometryOption(name, value));
+  if (!skip && !set) PetscCall(InsertCheckpointOption(name, value[0] ? value : NULL));
   PetscFunctionReturn(0);
 }
 
@@ -783,7 +763,7 @@ PetscErrorCode KergsCheckpointLoadOptions(MPI_Comm comm, const char path[])
   PetscCall(PetscViewerHDF5Open(comm, path, FILE_MODE_READ, &v));
   PetscCall(PetscViewerHDF5ReadAttribute(v, "/", "options", PETSC_STRING, NULL, &text));
   PetscCall(PetscViewerDestroy(&v));
-  PetscCall(InsertOptions(text));
+  PetscCall(KergsOptionsTextWalk(text, InsertOption, NULL));
   PetscCall(PetscFree(text));
   PetscFunctionReturn(0);
 }

@@ -433,45 +433,40 @@ PetscErrorCode KergsFileCheckPaths(MPI_Comm comm, PetscInt nout, const KergsFile
   PetscFunctionReturn(0);
 }
 
-static void AddViewerFile(KergsViewerFiles *vf, const char option[], const char value[])
+static PetscErrorCode AddViewerFile(const char option[], const char value[], void *ctx)
 {
   static const char *types[] = {"", "ascii", "binary", "hdf5", "vtk", "matlab"};
+  KergsViewerFiles  *vf      = (KergsViewerFiles *)ctx;
   const char        *colon   = strchr(value, ':');
   char               file[PETSC_MAX_PATH_LEN];
   size_t             len;
   PetscBool          known = PETSC_FALSE;
 
-  if (!colon) return;
+  PetscFunctionBeginUser;
+  if (!colon) PetscFunctionReturn(0);
   for (size_t t = 0; t < sizeof(types) / sizeof(types[0]); t++)
     if (strlen(types[t]) == (size_t)(colon - value) && !strncmp(value, types[t], (size_t)(colon - value))) known = PETSC_TRUE;
   len = strcspn(colon + 1, ":");
-  if (!known || len == 0 || len >= sizeof(file)) return;
+  if (!known || len == 0 || len >= sizeof(file)) PetscFunctionReturn(0);
   memcpy(file, colon + 1, len);
   file[len] = 0;
-  if (!strcmp(file, "stdout") || !strcmp(file, "stderr")) return;
+  if (!strcmp(file, "stdout") || !strcmp(file, "stderr")) PetscFunctionReturn(0);
   for (PetscInt k = 0; k < vf->n; k++)
-    if (!strcmp(vf->path[k], file)) return;
-  if (vf->n == KERGS_MAX_VIEWER_FILES) return;
+    if (!strcmp(vf->path[k], file)) PetscFunctionReturn(0);
+  if (vf->n == KERGS_MAX_VIEWER_FILES) PetscFunctionReturn(0);
   snprintf(vf->option[vf->n], sizeof(vf->option[0]), "%s", option);
   snprintf(vf->path[vf->n++], sizeof(vf->path[0]), "%s", file);
+  PetscFunctionReturn(0);
 }
 
-/* From PetscOptionsGetAll's text: "-name value -flag -name2 value". */
 PetscErrorCode KergsFileViewerFiles(KergsViewerFiles *vf)
 {
-  char *all, *save = NULL, name[64] = "";
+  char *all;
 
   PetscFunctionBeginUser;
   vf->n = 0;
   PetscCall(PetscOptionsGetAll(NULL, &all));
-  for (char *tok = strtok_r(all, " ", &save); tok; tok = strtok_r(NULL, " ", &save)) {
-    if (tok[0] == '-' && ((tok[1] >= 'a' && tok[1] <= 'z') || (tok[1] >= 'A' && tok[1] <= 'Z')))
-      snprintf(name, sizeof(name), "%s", tok);
-    else if (name[0]) {
-      AddViewerFile(vf, name, tok);
-      name[0] = 0;
-    }
-  }
+  PetscCall(KergsOptionsTextWalk(all, AddViewerFile, vf));
   PetscCall(PetscFree(all));
   PetscFunctionReturn(0);
 }
