@@ -68,17 +68,22 @@ PetscErrorCode KergsSceneDestroy(KergsScene *scene)
   PetscFunctionReturn(0);
 }
 
-/* Mass and inertia of a disk from its material's density (2D: area pi r^2, I = m r^2 / 2 about its centre).
-   Disks with an invalid material are left massless: KergsSceneCheck reports them. */
+/* Mass and inertia of a disk of radius r (2D: area pi r^2, I = m r^2 / 2 about its centre). */
+static void DiskMass(PetscReal density, PetscReal r, PetscReal *mass, PetscReal *inertia)
+{
+  *mass    = density * PETSC_PI * r * r;
+  *inertia = 0.5 * *mass * r * r;
+}
+
+/* Mass and inertia of each disk from its material's density. Disks with an invalid material are left massless:
+   KergsSceneCheck reports them. */
 static PetscErrorCode SceneComputeMasses(KergsScene scene)
 {
   PetscFunctionBeginUser;
   for (PetscInt i = 0; i < scene->nlocal; i++) {
-    const PetscInt  m = scene->material[i];
-    const PetscReal r = scene->radius[i];
+    const PetscInt m = scene->material[i];
 
-    scene->mass[i]    = (m >= 0 && m < scene->nmaterials) ? scene->density[m] * PETSC_PI * r * r : 0.0;
-    scene->inertia[i] = 0.5 * scene->mass[i] * r * r;
+    DiskMass((m >= 0 && m < scene->nmaterials) ? scene->density[m] : 0.0, scene->radius[i], &scene->mass[i], &scene->inertia[i]);
   }
   PetscFunctionReturn(0);
 }
@@ -667,7 +672,8 @@ static PetscErrorCode CheckDisk(MPI_Comm comm, PetscInt nmaterials, const PetscR
   {
     /* M^-1 enters every step: a mass or a moment of inertia that underflows to 0 or overflows makes the first update
        non-finite, which the watch then reports as a blow-up that names no cause */
-    const PetscReal mass = density[d->material] * PETSC_PI * d->radius * d->radius, inertia = 0.5 * mass * d->radius * d->radius;
+    PetscReal mass, inertia;
+    DiskMass(density[d->material], d->radius, &mass, &inertia);
     PetscCheck(PetscIsNormalReal(mass) && PetscIsNormalReal(inertia) && PetscIsNormalReal(1.0 / inertia), comm, PETSC_ERR_ARG_OUTOFRANGE,
                "Grain %" PetscInt_FMT ": radius %g and density %g (material %" PetscInt_FMT ") give a mass %g and a moment of inertia %g "
                "that double precision cannot invert",
