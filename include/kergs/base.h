@@ -100,6 +100,16 @@ PETSC_EXTERN void KergsReturnFreedMemory(void);
 /* PETSc's error handler, which reports a failed allocation by the function's name alone ("DisksFromLattice"), with a
    first line that says it was out of memory, where, and what to change. Push after PetscInitialize (main). */
 PETSC_EXTERN PetscErrorCode KergsPushErrorHandler(void);
+/* An error raised while a file is open on several ranks is held until the file is closed, then raised again:
+     PetscCall(KergsErrorsHoldBegin()); ierr = Load(viewer); PetscCall(KergsErrorsHoldEnd());
+     PetscCall(PetscViewerDestroy(&viewer)); PetscCall(KergsErrorsRaiseHeld(comm, ierr));
+   Without it, PETSc's handler makes every rank but the first sleep 10 s after printing nothing (so that the first rank
+   prints and aborts the run), while the first rank waits for them in the file's collective close: a refusal took 10 s
+   to exit on 2 ranks. Between Begin and End errors return without a word; RaiseHeld (collective) raises the held
+   error with its message, once on comm when every rank holds one, else on each rank that does. */
+PETSC_EXTERN PetscErrorCode KergsErrorsHoldBegin(void);
+PETSC_EXTERN PetscErrorCode KergsErrorsHoldEnd(void);
+PETSC_EXTERN PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm, PetscErrorCode);
 /* The rank owning global index i when rank q owns [ranges[q], ranges[q+1]) (size + 1 entries, non-decreasing; an
    empty rank is skipped: a later rank starts at the same index). */
 static inline PetscMPIInt KergsRangeOwner(const PetscInt ranges[], PetscMPIInt size, PetscInt i)

@@ -107,6 +107,33 @@ PetscErrorCode KergsPushErrorHandler(void)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsErrorsHoldBegin(void)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsErrorsHoldEnd(void)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscPopErrorHandler());
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm comm, PetscErrorCode held)
+{
+  PetscMPIInt failed  = held ? 1 : 0, all;
+  char       *message = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Allreduce(&failed, &all, 1, MPI_INT, MPI_MIN, comm));
+  if (!held) PetscFunctionReturn(0);
+  PetscCall(PetscErrorMessage(held, NULL, &message)); /* the held error's own message, kept by PETSc */
+  /* raised on comm when every rank holds one, so that it is printed once; else by each rank that does */
+  SETERRQ(all ? comm : PETSC_COMM_SELF, held, "%s", message && message[0] ? message : "error raised while a file was open");
+}
+
 void KergsReturnFreedMemory(void)
 {
 #if defined(__GLIBC__)

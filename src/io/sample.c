@@ -307,9 +307,12 @@ PetscErrorCode KergsSampleReadForces(KergsScene scene, KergsContacts contacts, P
     PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
     PetscFunctionReturn(0);
   }
+  PetscCall(KergsErrorsHoldBegin());
   ierr = SampleContactsLoad(viewer, path, scene, &sc);
+  PetscCall(KergsErrorsHoldEnd());
   PetscCall(PetscViewerDestroy(&viewer));
-  PetscCall(ierr);
+  if (ierr) PetscCall(SampleContactsFree(&sc));
+  PetscCall(KergsErrorsRaiseHeld(comm, ierr));
   PetscCall(SampleContactsOwned(path, scene, &sc, &c, count));
   PetscCall(SampleContactsFree(&sc));
   PetscCallMPI(MPI_Allreduce(count, total, 3, MPIU_INT, MPI_SUM, comm));

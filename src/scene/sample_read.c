@@ -250,9 +250,11 @@ PetscErrorCode KergsSampleReadBox(MPI_Comm comm, const char path[], PetscReal bo
   PetscCall(KergsInitializePackage());
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
   PetscCall(SampleOpen(comm, path, &viewer));
+  PetscCall(KergsErrorsHoldBegin());
   ierr = SampleLoadBox(viewer, comm, path, box);
+  PetscCall(KergsErrorsHoldEnd());
   PetscCall(PetscViewerDestroy(&viewer));
-  PetscCall(ierr);
+  PetscCall(KergsErrorsRaiseHeld(comm, ierr));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -268,9 +270,13 @@ PetscErrorCode KergsSampleRead(KergsScene scene, const char path[])
   PetscCall(KergsInitializePackage());
   PetscCall(PetscLogEventBegin(KERGS_IO, 0, 0, 0, 0));
   PetscCall(SampleOpen(comm, path, &viewer));
+  PetscCall(KergsErrorsHoldBegin());
   ierr = SampleLoad(viewer, comm, path, &s);
+  PetscCall(KergsErrorsHoldEnd());
   PetscCall(PetscViewerDestroy(&viewer));
-  if (!ierr) ierr = SampleValidate(scene, path, &s);
+  if (ierr) PetscCall(SampleDataFree(&s));
+  PetscCall(KergsErrorsRaiseHeld(comm, ierr));
+  ierr = SampleValidate(scene, path, &s);
   if (!ierr) ierr = SampleApply(scene, &s);
   PetscCall(SampleDataFree(&s));
   PetscCall(ierr);
