@@ -64,6 +64,14 @@ kergs_bad_input(stop_at_rest_stress_box "the 5 walls are not a box of four axis-
 # (KergsErrorsHoldBegin), else PETSc held rank 1 for 10 s while rank 0 closed the file. The time limit fails it then.
 kergs_bad_input(box_from_sample_none "records no box" -options_file cases/biaxial_small.opts -sample_input cases/deposit500.h5)
 set_tests_properties(bad_input_box_from_sample_none PROPERTIES TIMEOUT 9 LABELS bad_input)
+# options that would do nothing in the set-up given: a sample file for disks from elsewhere, the rest rule's stress
+# check without the rule, an FCLib file without a step to export
+kergs_bad_input(sample_input_unused "-sample_input cases/deposit500.h5 is read only with -disks_source file, and the disks come from -disks_source list"
+                -options_file cases/confine5.opts -sample_input cases/deposit500.h5)
+kergs_bad_input(stop_at_rest_stress_alone "-stop_at_rest_stress holds back the stop of -stop_at_rest_inertial, which is not given"
+                -options_file cases/compact_small.opts -stop_at_rest_stress 0.1)
+kergs_bad_input(fclib_output_alone "-fclib_output .*x.fclib.h5 is the file of the step -fclib_step exports, and no step is given"
+                -options_file cases/confine5.opts -fclib_output results/x.fclib.h5)
 kergs_bad_input(box_from_sample_and_box "Give -box or -box_from_sample, not both" -options_file cases/biaxial_small.opts -box 0,0,1,1)
 kergs_bad_input(box_from_sample_no_file "needs -disks_source file" -options_file cases/confine5.opts -box_from_sample)
 kergs_bad_input(bad_solver "solver_type" -options_file cases/confine5.opts -solver_type nlgz)

@@ -260,6 +260,9 @@ PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
   o.random_seed  = 1;
   PetscCall(DiskOptionsRead(scene->comm, &o));
   if (scene->restoring) o.source = -1; /* read (for -help and the unused-option check), but the checkpoint holds the disks */
+  PetscCheck(o.source < 0 || o.source == DISKS_FILE || !o.sample_set, scene->comm, PETSC_ERR_ARG_INCOMP,
+             "-sample_input %s is read only with -disks_source file, and the disks come from -disks_source %s: drop one", o.sample,
+             DiskSources[o.source]);
   switch ((DiskSource)o.source) {
   case DISKS_LIST:
     PetscCall(DisksFromList(scene, &o));

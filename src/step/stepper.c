@@ -56,7 +56,7 @@ static PetscErrorCode CheckClockOptions(MPI_Comm comm)
 PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
 {
   const char *name;
-  PetscBool   help;
+  PetscBool   help, rest_stress_set = PETSC_FALSE, fclib_output_set = PETSC_FALSE;
 
   PetscFunctionBeginUser;
   PetscCall(PetscOptionsHasHelp(NULL, &help));
@@ -93,7 +93,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
       "-stop_at_rest_stress",
       "With -stop_at_rest_inertial: stop only once the Love-Weber stress and the walls' tractions' (friction included), "
       "averaged over the same window, differ by at most this times p along each pressure wall's normal (stress_gap; 0: not checked)",
-      "", st->rest_stress, &st->rest_stress, NULL));
+      "", st->rest_stress, &st->rest_stress, &rest_stress_set));
   PetscCall(PetscOptionsString("-sample_output", "Write the final packing to this sample file (HDF5), for -disks_source file", "",
                                st->sample_out, st->sample_out, sizeof(st->sample_out), NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-sample_forces",
@@ -104,8 +104,8 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                             "Export in FCLib format the local problem solved in this step, numbered as the step lines (1: the first step; "
                             "-1: none)",
                             "", st->fclib_step, &st->fclib_step, NULL));
-  PetscCall(
-      PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path), NULL));
+  PetscCall(PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path),
+                               &fclib_output_set));
   PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair",
                              "", st->overlap_tol, &st->overlap_tol, NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-quiet", "Do not print a summary line per step", "", st->quiet, &st->quiet, NULL));
@@ -130,6 +130,11 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
              st->fclib_step);
   PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative",
              (double)st->overlap_tol);
+  /* options that would do nothing in this set-up */
+  PetscCheck(!rest_stress_set || st->rest_inertial > 0, st->comm, PETSC_ERR_ARG_INCOMP,
+             "-stop_at_rest_stress holds back the stop of -stop_at_rest_inertial, which is not given: give both, or neither");
+  PetscCheck(!fclib_output_set || st->fclib_step >= 1, st->comm, PETSC_ERR_ARG_INCOMP,
+             "-fclib_output %s is the file of the step -fclib_step exports, and no step is given: add -fclib_step N", st->fclib_path);
   if (st->fclib_step >= 0 && !st->fclib_path[0])
     PetscCall(PetscSNPrintf(st->fclib_path, sizeof(st->fclib_path), "results/%s-step%" PetscInt_FMT ".fclib.h5", name[0] ? name : "kergs",
                             st->fclib_step));
