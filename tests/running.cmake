@@ -58,6 +58,13 @@ kergs_bad_input(kernel_count_overflow "Option .kernel_diag_batch: -3000000000 is
 # a checkpoint's .tmp (a write that did not finish) is not restarted from; an export of a step beyond the run is refused
 kergs_bad_input(restart_from_tmp "restart [^ ]*c.checkpoint.h5.tmp is the temporary file of a checkpoint.*restart from [^ ]*c.checkpoint.h5,"
                 -restart tests/data/c.checkpoint.h5.tmp)
+# a restart of a -box_from_sample run builds its box walls from the run's sample file (relative paths): from another
+# directory it is refused with the reason, not "does not exist"
+add_test(NAME bad_input_restart_box_from_sample_elsewhere
+         COMMAND sh -c "\"$1\" -options_file cases/biaxial_small.opts -steps 1 -output \"$0/rbfs.h5\" -output_every 0 -checkpoint_every 1 -checkpoint_path \"$0/rbfs.checkpoint.h5\" -quiet > /dev/null && cd \"$0\" && exec \"$2\" \"Restart of a run with -box_from_sample: the box walls are built from its sample file cases/compact_small.h5 .* restart in the directory the run started in\" \"$1\" -restart rbfs.checkpoint.h5 -steps 2"
+                 ${CMAKE_CURRENT_BINARY_DIR} $<TARGET_FILE:kergs_exe> ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(bad_input_restart_box_from_sample_elsewhere PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60 LABELS bad_input)
 kergs_bad_input(fclib_step_beyond "fclib_step 50 is beyond the run .-steps 40." -options_file cases/confine5.opts -fclib_step 50)
 # an options file that includes itself, directly or through another, is refused before PETSc recurses into it; the
 # files an options file includes are inputs that no output may replace

@@ -290,10 +290,10 @@ PetscErrorCode KergsSceneWallsOptions(PetscOptionItems *PetscOptionsObject, Kerg
 
 /* -box_from_sample: the box a compaction ended in, recorded with its sample, so that the test that starts from the
    sample confines it exactly (a box typed by hand from another seed's sample would cut grains or leave a gap). */
-static PetscErrorCode WallsBoxFromSample(MPI_Comm comm, KergsWallsSpec *spec)
+static PetscErrorCode WallsBoxFromSample(MPI_Comm comm, KergsWallsSpec *spec, PetscBool restoring)
 {
   char      path[PETSC_MAX_PATH_LEN], source[16] = "";
-  PetscBool set, is_file;
+  PetscBool set, is_file, readable;
 
   PetscFunctionBeginUser;
   PetscCheck(!spec->box_set, comm, PETSC_ERR_ARG_INCOMP, "Give -box or -box_from_sample, not both");
@@ -302,6 +302,11 @@ static PetscErrorCode WallsBoxFromSample(MPI_Comm comm, KergsWallsSpec *spec)
   PetscCall(PetscOptionsGetString(NULL, NULL, "-sample_input", path, sizeof(path), &set));
   PetscCheck(is_file && set && path[0], comm, PETSC_ERR_ARG_WRONGSTATE,
              "-box_from_sample takes the box of the sample the disks come from: it needs -disks_source file -sample_input <path>");
+  PetscCall(PetscTestFile(path, 'r', &readable));
+  PetscCheck(readable || !restoring, comm, PETSC_ERR_FILE_OPEN,
+             "Restart of a run with -box_from_sample: the box walls are built from its sample file %s (then moved where the checkpoint has "
+             "them), which cannot be read from here; restart in the directory the run started in, with the sample where it was",
+             path);
   PetscCall(KergsSampleReadBox(comm, path, spec->box));
   spec->box_set = PETSC_TRUE;
   PetscFunctionReturn(0);
@@ -509,7 +514,7 @@ PetscErrorCode KergsSceneSetWalls(KergsScene scene, KergsWallsSpec *spec)
   PetscCall(PetscFree(scene->walls));
   scene->nwalls = 0;
   PetscCall(PetscCalloc1(4 + spec->nnames, &scene->walls));
-  if (spec->box_from_sample) PetscCall(WallsBoxFromSample(scene->comm, spec));
+  if (spec->box_from_sample) PetscCall(WallsBoxFromSample(scene->comm, spec, scene->restoring));
   if (spec->box_set) PetscCall(SceneBoxWalls(scene, spec->box, spec->open_top, &nbox, scene->walls));
   scene->nwalls = nbox;
   for (PetscInt k = 0; k < spec->nnames; k++) {
