@@ -115,6 +115,14 @@ set_tests_properties(sample_contacts_nan PROPERTIES TIMEOUT 9)
 kergs_edited_sample(sample_contacts_ncontacts_array cases/compact_10k.h5 "f['sample/contacts'].attrs['ncontacts'] = np.arange(1000)"
                     "Sample file .*sample_contacts_ncontacts_array\\.h5: attribute ncontacts of /sample/contacts is not a single integer" 2
                     -options_file cases/biaxial_1m.opts -steps 1)
+# A sample too large for the memory, read while its file is open (where errors are held until it is closed): the
+# failed allocation is still reported as one. Its datasets are declared for 200 million disks but not written, and a
+# 3 GB address-space limit refuses the 3.2 GB of a coordinate vector without touching the machine's memory.
+add_test(NAME sample_out_of_memory
+         COMMAND sh -c "cp cases/compact_small.h5 \"$0/sample_oom.h5\" && /usr/bin/python3 -c \"import h5py, numpy as np; g = h5py.File('$0/sample_oom.h5', 'r+')['sample']; N = 200000000; [(lambda k, d: (g.__delitem__(k), g.create_dataset(k, shape=(N,) + d.shape[1:], dtype=d.dtype)))(k, g[k]) for k in list(g.keys()) if k != 'box' and isinstance(g[k], h5py.Dataset)]; g.attrs['ndisks'] = np.int32(N)\" && ulimit -v 3000000 && exec \"$1\" \"out of memory: an allocation in VecCreate_MPI_Private failed\" \"$2\" -options_file cases/biaxial_small.opts -sample_input \"$0/sample_oom.h5\" -output_none"
+                 ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh $<TARGET_FILE:kergs_exe>
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(sample_out_of_memory PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60 LABELS bad_input)
 # A sample file is checked for what it must be before its grains are read: its format (root attribute kergs_format),
 # its dimension, at least one grain. Each is an edited copy of cases/compact_small.h5, refused naming the file.
 kergs_edited_sample(sample_bad_format cases/compact_small.h5 "del f.attrs['kergs_format']"

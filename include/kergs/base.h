@@ -105,8 +105,9 @@ PETSC_EXTERN PetscErrorCode KergsPushErrorHandler(void);
      PetscCall(PetscViewerDestroy(&viewer)); PetscCall(KergsErrorsRaiseHeld(comm, ierr));
    Without it, PETSc's handler makes every rank but the first sleep 10 s after printing nothing (so that the first rank
    prints and aborts the run), while the first rank waits for them in the file's collective close: a refusal took 10 s
-   to exit on 2 ranks. Between Begin and End errors return without a word; RaiseHeld (collective) raises the held
-   error with its message, once on comm when every rank holds one, else on each rank that does. */
+   to exit on 2 ranks. Between Begin and End errors return without a word and the first is kept; RaiseHeld
+   (collective) raises it again with its message and the function, file and line where it arose (a failed allocation
+   as PETSC_ERR_MEM, with the caller's name), once on comm when every rank holds one, else on each rank that does. */
 PETSC_EXTERN PetscErrorCode KergsErrorsHoldBegin(void);
 PETSC_EXTERN PetscErrorCode KergsErrorsHoldEnd(void);
 PETSC_EXTERN PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm, PetscErrorCode);

@@ -107,10 +107,36 @@ PetscErrorCode KergsPushErrorHandler(void)
   PetscFunctionReturn(0);
 }
 
+/* The first error raised while errors are held: what PETSc's handler receives (its message formatted, up to PETSc's
+   2,048 characters), kept to raise it again once the file is closed. */
+static struct {
+  PetscBool      set;
+  PetscErrorCode code;
+  int            line;
+  char           fun[128], file[256], message[2048];
+} Held;
+
+static PetscErrorCode HoldHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p,
+                                  const char *mess, void *ctx)
+{
+  (void)comm;
+  (void)ctx;
+  if (p == PETSC_ERROR_INITIAL && !Held.set) {
+    Held.set  = PETSC_TRUE;
+    Held.code = n;
+    Held.line = line;
+    (void)PetscStrncpy(Held.fun, fun ? fun : "", sizeof(Held.fun));
+    (void)PetscStrncpy(Held.file, file ? file : "", sizeof(Held.file));
+    (void)PetscStrncpy(Held.message, mess ? mess : "", sizeof(Held.message));
+  }
+  return n;
+}
+
 PetscErrorCode KergsErrorsHoldBegin(void)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  Held.set = PETSC_FALSE;
+  PetscCall(PetscPushErrorHandler(HoldHandler, NULL));
   PetscFunctionReturn(0);
 }
 
@@ -123,15 +149,20 @@ PetscErrorCode KergsErrorsHoldEnd(void)
 
 PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm comm, PetscErrorCode held)
 {
-  PetscMPIInt failed  = held ? 1 : 0, all;
-  char       *message = NULL;
+  PetscMPIInt failed = held ? 1 : 0, all;
+  MPI_Comm    where;
+  PetscBool   memory;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Allreduce(&failed, &all, 1, MPI_INT, MPI_MIN, comm));
   if (!held) PetscFunctionReturn(0);
-  PetscCall(PetscErrorMessage(held, NULL, &message)); /* the held error's own message, kept by PETSc */
-  /* raised on comm when every rank holds one, so that it is printed once; else by each rank that does */
-  SETERRQ(all ? comm : PETSC_COMM_SELF, held, "%s", message && message[0] ? message : "error raised while a file was open");
+  where = all ? comm : PETSC_COMM_SELF; /* printed once when every rank holds one, else by each rank that does */
+  PetscCheck(Held.set, where, held, "an error was raised while a file was open");
+  /* PETSc's allocator names only the caller: raised as PETSC_ERR_MEM, KergsPushErrorHandler's handler says it was
+     out of memory */
+  PetscCall(PetscStrcmp(Held.fun, "PetscMallocAlign", &memory));
+  if (memory) SETERRQ(where, PETSC_ERR_MEM, "%s", Held.message);
+  SETERRQ(where, Held.code, "%s [raised in %s() at %s:%d]", Held.message, Held.fun, Held.file, Held.line);
 }
 
 void KergsReturnFreedMemory(void)
