@@ -65,6 +65,21 @@ add_test(NAME bad_input_restart_box_from_sample_elsewhere
                  ${CMAKE_CURRENT_BINARY_DIR} $<TARGET_FILE:kergs_exe> ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(bad_input_restart_box_from_sample_elsewhere PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60 LABELS bad_input)
+# a restart takes its options from the checkpoint and can only change their values: turning the rest rule or the
+# export off must not meet the refusals of options that would do nothing (-stop_at_rest_stress, -fclib_output)
+add_test(NAME restart_turns_options_off
+         COMMAND sh -c "\"$1\" -options_file cases/compact_small.opts -steps 2 -stop_at_rest_inertial 1e-4 -stop_at_rest_window 1 -stop_at_rest_stress 0.05 -fclib_step 1 -fclib_output \"$0/rto.fclib.h5\" -output \"$0/rto.h5\" -output_every 0 -checkpoint_every 1 -checkpoint_path \"$0/rto.checkpoint.h5\" -sample_output \"$0/rto_sample.h5\" -quiet > /dev/null && exec \"$1\" -restart \"$0/rto.checkpoint.h5\" -steps 3 -stop_at_rest_inertial 0 -fclib_step -1 -quiet"
+                 ${CMAKE_CURRENT_BINARY_DIR} $<TARGET_FILE:kergs_exe>
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(restart_turns_options_off PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60 FIXTURES_SETUP rto)
+# that restart's checkpoint holds random disks: a -sample_input given with it is read and not used, and must not stop
+# the pass that finds options given without their value
+add_test(NAME bad_input_restart_missing_value
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/expect_error.sh "option -initial_overlap_tol is given without its value" $<TARGET_FILE:kergs_exe>
+                 -restart ${CMAKE_CURRENT_BINARY_DIR}/rto.checkpoint.h5 -steps 3 -sample_input cases/compact_small.h5 -initial_overlap_tol
+                 -output ${CMAKE_CURRENT_BINARY_DIR}/rto_missing.h5
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(bad_input_restart_missing_value PROPERTIES ENVIRONMENT "${KERGS_MPI_ENV}" TIMEOUT 60 FIXTURES_REQUIRED rto LABELS bad_input)
 kergs_bad_input(fclib_step_beyond "fclib_step 50 is beyond the run .-steps 40." -options_file cases/confine5.opts -fclib_step 50)
 # an options file that includes itself, directly or through another, is refused before PETSc recurses into it; the
 # files an options file includes are inputs that no output may replace

@@ -252,6 +252,7 @@ static PetscErrorCode DisksFromFile(KergsScene scene, const DiskOptions *o)
 PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
 {
   DiskOptions o;
+  PetscBool   restart, help;
 
   PetscFunctionBeginUser;
   PetscCall(PetscMemzero(&o, sizeof(o)));
@@ -260,7 +261,11 @@ PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
   o.random_seed  = 1;
   PetscCall(DiskOptionsRead(scene->comm, &o));
   if (scene->restoring) o.source = -1; /* read (for -help and the unused-option check), but the checkpoint holds the disks */
-  PetscCheck(o.source < 0 || o.source == DISKS_FILE || !o.sample_set, scene->comm, PETSC_ERR_ARG_INCOMP,
+  /* not on a restart, whose checkpoint holds the disks, nor in the -help pass that looks for options without a value
+     (main's KergsOptionsCheckValues, where a restart is not marked as one) */
+  PetscCall(PetscOptionsHasName(NULL, NULL, "-restart", &restart));
+  PetscCall(PetscOptionsHasHelp(NULL, &help));
+  PetscCheck(o.source < 0 || o.source == DISKS_FILE || !o.sample_set || restart || help, scene->comm, PETSC_ERR_ARG_INCOMP,
              "-sample_input %s is read only with -disks_source file, and the disks come from -disks_source %s: drop one", o.sample,
              DiskSources[o.source]);
   switch ((DiskSource)o.source) {

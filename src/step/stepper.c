@@ -130,10 +130,11 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
              st->fclib_step);
   PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative",
              (double)st->overlap_tol);
-  /* options that would do nothing in this set-up */
-  PetscCheck(!rest_stress_set || st->rest_inertial > 0, st->comm, PETSC_ERR_ARG_INCOMP,
+  /* options that would do nothing in this set-up; not on a restart, which takes its options from the checkpoint and
+     can change a value but not take an option away (-stop_at_rest_inertial 0 or -fclib_step -1 must still work) */
+  PetscCheck(!rest_stress_set || st->rest_inertial > 0 || st->restart_path[0], st->comm, PETSC_ERR_ARG_INCOMP,
              "-stop_at_rest_stress holds back the stop of -stop_at_rest_inertial, which is not given: give both, or neither");
-  PetscCheck(!fclib_output_set || st->fclib_step >= 1, st->comm, PETSC_ERR_ARG_INCOMP,
+  PetscCheck(!fclib_output_set || st->fclib_step >= 1 || st->restart_path[0], st->comm, PETSC_ERR_ARG_INCOMP,
              "-fclib_output %s is the file of the step -fclib_step exports, and no step is given: add -fclib_step N", st->fclib_path);
   if (st->fclib_step >= 0 && !st->fclib_path[0])
     PetscCall(PetscSNPrintf(st->fclib_path, sizeof(st->fclib_path), "results/%s-step%" PetscInt_FMT ".fclib.h5", name[0] ? name : "kergs",
