@@ -115,6 +115,10 @@ set_tests_properties(sample_contacts_nan PROPERTIES TIMEOUT 9)
 kergs_edited_sample(sample_contacts_ncontacts_array cases/compact_10k.h5 "f['sample/contacts'].attrs['ncontacts'] = np.arange(1000)"
                     "Sample file .*sample_contacts_ncontacts_array\\.h5: attribute ncontacts of /sample/contacts is not a single integer" 2
                     -options_file cases/biaxial_1m.opts -steps 1)
+# A corrupt sample whose damage HDF5 itself reports ("Error in HDF5 call H5Lexists() Status -1", naming no file): the
+# message names the file. Eight bytes of cases/compact_small.h5's metadata overwritten at offset 1500.
+kergs_edited_sample(sample_flipped cases/compact_small.h5 "f.close(); b = open('$0/sample_flipped.h5', 'r+b'); b.seek(1500); b.write(bytes([255] * 8)); b.close()"
+                    "Sample file .*sample_flipped\\.h5: Error in HDF5 call" 2 -options_file cases/biaxial_small.opts -steps 1)
 # A sample too large for the memory, read while its file is open (where errors are held until it is closed): the
 # failed allocation is still reported as one. Its datasets are declared for 200 million disks but not written, and a
 # 3 GB address-space limit refuses the 3.2 GB of a coordinate vector without touching the machine's memory.

@@ -102,15 +102,16 @@ PETSC_EXTERN void KergsReturnFreedMemory(void);
 PETSC_EXTERN PetscErrorCode KergsPushErrorHandler(void);
 /* An error raised while a file is open on several ranks is held until the file is closed, then raised again:
      PetscCall(KergsErrorsHoldBegin()); ierr = Load(viewer); PetscCall(KergsErrorsHoldEnd());
-     PetscCall(PetscViewerDestroy(&viewer)); PetscCall(KergsErrorsRaiseHeld(comm, ierr));
+     PetscCall(PetscViewerDestroy(&viewer)); PetscCall(KergsErrorsRaiseHeld(comm, ierr, "Sample file", path));
    Without it, PETSc's handler makes every rank but the first sleep 10 s after printing nothing (so that the first rank
    prints and aborts the run), while the first rank waits for them in the file's collective close: a refusal took 10 s
    to exit on 2 ranks. Between Begin and End errors return without a word and the first is kept; RaiseHeld
    (collective) raises it again with its message and the function, file and line where it arose (a failed allocation
-   as PETSC_ERR_MEM, with the caller's name), once on comm when every rank holds one, else on each rank that does. */
+   as PETSC_ERR_MEM, with the caller's name), once on comm when every rank holds one, else on each rank that does. A
+   message that does not name the file (HDF5's own failures on a corrupt file) is prefixed with role and path. */
 PETSC_EXTERN PetscErrorCode KergsErrorsHoldBegin(void);
 PETSC_EXTERN PetscErrorCode KergsErrorsHoldEnd(void);
-PETSC_EXTERN PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm, PetscErrorCode);
+PETSC_EXTERN PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm, PetscErrorCode, const char[], const char[]);
 /* The rank owning global index i when rank q owns [ranges[q], ranges[q+1]) (size + 1 entries, non-decreasing; an
    empty rank is skipped: a later rank starts at the same index). */
 static inline PetscMPIInt KergsRangeOwner(const PetscInt ranges[], PetscMPIInt size, PetscInt i)

@@ -147,11 +147,12 @@ PetscErrorCode KergsErrorsHoldEnd(void)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm comm, PetscErrorCode held)
+PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm comm, PetscErrorCode held, const char role[], const char path[])
 {
   PetscMPIInt failed = held ? 1 : 0, all;
   MPI_Comm    where;
   PetscBool   memory;
+  char       *named = NULL;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Allreduce(&failed, &all, 1, MPI_INT, MPI_MIN, comm));
@@ -162,7 +163,10 @@ PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm comm, PetscErrorCode held)
      out of memory */
   PetscCall(PetscStrcmp(Held.fun, "PetscMallocAlign", &memory));
   if (memory) SETERRQ(where, PETSC_ERR_MEM, "%s", Held.message);
-  SETERRQ(where, Held.code, "%s [raised in %s() at %s:%d]", Held.message, Held.fun, Held.file, Held.line);
+  /* HDF5's own failures (a corrupt file: "Error in HDF5 call H5Lexists() Status -1") do not name the file */
+  PetscCall(PetscStrstr(Held.message, path, &named));
+  SETERRQ(where, Held.code, "%s%s%s%s%s [raised in %s() at %s:%d]", named ? "" : role, named ? "" : " ", named ? "" : path,
+          named ? "" : ": ", Held.message, Held.fun, Held.file, Held.line);
 }
 
 void KergsReturnFreedMemory(void)

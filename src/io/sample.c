@@ -312,7 +312,7 @@ PetscErrorCode KergsSampleReadForces(KergsScene scene, KergsContacts contacts, P
   PetscCall(KergsErrorsHoldEnd());
   PetscCall(PetscViewerDestroy(&viewer));
   if (ierr) PetscCall(SampleContactsFree(&sc));
-  PetscCall(KergsErrorsRaiseHeld(comm, ierr));
+  PetscCall(KergsErrorsRaiseHeld(comm, ierr, "Sample file", path));
   PetscCall(SampleContactsOwned(path, scene, &sc, &c, count));
   PetscCall(SampleContactsFree(&sc));
   PetscCallMPI(MPI_Allreduce(count, total, 3, MPIU_INT, MPI_SUM, comm));

@@ -254,7 +254,7 @@ PetscErrorCode KergsSampleReadBox(MPI_Comm comm, const char path[], PetscReal bo
   ierr = SampleLoadBox(viewer, comm, path, box);
   PetscCall(KergsErrorsHoldEnd());
   PetscCall(PetscViewerDestroy(&viewer));
-  PetscCall(KergsErrorsRaiseHeld(comm, ierr));
+  PetscCall(KergsErrorsRaiseHeld(comm, ierr, "Sample file", path));
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -275,7 +275,7 @@ PetscErrorCode KergsSampleRead(KergsScene scene, const char path[])
   PetscCall(KergsErrorsHoldEnd());
   PetscCall(PetscViewerDestroy(&viewer));
   if (ierr) PetscCall(SampleDataFree(&s));
-  PetscCall(KergsErrorsRaiseHeld(comm, ierr));
+  PetscCall(KergsErrorsRaiseHeld(comm, ierr, "Sample file", path));
   ierr = SampleValidate(scene, path, &s);
   if (!ierr) ierr = SampleApply(scene, &s);
   PetscCall(SampleDataFree(&s));
