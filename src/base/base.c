@@ -165,8 +165,8 @@ PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm comm, PetscErrorCode held, const ch
   if (memory) SETERRQ(where, PETSC_ERR_MEM, "%s", Held.message);
   /* HDF5's own failures (a corrupt file: "Error in HDF5 call H5Lexists() Status -1") do not name the file */
   PetscCall(PetscStrstr(Held.message, path, &named));
-  SETERRQ(where, Held.code, "%s%s%s%s%s [raised in %s() at %s:%d]", named ? "" : role, named ? "" : " ", named ? "" : path,
-          named ? "" : ": ", Held.message, Held.fun, Held.file, Held.line);
+  if (named) SETERRQ(where, Held.code, "%s [raised in %s() at %s:%d]", Held.message, Held.fun, Held.file, Held.line);
+  SETERRQ(where, Held.code, "%s %s: %s [raised in %s() at %s:%d]", role, path, Held.message, Held.fun, Held.file, Held.line);
 }
 
 void KergsReturnFreedMemory(void)
