@@ -106,9 +106,11 @@ PETSC_EXTERN PetscErrorCode KergsPushErrorHandler(void);
    Without it, PETSc's handler makes every rank but the first sleep 10 s after printing nothing (so that the first rank
    prints and aborts the run), while the first rank waits for them in the file's collective close: a refusal took 10 s
    to exit on 2 ranks. Between Begin and End errors return without a word and the first is kept; RaiseHeld
-   (collective) raises it again with its message and the function, file and line where it arose (a failed allocation
-   as PETSC_ERR_MEM, with the caller's name), once on comm when every rank holds one, else on each rank that does. A
-   message that does not name the file (HDF5's own failures on a corrupt file) is prefixed with role and path. */
+   (collective) raises it again with its message and the function, file and line where it arose (prefixed with role and
+   path when the message does not name the file, as HDF5's own failures on a corrupt file do), once on comm when every
+   rank holds one. Holding suits the errors every rank meets at the same point (a file's content, read by all); one
+   rank's error leaves it closing the file while the others read on, so a failed allocation, one rank's by nature, is
+   not held: it prints that it was out of memory and aborts the run. */
 PETSC_EXTERN PetscErrorCode KergsErrorsHoldBegin(void);
 PETSC_EXTERN PetscErrorCode KergsErrorsHoldEnd(void);
 PETSC_EXTERN PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm, PetscErrorCode, const char[], const char[]);

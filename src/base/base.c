@@ -84,19 +84,29 @@ PetscErrorCode KergsExchangeRecords(MPI_Comm comm, size_t size, const PetscMPIIn
   PetscFunctionReturn(0);
 }
 
-/* PETSc 3.18's PetscMallocAlign raises its failure with the calling function's name as the whole message (and an error
-   code of its own, not always PETSC_ERR_MEM): recognised by the function that raised it. */
+/* PETSc 3.18's allocator (PetscMallocAlign, PetscReallocAlign) raises its failure with the calling function's name as
+   the whole message (and an error code of its own, not always PETSC_ERR_MEM): recognised by the function that raised
+   it. */
+static PetscBool AllocationFailed(const char *fun, PetscErrorCode n)
+{
+  return (PetscBool)(n == PETSC_ERR_MEM || (fun && (!strcmp(fun, "PetscMallocAlign") || !strcmp(fun, "PetscReallocAlign"))));
+}
+
+static void PrintOutOfMemory(const char *fun, const char *mess)
+{
+  PetscMPIInt rank = 0;
+
+  (void)MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  (void)fprintf(stderr,
+                "[%d] kergs: out of memory: an allocation in %s failed, this process could not get the memory it asked for. Fewer "
+                "grains per rank (more ranks, a smaller -lattice_n or -random_n), or more memory for the job\n",
+                (int)rank, mess && mess[0] ? mess : fun);
+}
+
 static PetscErrorCode OutOfMemoryHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p,
                                          const char *mess, void *ctx)
 {
-  if (p == PETSC_ERROR_INITIAL && (n == PETSC_ERR_MEM || (fun && !strcmp(fun, "PetscMallocAlign")))) {
-    PetscMPIInt rank = 0;
-    (void)MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-    (void)fprintf(stderr,
-                  "[%d] kergs: out of memory: an allocation in %s failed, this process could not get the memory it asked for. Fewer "
-                  "grains per rank (more ranks, a smaller -lattice_n or -random_n), or more memory for the job\n",
-                  (int)rank, mess && mess[0] ? mess : fun);
-  }
+  if (p == PETSC_ERROR_INITIAL && AllocationFailed(fun, n)) PrintOutOfMemory(fun, mess);
   return PetscTraceBackErrorHandler(comm, line, fun, file, n, p, mess, ctx);
 }
 
@@ -121,6 +131,12 @@ static PetscErrorCode HoldHandler(MPI_Comm comm, int line, const char *fun, cons
 {
   (void)comm;
   (void)ctx;
+  /* a failed allocation is one rank's: that rank would close the file while the others go on reading it, and both sides
+     would wait for each other. It ends the run at once, as main does after any error (status 1, KERGS_EXIT_ERROR). */
+  if (p == PETSC_ERROR_INITIAL && AllocationFailed(fun, n)) {
+    PrintOutOfMemory(fun, mess);
+    (void)MPI_Abort(MPI_COMM_WORLD, 1);
+  }
   if (p == PETSC_ERROR_INITIAL && !Held.set) {
     Held.set  = PETSC_TRUE;
     Held.code = n;
@@ -151,18 +167,13 @@ PetscErrorCode KergsErrorsRaiseHeld(MPI_Comm comm, PetscErrorCode held, const ch
 {
   PetscMPIInt failed = held ? 1 : 0, all;
   MPI_Comm    where;
-  PetscBool   memory;
   char       *named = NULL;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Allreduce(&failed, &all, 1, MPI_INT, MPI_MIN, comm));
   if (!held) PetscFunctionReturn(0);
   where = all ? comm : PETSC_COMM_SELF; /* printed once when every rank holds one, else by each rank that does */
-  PetscCheck(Held.set, where, held, "an error was raised while a file was open");
-  /* PETSc's allocator names only the caller: raised as PETSC_ERR_MEM, KergsPushErrorHandler's handler says it was
-     out of memory */
-  PetscCall(PetscStrcmp(Held.fun, "PetscMallocAlign", &memory));
-  if (memory) SETERRQ(where, PETSC_ERR_MEM, "%s", Held.message);
+  PetscCheck(Held.set, where, held, "%s %s: an error was raised while it was open", role, path);
   /* HDF5's own failures (a corrupt file: "Error in HDF5 call H5Lexists() Status -1") do not name the file */
   PetscCall(PetscStrstr(Held.message, path, &named));
   if (named) SETERRQ(where, Held.code, "%s [raised in %s() at %s:%d]", Held.message, Held.fun, Held.file, Held.line);

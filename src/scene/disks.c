@@ -252,7 +252,7 @@ static PetscErrorCode DisksFromFile(KergsScene scene, const DiskOptions *o)
 PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
 {
   DiskOptions o;
-  PetscBool   restart, help;
+  PetscBool   help;
 
   PetscFunctionBeginUser;
   PetscCall(PetscMemzero(&o, sizeof(o)));
@@ -261,11 +261,10 @@ PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
   o.random_seed  = 1;
   PetscCall(DiskOptionsRead(scene->comm, &o));
   if (scene->restoring) o.source = -1; /* read (for -help and the unused-option check), but the checkpoint holds the disks */
-  /* not on a restart, whose checkpoint holds the disks, nor in the -help pass that looks for options without a value
-     (main's KergsOptionsCheckValues, where a restart is not marked as one) */
-  PetscCall(PetscOptionsHasName(NULL, NULL, "-restart", &restart));
+  /* not on a restart (source -1 above: the checkpoint holds the disks), nor in the -help pass that looks for options
+     without a value (main's KergsOptionsCheckValues, where a restart is not marked as one) */
   PetscCall(PetscOptionsHasHelp(NULL, &help));
-  PetscCheck(o.source < 0 || o.source == DISKS_FILE || !o.sample_set || restart || help, scene->comm, PETSC_ERR_ARG_INCOMP,
+  PetscCheck(o.source < 0 || o.source == DISKS_FILE || !o.sample_set || help, scene->comm, PETSC_ERR_ARG_INCOMP,
              "-sample_input %s is read only with -disks_source file, and the disks come from -disks_source %s: drop one", o.sample,
              DiskSources[o.source]);
   switch ((DiskSource)o.source) {
