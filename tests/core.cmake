@@ -70,6 +70,10 @@ kergs_bad_input(sample_input_unused "-sample_input cases/deposit500.h5 is read o
                 -options_file cases/confine5.opts -sample_input cases/deposit500.h5)
 kergs_bad_input(stop_at_rest_stress_alone "-stop_at_rest_stress holds back the stop of -stop_at_rest_inertial, which is not given"
                 -options_file cases/compact_small.opts -stop_at_rest_stress 0.1)
+kergs_bad_input(stop_at_rest_window_alone "-stop_at_rest_window is the window of -stop_at_rest_inertial, which is not given"
+                -options_file cases/compact_small.opts -stop_at_rest_window 10)
+kergs_bad_input(sample_forces_unused "-sample_forces takes the first step's impulses from the sample file of -disks_source file, and the disks come from -disks_source random"
+                -options_file cases/compact_small.opts -sample_forces false)
 kergs_bad_input(fclib_output_alone "-fclib_output .*x.fclib.h5 is the file of the step -fclib_step exports, and no step is given"
                 -options_file cases/confine5.opts -fclib_output results/x.fclib.h5)
 kergs_bad_input(box_from_sample_and_box "Give -box or -box_from_sample, not both" -options_file cases/biaxial_small.opts -box 0,0,1,1)

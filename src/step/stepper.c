@@ -56,7 +56,8 @@ static PetscErrorCode CheckClockOptions(MPI_Comm comm)
 PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
 {
   const char *name;
-  PetscBool   help, rest_stress_set = PETSC_FALSE, fclib_output_set = PETSC_FALSE;
+  PetscBool   help, rest_stress_set = PETSC_FALSE, rest_window_set = PETSC_FALSE, fclib_output_set = PETSC_FALSE,
+                  sample_forces_set = PETSC_FALSE;
 
   PetscFunctionBeginUser;
   PetscCall(PetscOptionsHasHelp(NULL, &help));
@@ -88,7 +89,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(
       KergsOptionsInt(PetscOptionsObject, "-stop_at_rest_window",
                       "Steps over which -stop_at_rest_inertial measures the walls' motion (inertial_number is -1 until they have run)", "",
-                      st->rest_window, &st->rest_window, NULL));
+                      st->rest_window, &st->rest_window, &rest_window_set));
   PetscCall(PetscOptionsReal(
       "-stop_at_rest_stress",
       "With -stop_at_rest_inertial: stop only once the Love-Weber stress and the walls' tractions' (friction included), "
@@ -99,7 +100,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-sample_forces",
                              "With -disks_source file: start the first step from the contact forces the sample records, as a restart "
                              "would (false: from zero impulses)",
-                             "", st->sample_forces, &st->sample_forces, NULL));
+                             "", st->sample_forces, &st->sample_forces, &sample_forces_set));
   PetscCall(KergsOptionsInt(PetscOptionsObject, "-fclib_step",
                             "Export in FCLib format the local problem solved in this step, numbered as the step lines (1: the first step; "
                             "-1: none)",
@@ -134,6 +135,18 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
      can change a value but not take an option away (-stop_at_rest_inertial 0 or -fclib_step -1 must still work) */
   PetscCheck(!rest_stress_set || st->rest_inertial > 0 || st->restart_path[0], st->comm, PETSC_ERR_ARG_INCOMP,
              "-stop_at_rest_stress holds back the stop of -stop_at_rest_inertial, which is not given: give both, or neither");
+  PetscCheck(!rest_window_set || st->rest_inertial > 0 || st->restart_path[0], st->comm, PETSC_ERR_ARG_INCOMP,
+             "-stop_at_rest_window is the window of -stop_at_rest_inertial, which is not given: give both, or neither");
+  if (sample_forces_set && !st->restart_path[0]) {
+    char      source[16] = "list"; /* the scene's default */
+    PetscBool file;
+    PetscCall(PetscOptionsGetString(NULL, NULL, "-disks_source", source, sizeof(source), NULL));
+    PetscCall(PetscStrcmp(source, "file", &file));
+    PetscCheck(file, st->comm, PETSC_ERR_ARG_INCOMP,
+               "-sample_forces takes the first step's impulses from the sample file of -disks_source file, and the disks come from "
+               "-disks_source %s: drop it",
+               source);
+  }
   PetscCheck(!fclib_output_set || st->fclib_step >= 1 || st->restart_path[0], st->comm, PETSC_ERR_ARG_INCOMP,
              "-fclib_output %s is the file of the step -fclib_step exports, and no step is given: add -fclib_step N", st->fclib_path);
   if (st->fclib_step >= 0 && !st->fclib_path[0])
