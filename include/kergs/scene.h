@@ -116,6 +116,9 @@ PETSC_EXTERN PetscErrorCode KergsSceneGetGrainIndex(KergsScene, PetscInt n, Kerg
 PETSC_EXTERN PetscInt       KergsGrainIndexFind(const KergsGrainIndex table[], PetscInt n, PetscInt id);
 /* The walls' names joined by commas, in wall order (PetscFree): how files record which walls a run had. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetWallNames(KergsScene, char **joined);
+/* The disk source -disks_source names ("list" when it is not given), read outside the disks' options block: for the
+   options that only one source uses (-box_from_sample, -sample_forces). */
+PETSC_EXTERN PetscErrorCode KergsSceneDisksSourceFromOptions(char source[], size_t len);
 /* The sample file the disks were read from by KergsSampleRead; an empty string when they were not. */
 PETSC_EXTERN PetscErrorCode KergsSceneGetSamplePath(KergsScene, const char **path);
 

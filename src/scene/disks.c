@@ -248,6 +248,14 @@ static PetscErrorCode DisksFromFile(KergsScene scene, const DiskOptions *o)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsSceneDisksSourceFromOptions(char source[], size_t len)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscStrncpy(source, DiskSources[DISKS_LIST], len)); /* DiskOptionsRead's default */
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-disks_source", source, len, NULL));
+  PetscFunctionReturn(0);
+}
+
 /* The disk options block (-disks_source and the options of every source) and the generation of the disks. */
 PetscErrorCode KergsSceneDisksSetFromOptions(KergsScene scene)
 {

@@ -292,21 +292,24 @@ PetscErrorCode KergsSceneWallsOptions(PetscOptionItems *PetscOptionsObject, Kerg
    sample confines it exactly (a box typed by hand from another seed's sample would cut grains or leave a gap). */
 static PetscErrorCode WallsBoxFromSample(MPI_Comm comm, KergsWallsSpec *spec, PetscBool restoring)
 {
-  char      path[PETSC_MAX_PATH_LEN], source[16] = "";
-  PetscBool set, is_file, readable;
+  char      path[PETSC_MAX_PATH_LEN], source[16];
+  PetscBool set, is_file;
 
   PetscFunctionBeginUser;
   PetscCheck(!spec->box_set, comm, PETSC_ERR_ARG_INCOMP, "Give -box or -box_from_sample, not both");
-  PetscCall(PetscOptionsGetString(NULL, NULL, "-disks_source", source, sizeof(source), NULL));
+  PetscCall(KergsSceneDisksSourceFromOptions(source, sizeof(source)));
   PetscCall(PetscStrcmp(source, "file", &is_file));
   PetscCall(PetscOptionsGetString(NULL, NULL, "-sample_input", path, sizeof(path), &set));
   PetscCheck(is_file && set && path[0], comm, PETSC_ERR_ARG_WRONGSTATE,
              "-box_from_sample takes the box of the sample the disks come from: it needs -disks_source file -sample_input <path>");
-  PetscCall(PetscTestFile(path, 'r', &readable));
-  PetscCheck(readable || !restoring, comm, PETSC_ERR_FILE_OPEN,
-             "Restart of a run with -box_from_sample: the box walls are built from its sample file %s (then moved where the checkpoint has "
-             "them), which cannot be read from here; restart in the directory the run started in, with the sample where it was",
-             path);
+  if (restoring) {
+    PetscBool readable;
+    PetscCall(PetscTestFile(path, 'r', &readable));
+    PetscCheck(readable, comm, PETSC_ERR_FILE_OPEN,
+               "Restart of a run with -box_from_sample: the box walls are built from its sample file %s (then moved where the checkpoint "
+               "has them), which cannot be read from here; restart in the directory the run started in, with the sample where it was",
+               path);
+  }
   PetscCall(KergsSampleReadBox(comm, path, spec->box));
   spec->box_set = PETSC_TRUE;
   PetscFunctionReturn(0);

@@ -53,6 +53,32 @@ static PetscErrorCode CheckClockOptions(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
+/* Options given where they would do nothing: refused, naming what they need. Not on a restart, which takes its options
+   from the checkpoint and can change a value but not take an option away (-stop_at_rest_inertial 0 or -fclib_step -1
+   must still work). */
+static PetscErrorCode CheckOptionsDoingNothing(KergsStepper st, PetscBool rest_stress_set, PetscBool rest_window_set,
+                                               PetscBool sample_forces_set, PetscBool fclib_output_set)
+{
+  char      source[16];
+  PetscBool file;
+
+  PetscFunctionBeginUser;
+  if (st->restart_path[0]) PetscFunctionReturn(0);
+  PetscCheck(!rest_stress_set || st->rest_inertial > 0, st->comm, PETSC_ERR_ARG_INCOMP,
+             "-stop_at_rest_stress holds back the stop of -stop_at_rest_inertial, which is not given: give both, or neither");
+  PetscCheck(!rest_window_set || st->rest_inertial > 0, st->comm, PETSC_ERR_ARG_INCOMP,
+             "-stop_at_rest_window is the window of -stop_at_rest_inertial, which is not given: give both, or neither");
+  PetscCall(KergsSceneDisksSourceFromOptions(source, sizeof(source)));
+  PetscCall(PetscStrcmp(source, "file", &file));
+  PetscCheck(!sample_forces_set || file, st->comm, PETSC_ERR_ARG_INCOMP,
+             "-sample_forces takes the first step's impulses from the sample file of -disks_source file, and the disks come from "
+             "-disks_source %s: drop it",
+             source);
+  PetscCheck(!fclib_output_set || st->fclib_step >= 1, st->comm, PETSC_ERR_ARG_INCOMP,
+             "-fclib_output %s is the file of the step -fclib_step exports, and no step is given: add -fclib_step N", st->fclib_path);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
 {
   const char *name;
@@ -131,24 +157,7 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
              st->fclib_step);
   PetscCheck(st->overlap_tol >= 0, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "-initial_overlap_tol %g must be non-negative",
              (double)st->overlap_tol);
-  /* options that would do nothing in this set-up; not on a restart, which takes its options from the checkpoint and
-     can change a value but not take an option away (-stop_at_rest_inertial 0 or -fclib_step -1 must still work) */
-  PetscCheck(!rest_stress_set || st->rest_inertial > 0 || st->restart_path[0], st->comm, PETSC_ERR_ARG_INCOMP,
-             "-stop_at_rest_stress holds back the stop of -stop_at_rest_inertial, which is not given: give both, or neither");
-  PetscCheck(!rest_window_set || st->rest_inertial > 0 || st->restart_path[0], st->comm, PETSC_ERR_ARG_INCOMP,
-             "-stop_at_rest_window is the window of -stop_at_rest_inertial, which is not given: give both, or neither");
-  if (sample_forces_set && !st->restart_path[0]) {
-    char      source[16] = "list"; /* the scene's default */
-    PetscBool file;
-    PetscCall(PetscOptionsGetString(NULL, NULL, "-disks_source", source, sizeof(source), NULL));
-    PetscCall(PetscStrcmp(source, "file", &file));
-    PetscCheck(file, st->comm, PETSC_ERR_ARG_INCOMP,
-               "-sample_forces takes the first step's impulses from the sample file of -disks_source file, and the disks come from "
-               "-disks_source %s: drop it",
-               source);
-  }
-  PetscCheck(!fclib_output_set || st->fclib_step >= 1 || st->restart_path[0], st->comm, PETSC_ERR_ARG_INCOMP,
-             "-fclib_output %s is the file of the step -fclib_step exports, and no step is given: add -fclib_step N", st->fclib_path);
+  PetscCall(CheckOptionsDoingNothing(st, rest_stress_set, rest_window_set, sample_forces_set, fclib_output_set));
   if (st->fclib_step >= 0 && !st->fclib_path[0])
     PetscCall(PetscSNPrintf(st->fclib_path, sizeof(st->fclib_path), "results/%s-step%" PetscInt_FMT ".fclib.h5", name[0] ? name : "kergs",
                             st->fclib_step));
