@@ -8,14 +8,15 @@ TEST is one of:
             files back: Newton from r = 0 reaches 1e-10 and NLGS 1e-8 (natural residual), statistics in the results file;
             started from the stored solution the import is the run's problem (Newton stops at once, same impulses, same
             residual); frictionless (a unique solution here) Newton from r = 0 finds the run's impulses to 1e-8 on 1 and
-            2 ranks, NLGS to its tolerance
+            2 ranks, NLGS to its tolerance; -fclib_output writes the problem again (W, q, mu as read) with the impulses
+            found as its solution, on 1 and 2 ranks, and that solution read back solves it with no Newton step
   global    a global problem (M diagonal, H of full column rank, f, w, mu) written with h5py around a known exact solution
             (contacts open, sticking, slipping either way): started there Newton stops at once (W = H^T M^-1 H and
             q = H^T M^-1 f + w built right), and from r = 0 Newton and NLGS find it (W is positive definite: one solution);
             an off-diagonal M is refused
   bad       a missing file, a text file, an HDF5 file that is no FCLib problem, a 3D problem, a NaN in q, a short
-            dataset, a non-symmetric W, -fclib_start solution without a solution, a kernel-regularised type: each
-            refused with a message naming the fault, no crash
+            dataset, a non-symmetric W, -fclib_start solution without a solution, a kernel-regularised type, an
+            -fclib_output that is the -fclib_input: each refused with a message naming the fault, no crash
 Exit status 0 when every check holds, 1 otherwise."""
 import argparse
 import os
@@ -24,6 +25,7 @@ import sys
 
 import h5py
 import numpy as np
+import scipy.sparse
 
 from checks import Kergs, check, failures
 
@@ -55,6 +57,35 @@ class FCLibKergs(Kergs):
         return p, stats
 
 
+def read_local(path):
+    """W (compressed columns), q, mu and the stored solution r of a local FCLib file, as arrays."""
+    with h5py.File(path, "r") as f:
+        g = f["fclib_local"]
+        m = int(g["W/m"][0])
+        W = scipy.sparse.csc_matrix((g["W/x"][()], g["W/i"][()], g["W/p"][()]), shape=(m, m))
+        r = f["solution/r"][()] if "solution" in f else None
+        return W, g["vectors/q"][()], g["vectors/mu"][()], r, f["fclib_local/info/title"][()]
+
+
+def check_solved_file(k, source, solved, ranks, r_of_run=None):
+    """solved (-fclib_output of an -fclib_input run on source) holds source's problem, its solution solves it: read back,
+    Newton takes no step. W is the one the solvers used: its upper triangle mirrored (the import accepts asymmetry up to
+    1e-10 of the largest entry; kergs's exports carry rounding's), so it equals the input's to that tolerance; it may
+    hold explicit zeros the input did not (the solvers store W by 2 x 2 blocks)."""
+    if not check(os.path.exists(solved), f"-fclib_output writes {os.path.basename(solved)} ({ranks} rank(s))"):
+        return
+    (Wa, qa, mua, _, _), (Wb, qb, mub, rb, title) = read_local(source), read_local(solved)
+    dW = float(abs(Wa - Wb).max() / abs(Wa).max()) if Wa.shape == Wb.shape else np.inf
+    same = dW <= 1e-10 and np.array_equal(qa, qb) and np.array_equal(mua, mub)
+    check(same, f"{ranks} rank(s): the written problem is the one read (q, mu equal; W to {dW:.2g} of its largest entry <= 1e-10)")
+    check(b"kergs solution of" in bytes(title), f"{ranks} rank(s): its title says it is kergs's solution of the input")
+    check(rb is not None and np.all(np.isfinite(rb)), f"{ranks} rank(s): it holds a finite solution")
+    p, s = k.solve(solved, k.path(f"solved_back_{ranks}.h5"), 1, "-solver_type", "newton", "-solver_tol", 1e-10, "-fclib_start", "solution")
+    if check(s is not None, f"{ranks} rank(s): the written file is read back"):
+        check(s["iterations"] == 0 and s["residual"] <= 1e-10,
+              f"{ranks} rank(s): its solution solves it: residual {s['residual']:.3g}, {s['iterations']:.0f} Newton steps")
+
+
 def test_solve(k):
     friction = k.export("c500.fclib.h5")
     frictionless = k.export("c500_frictionless.fclib.h5", "-friction", 0)
@@ -64,8 +95,11 @@ def test_solve(k):
     check(nc > 500 and assert_some_friction == 0.3, f"the frictional export holds {nc} contacts with mu 0.3")
 
     # from r = 0 (Siconos's start): the residual reached, whatever solution is found (with friction it need not be unique)
-    p, s = k.solve(friction, k.path("newton.h5"), 1, "-solver_type", "newton", "-solver_tol", 1e-10, "-solver_max_it", 1000)
+    solved = k.path("c500_solved.fclib.h5")
+    p, s = k.solve(friction, k.path("newton.h5"), 1, "-solver_type", "newton", "-solver_tol", 1e-10, "-solver_max_it", 1000,
+                   "-fclib_output", solved)
     if check(s is not None, "newton solves the frictional problem from r = 0"):
+        check_solved_file(k, friction, solved, 1)
         check(s["residual"] <= 1e-10 and s["converged"] == 1, f"newton: natural residual {s['residual']:.3g} <= 1e-10, converged")
         check(s["contacts"] == nc and s["active"] == nc, "newton: every contact of the file is a contact of the solve")
         check(s["solve_seconds"] > 0 and s["iterations"] >= 1 and s["solver_type"] == "newton", "newton: time, iterations, type recorded")
@@ -84,9 +118,11 @@ def test_solve(k):
 
     # frictionless: the solve from r = 0 finds the run's impulses
     for ranks in (1, 2):
+        solved = k.path(f"c500_frictionless_solved_{ranks}.fclib.h5")
         p, s = k.solve(frictionless, k.path(f"newton_frictionless_{ranks}.h5"), ranks, "-solver_type", "newton", "-solver_tol", 1e-10,
-                       "-solver_max_it", 1000)
+                       "-solver_max_it", 1000, "-fclib_output", solved)
         if check(s is not None, f"newton solves the frictionless problem on {ranks} rank(s)"):
+            check_solved_file(k, frictionless, solved, ranks)
             check(s["residual"] <= 1e-10, f"newton, {ranks} rank(s): natural residual {s['residual']:.3g} <= 1e-10")
             check(s["reference_impulse_difference"] <= 1e-8 and s["reference_velocity_difference"] <= 1e-8,
                   f"newton, {ranks} rank(s): impulses {s['reference_impulse_difference']:.3g} and velocities "
@@ -228,6 +264,10 @@ def test_bad(k):
     refused(k, "kernel-regularised type", ["-solver_type nlgsjac needs", "nlgs or newton"], "-fclib_input", good, "-solver_type", "nlgsjac",
             *out)
     refused(k, "misspelled option", ["does not use option -solver_max_itt", "misspelled?"], "-fclib_input", good, "-solver_max_itt", 3, *out)
+    before = os.path.getmtime(good), os.path.getsize(good)
+    refused(k, "-fclib_output that is the -fclib_input", ["-fclib_output", "-fclib_input", "good.fclib.h5"], "-fclib_input", good,
+            "-fclib_output", good, *out)
+    check((os.path.getmtime(good), os.path.getsize(good)) == before, "the input is left as it was")
     p = k.run(1, "-fclib_input", nosol, "-output", k.path("nosol.h5"), "-solver_type", "newton", "-solver_max_it", 1000)
     check(p.returncode == 0 and "against the file's solution" not in p.stdout, "a file without a solution is solved, no comparison")
     check(not os.path.exists(k.path("bad.h5")), "no results file is left by a refused input")

@@ -6,6 +6,9 @@
 #include <kergs/operators.h>
 
 PETSC_EXTERN PetscErrorCode KergsFCLibExport(KergsScene, KergsContacts, KergsOperators, const PetscBool *active, const char path[]);
+/* An -fclib_input run's problem with the impulses the solver found as its solution (every contact), titled after the
+   source file: what -fclib_output writes there. Collective. */
+PETSC_EXTERN PetscErrorCode KergsFCLibExportSolved(KergsContacts, KergsOperators, const char source[], const char path[]);
 
 /* A 2D FCLib problem as kergs solves it: u = W r + q with Coulomb's law per contact (normal then tangential component).
    W (symmetric, m = 2 ncontacts) in compressed rows, sorted columns, no duplicates. From a global problem (M, H, f, w)

@@ -197,40 +197,31 @@ static PetscErrorCode FCLibBuildVectors(const PetscReal *pack, FCLibProblem *p)
   PetscFunctionReturn(0);
 }
 
-/* Rank 0: write path.tmp with libfclib, then rename it to path; msg is set on failure. */
-static PetscErrorCode FCLibWrite(KergsScene scene, FCLibProblem *p, const char path[], char msg[], size_t len)
+/* Rank 0: write path.tmp with libfclib, then rename it to path; msg is set on failure. The title and the description's
+   head are the caller's; the description says further whether the problem was padded. */
+static PetscErrorCode FCLibWrite(FCLibProblem *p, const char title[], const char head[], const char path[], char msg[], size_t len)
 {
-  const char           *name           = "";
-  PetscInt              step           = 0;
-  PetscReal             time           = 0;
   FCLibWriteLocalFn     write_local    = NULL;
   FCLibWriteSolutionFn  write_solution = NULL;
-  char                  tmp[PETSC_MAX_PATH_LEN], title[PETSC_MAX_PATH_LEN + 64], description[256], math[256];
+  char                  tmp[PETSC_MAX_PATH_LEN], description[PETSC_MAX_PATH_LEN + 256], math[256];
   struct fclib_matrix   W;
   struct fclib_info     info;
   struct fclib_local    problem;
   struct fclib_solution solution;
 
   PetscFunctionBeginUser;
-  if (scene) {
-    PetscCall(KergsSceneGetName(scene, &name));
-    PetscCall(KergsSceneGetStep(scene, &step, &time, NULL));
-    step++; /* exported after the solve, before the clock advances: the step line of this step says step + 1 */
-  }
   FCLibLoad(&write_local, &write_solution, msg, len);
   if (msg[0]) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
-  PetscCall(PetscSNPrintf(title, sizeof(title), "kergs %s step %" PetscInt_FMT, name, step));
   PetscCall(PetscSNPrintf(description, sizeof(description),
-                          "2D disks, step from time %g, %" PetscInt_FMT " active contacts%s; unknowns per contact normal then tangential",
-                          (double)time, p->na,
+                          "%s, %" PetscInt_FMT " active contacts%s; unknowns per contact normal then tangential", head, p->na,
                           p->padded ? ", frictionless (tangential components padded: W_tt = W_nn, q_t = 0, mu = 0)" : ""));
   PetscCall(PetscSNPrintf(
       math, sizeof(math),
       "W = H_f^T M^-1 H_f symmetric positive semi-definite (singular in confined packings); solution r is kergs' impulse, u = W r + q"));
   W = (struct fclib_matrix){
       .nzmax = (int)p->nnz, .m = (int)p->m, .n = (int)p->m, .p = p->colptr, .i = p->rowind, .x = p->val, .nz = -1, .info = NULL};
-  info    = (struct fclib_info){.title = title, .description = description, .math_info = math};
+  info    = (struct fclib_info){.title = (char *)title, .description = description, .math_info = math};
   problem = (struct fclib_local){
       .W = &W, .V = NULL, .R = NULL, .mu = p->mu, .q = p->q, .s = NULL, .spacedim = KERGS_FCLIB_SPACEDIM, .info = &info};
   solution = (struct fclib_solution){.v = NULL, .u = p->u, .r = p->r, .l = NULL};
@@ -247,7 +238,9 @@ static PetscErrorCode FCLibWrite(KergsScene scene, FCLibProblem *p, const char p
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsOperators ops, const PetscBool *active, const char path[])
+/* The problem of the active contacts, with their impulses as its solution, written to path by rank 0. Collective. */
+static PetscErrorCode FCLibExport(KergsContacts contacts, KergsOperators ops, const PetscBool *active, const char title[],
+                                  const char head[], const char path[])
 {
   MPI_Comm       comm;
   PetscMPIInt    rank;
@@ -298,7 +291,7 @@ PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsO
     p.padded = (PetscBool)(nc == 1);
     PetscCall(FCLibBuildCSC(sub[0], nc, &p));
     PetscCall(FCLibBuildVectors(pack, &p));
-    PetscCall(FCLibWrite(scene, &p, path, msg, sizeof(msg)));
+    PetscCall(FCLibWrite(&p, title, head, path, msg, sizeof(msg)));
     PetscCall(FCLibProblemFree(&p));
   }
   PetscCall(MatDestroySubMatrices(1, &sub));
@@ -307,5 +300,41 @@ PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsO
   PetscCallMPI(MPI_Bcast(msg, (int)sizeof(msg), MPI_CHAR, 0, comm));
   PetscCheck(msg[0] == 0, comm, PETSC_ERR_FILE_WRITE, "FCLib export: %s", msg);
   PetscCall(PetscLogEventEnd(KERGS_IO, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsOperators ops, const PetscBool *active, const char path[])
+{
+  const char *name = "";
+  PetscInt    step = 0;
+  PetscReal   time = 0;
+  char        title[PETSC_MAX_PATH_LEN + 64], head[128];
+
+  PetscFunctionBeginUser;
+  if (scene) {
+    PetscCall(KergsSceneGetName(scene, &name));
+    PetscCall(KergsSceneGetStep(scene, &step, &time, NULL));
+    step++; /* exported after the solve, before the clock advances: the step line of this step says step + 1 */
+  }
+  PetscCall(PetscSNPrintf(title, sizeof(title), "kergs %s step %" PetscInt_FMT, name, step));
+  PetscCall(PetscSNPrintf(head, sizeof(head), "2D disks, step from time %g", (double)time));
+  PetscCall(FCLibExport(contacts, ops, active, title, head, path));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KergsFCLibExportSolved(KergsContacts contacts, KergsOperators ops, const char source[], const char path[])
+{
+  PetscInt   n;
+  PetscBool *all;
+  char       title[PETSC_MAX_PATH_LEN + 64];
+
+  PetscFunctionBeginUser;
+  PetscCall(KergsContactsGetLocal(contacts, &n, NULL));
+  PetscCall(PetscMalloc1(PetscMax(n, 1), &all));
+  for (PetscInt k = 0; k < n; k++) all[k] = PETSC_TRUE; /* every contact of an FCLib problem holds its law */
+  PetscCall(PetscSNPrintf(title, sizeof(title), "kergs solution of %s", source));
+  PetscCall(FCLibExport(contacts, ops, all, title,
+                        "2D local problem as kergs -fclib_input read it (a global one as W = H^T M^-1 H, q = H^T M^-1 f + w)", path));
+  PetscCall(PetscFree(all));
   PetscFunctionReturn(0);
 }

@@ -9,8 +9,9 @@
 
 struct _p_KergsFCLibRun {
   MPI_Comm          comm;
-  char              path[PETSC_MAX_PATH_LEN]; /* -fclib_input */
-  char              name[PETSC_MAX_PATH_LEN]; /* its base name without .h5 / .fclib.h5: the default results/<name>.h5 */
+  char              path[PETSC_MAX_PATH_LEN];   /* -fclib_input */
+  char              name[PETSC_MAX_PATH_LEN];   /* its base name without .h5 / .fclib.h5: the default results/<name>.h5 */
+  char              solved[PETSC_MAX_PATH_LEN]; /* -fclib_output: the problem with the solution found, or empty */
   PetscBool         error_on_nonconvergence;
   PetscBool         start_solution; /* -fclib_start solution: start from the file's solution instead of r = 0 */
   KergsFCLibProblem problem;
@@ -55,7 +56,7 @@ static PetscErrorCode FCLibRunName(KergsFCLibRun r)
   PetscFunctionReturn(0);
 }
 
-/* -fclib_input, -fclib_start, -error_on_nonconvergence */
+/* -fclib_input, -fclib_start, -fclib_output, -error_on_nonconvergence */
 static PetscErrorCode FCLibRunOptions(KergsFCLibRun r, PetscBool *set)
 {
   PetscFunctionBeginUser;
@@ -73,6 +74,9 @@ static PetscErrorCode FCLibRunOptions(KergsFCLibRun r, PetscBool *set)
                                 starts, 2, starts[start], &start, NULL));
     r->start_solution = (PetscBool)(start == 1);
   }
+  PetscCall(PetscOptionsString("-fclib_output",
+                               "With -fclib_input: write the problem again with the impulses found as its solution (local form, FCLib)",
+                               "KergsFCLibExportSolved", r->solved, r->solved, sizeof(r->solved), NULL));
   PetscOptionsEnd();
   PetscFunctionReturn(0);
 }
@@ -95,7 +99,7 @@ PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun r)
   KergsSolverType type;
   const char     *out;
   PetscBool       enabled;
-  KergsFileRole   outputs[1], inputs[1];
+  KergsFileRole   outputs[2], inputs[1];
 
   PetscFunctionBeginUser;
   PetscCall(FCLibRunOptions(r, &set));
@@ -122,8 +126,9 @@ PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun r)
   PetscCall(KergsResultsSetFromOptions(r->results));
   PetscCall(KergsResultsGetPath(r->results, &out, &enabled));
   outputs[0] = (KergsFileRole){"-output", enabled ? out : NULL};
+  outputs[1] = (KergsFileRole){"-fclib_output", r->solved[0] ? r->solved : NULL};
   inputs[0]  = (KergsFileRole){"-fclib_input", r->path};
-  PetscCall(KergsFileCheckPaths(r->comm, 1, outputs, 1, inputs, 0, NULL));
+  PetscCall(KergsFileCheckPaths(r->comm, 2, outputs, 1, inputs, 0, NULL));
   PetscCall(KergsFCLibRead(r->comm, r->path, &r->problem));
   PetscCheck(!r->start_solution || r->problem.r_ref, r->comm, PETSC_ERR_ARG_WRONG, "-fclib_start solution: %s holds no solution", r->path);
   PetscFunctionReturn(0);
@@ -223,6 +228,7 @@ PetscErrorCode KergsFCLibRunSolve(KergsFCLibRun r, KergsExitStatus *status)
   PetscCall(KergsSolverSolve(r->solver, r->scene, r->contacts, r->ops, &ss));
   PetscCall(KergsOperatorsSetImpulses(r->ops, r->contacts));
   PetscCall(FCLibRunCompare(r, start, &dr, &du));
+  if (r->solved[0]) PetscCall(KergsFCLibExportSolved(r->contacts, r->ops, r->path, r->solved));
   PetscCall(KergsSolverGetType(r->solver, &type));
   PetscCall(KergsOperatorsGetNonzeros(r->ops, &nnz_Hf, &nnz_W));
   PetscCall(KergsStepperPeakMemory(r->comm, &peak));
@@ -252,6 +258,7 @@ PetscErrorCode KergsFCLibRunSolve(KergsFCLibRun r, KergsExitStatus *status)
                           (double)dr, (double)du));
   PetscCall(KergsResultsGetPath(r->results, &out, &enabled));
   if (enabled) PetscCall(PetscPrintf(r->comm, "kergs: results in %s\n", out));
+  if (r->solved[0]) PetscCall(PetscPrintf(r->comm, "kergs: the problem with its solution in %s\n", r->solved));
   *status = (ss.reason > 0 || !r->error_on_nonconvergence) ? KERGS_EXIT_DONE : KERGS_EXIT_NOT_CONVERGED;
   PetscCall(PetscPrintf(r->comm, "kergs: %s, exit status %d\n", ss.reason > 0 ? "done" : "done, not converged", (int)*status));
   PetscFunctionReturn(0);
