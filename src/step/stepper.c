@@ -131,8 +131,9 @@ PetscErrorCode KergsStepperSetFromOptions(KergsStepper st)
                             "Export in FCLib format the local problem solved in this step, numbered as the step lines (1: the first step; "
                             "-1: none)",
                             "", st->fclib_step, &st->fclib_step, NULL));
-  PetscCall(PetscOptionsString("-fclib_output", "FCLib file of -fclib_step", "", st->fclib_path, st->fclib_path, sizeof(st->fclib_path),
-                               &fclib_output_set));
+  PetscCall(PetscOptionsString("-fclib_output",
+                               "FCLib file of -fclib_step (with -fclib_input: the problem solved, with the solution found)", "",
+                               st->fclib_path, st->fclib_path, sizeof(st->fclib_path), &fclib_output_set));
   PetscCall(PetscOptionsReal("-initial_overlap_tol", "Largest initial interpenetration allowed, relative to the smaller radius of the pair",
                              "", st->overlap_tol, &st->overlap_tol, NULL));
   PetscCall(KergsOptionsBool(PetscOptionsObject, "-quiet", "Do not print a summary line per step", "", st->quiet, &st->quiet, NULL));
