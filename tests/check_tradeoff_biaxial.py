@@ -6,7 +6,9 @@ within 0.01 of its 0.8167, Z above 3); the settings are applied (the paper's cap
 times, the uncapped one does on some step); the reference ran on 1 and 2 ranks and their band is rounding-small (q/p
 within 0.02); every setting has a comparison row with an error and a band for each result; the JSON file is complete.
 A run killed after a checkpoint (its first 4 steps, no exit status) is continued by --reuse from that checkpoint, to
-the uninterrupted run's statistics bit for bit, and the runs that ended are kept as they are.
+the uninterrupted run's statistics bit for bit, and the runs that ended are kept as they are. The dilatancy angle of
+known strain paths: a steady dilation s = d eps_v / d eps_a gives asin(-s / (2 - s)), and a stretch where the sample
+is squeezed from every side (s >= 1, as after a shock) has none: it does not become 90 degrees.
 
   check_tradeoff_biaxial.py --dir WORKDIR
 Exit status 0 when every check holds, 1 otherwise."""
@@ -32,18 +34,22 @@ def results_stats(path):
         return {k: f["stats"][k][()] for k in f["stats"] if not (k.endswith("_seconds") or "memory" in k or k == "imbalance")}
 
 
-def check_stop_forwarded(a):
-    """A stop request to the script reaches a run under way as SIGUSR1 (here a process that exits 4 on it, as kergs
-    does after its checkpoint), and no run starts after it."""
+def load_script():
     import importlib.machinery
     import importlib.util
-    import threading
-    import time
     loader = importlib.machinery.SourceFileLoader("tradeoff_biaxial", os.path.join(ROOT, "scripts", "tradeoff_biaxial"))
     spec = importlib.util.spec_from_loader("tradeoff_biaxial", loader)
     tb = importlib.util.module_from_spec(spec)
     loader.exec_module(tb)
-    procs = tb.Processes()
+    return tb
+
+
+def check_stop_forwarded(a):
+    """A stop request to the script reaches a run under way as SIGUSR1 (here a process that exits 4 on it, as kergs
+    does after its checkpoint), and no run starts after it."""
+    import threading
+    import time
+    procs = load_script().Processes()
     waiting = [sys.executable, "-c", "import signal, sys, time\nsignal.signal(signal.SIGUSR1, lambda *a: sys.exit(4))\n"
                "open(sys.argv[1], 'w').close()\ntime.sleep(60)", os.path.join(a.dir, "stop_probe")]
     ready = waiting[-1]
@@ -60,6 +66,20 @@ def check_stop_forwarded(a):
     os.remove(ready)
     check(result.get("code") == 4 and time.time() - t0 < 30 and procs.run(["true"])[0] is None,
           "a stop request reaches the run under way as SIGUSR1 (exit %s) and no run starts after it" % result.get("code"))
+
+
+def check_dilatancy():
+    """macroscopic()'s dilatancy on synthetic strain paths."""
+    tb = load_script()
+    e = np.linspace(0, 0.04, 401)
+    base = {"q_over_p": np.full_like(e, 0.3), "solid_fraction": np.full_like(e, 0.8), "Z_nonrattler": np.full_like(e, 3.1)}
+    steady = tb.macroscopic(dict(base, strain_axial=e, strain_volumetric=-0.5 * e))
+    want = math.degrees(math.asin(0.5 / 2.5))
+    check(abs(steady["dilatancy"] - want) < 1e-6, f"steady dilation s = -0.5: psi {steady['dilatancy']:.4f} = {want:.4f} degrees")
+    squeezed = -0.5 * e + np.where((e > 0.01) & (e < 0.02), 3.0 * (e - 0.01), np.where(e >= 0.02, 0.03, 0.0))
+    shocked = tb.macroscopic(dict(base, strain_axial=e, strain_volumetric=squeezed))
+    check(abs(shocked["dilatancy"] - want) < 1e-6, f"with a stretch squeezed at s = 2.5: psi {shocked['dilatancy']:.4f}, the steady "
+          "stretches' (it was 90)")
 
 
 def check_continue(a):
@@ -113,6 +133,7 @@ def main():
           all("critical_q_error" in c and "phi_end_band" in c for c in comps.values()), "a comparison row per setting: %s" % sorted(comps))
     check_continue(a)
     check_stop_forwarded(a)
+    check_dilatancy()
     print("%d failure(s)" % len(failures))
     return 1 if failures else 0
 
