@@ -154,14 +154,19 @@ static PetscErrorCode CheckViewerFiles(int argc, char **argv)
 }
 
 /* -fclib_input FILE: one FCLib problem instead of a scene */
-static PetscErrorCode RunFCLib(KergsExitStatus *status)
+static PetscErrorCode RunFCLib(int argc, char **argv, KergsExitStatus *status)
 {
-  KergsFCLibRun run;
-  KergsSolver   solver;
+  static OptionsFiles files;
+  KergsFCLibRun       run;
+  KergsSolver         solver;
+  char                msg[256];
 
   PetscFunctionBeginUser;
   (void)KergsStepperCatchStopSignals(PETSC_FALSE); /* one solve, no time loop to stop cleanly: a signal ends it */
   PetscCall(KergsFCLibRunCreate(PETSC_COMM_WORLD, &run));
+  files.n = 0;
+  (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
+  for (int i = 0; i < files.n; i++) PetscCall(KergsFCLibRunAddInput(run, "-options_file", files.path[i]));
   PetscCall(KergsFCLibRunSetFromOptions(run));
   PetscCall(KergsFCLibRunGetSolver(run, &solver));
   PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD, PETSC_TRUE));
@@ -204,7 +209,7 @@ static PetscErrorCode Run(int argc, char **argv, KergsExitStatus *status)
   if (!want_help) PetscCall(KergsOptionsCheckValues(PETSC_COMM_WORLD, ReadAllOptions, NULL)); /* "-dt" alone is an error */
   PetscCall(PetscOptionsHasName(NULL, NULL, "-fclib_input", &fclib));
   if (fclib && !want_help) {
-    PetscCall(RunFCLib(status));
+    PetscCall(RunFCLib(argc, argv, status));
     PetscFunctionReturn(0);
   }
   /* a restart: the checkpointed run's options enter the database before anything reads it (the command line wins) */

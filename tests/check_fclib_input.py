@@ -9,14 +9,16 @@ TEST is one of:
             started from the stored solution the import is the run's problem (Newton stops at once, same impulses, same
             residual); frictionless (a unique solution here) Newton from r = 0 finds the run's impulses to 1e-8 on 1 and
             2 ranks, NLGS to its tolerance; -fclib_output writes the problem again (W, q, mu as read) with the impulses
-            found as its solution, on 1 and 2 ranks, and that solution read back solves it with no Newton step
+            found as its solution, on 1 and 2 ranks, and that solution read back solves it with no Newton step; a
+            solve stopped after 3 Newton steps writes the answer it reached
   global    a global problem (M diagonal, H of full column rank, f, w, mu) written with h5py around a known exact solution
             (contacts open, sticking, slipping either way): started there Newton stops at once (W = H^T M^-1 H and
             q = H^T M^-1 f + w built right), and from r = 0 Newton and NLGS find it (W is positive definite: one solution);
             an off-diagonal M is refused
   bad       a missing file, a text file, an HDF5 file that is no FCLib problem, a 3D problem, a NaN in q, a short
             dataset, a non-symmetric W, -fclib_start solution without a solution, a kernel-regularised type, an
-            -fclib_output that is the -fclib_input: each refused with a message naming the fault, no crash
+            -fclib_output that is the -fclib_input or an -options_file: each refused with a message naming the fault,
+            no crash
 Exit status 0 when every check holds, 1 otherwise."""
 import argparse
 import os
@@ -67,7 +69,7 @@ def read_local(path):
         return W, g["vectors/q"][()], g["vectors/mu"][()], r, f["fclib_local/info/title"][()]
 
 
-def check_solved_file(k, source, solved, ranks, r_of_run=None):
+def check_solved_file(k, source, solved, ranks):
     """solved (-fclib_output of an -fclib_input run on source) holds source's problem, its solution solves it: read back,
     Newton takes no step. W is the one the solvers used: its upper triangle mirrored (the import accepts asymmetry up to
     1e-10 of the largest entry; kergs's exports carry rounding's), so it equals the input's to that tolerance; it may
@@ -108,6 +110,17 @@ def test_solve(k):
                    "-solver_max_it", 100000)
     if check(s is not None, "nlgs solves the frictional problem from r = 0"):
         check(s["residual"] <= 1e-8 and s["converged"] == 1, f"nlgs: natural residual {s['residual']:.3g} <= 1e-8 after {s['iterations']:.0f} sweeps")
+
+    # a solve stopped early writes the answer it reached: read back, it starts there (its residual, no step)
+    capped = k.path("c500_capped.fclib.h5")
+    p, s = k.solve(friction, k.path("newton_capped.h5"), 1, "-solver_type", "newton", "-solver_max_it", 3, "-fclib_output", capped)
+    if check(s is not None and s["converged"] == 0 and p.returncode == 0, "newton stopped after 3 Newton steps writes its answer (exit 0)"):
+        p2, back = k.solve(capped, k.path("capped_back.h5"), 1, "-solver_type", "newton", "-solver_tol", 1, "-fclib_start", "solution")
+        if check(back is not None, "the capped answer is read back"):
+            check(back["iterations"] == 0 and abs(back["residual"] - s["residual"]) <= 1e-6 * s["residual"],
+                  f"it is the answer the capped solve reached: residual {back['residual']:.6g} against {s['residual']:.6g}")
+            check(read_local(capped)[3] is not None and not np.allclose(read_local(capped)[3], read_local(friction)[3]),
+                  "not the input's stored solution")
 
     # from the stored solution: the run's very problem (W, q, mu read exactly), so newton has nothing to do
     p, s = k.solve(friction, k.path("newton_start.h5"), 1, "-solver_type", "newton", "-solver_tol", 1e-10, "-fclib_start", "solution")
@@ -264,6 +277,12 @@ def test_bad(k):
     refused(k, "kernel-regularised type", ["-solver_type nlgsjac needs", "nlgs or newton"], "-fclib_input", good, "-solver_type", "nlgsjac",
             *out)
     refused(k, "misspelled option", ["does not use option -solver_max_itt", "misspelled?"], "-fclib_input", good, "-solver_max_itt", 3, *out)
+    opts = k.path("run.opts")
+    with open(opts, "w") as f:
+        f.write("-solver_type newton\n")
+    refused(k, "-fclib_output that is an -options_file", ["-fclib_output", "-options_file", "run.opts"], "-options_file", opts,
+            "-fclib_input", good, "-fclib_output", opts, *out)
+    check(open(opts).read() == "-solver_type newton\n", "the options file is left as it was")
     before = os.path.getmtime(good), os.path.getsize(good)
     refused(k, "-fclib_output that is the -fclib_input", ["-fclib_output", "-fclib_input", "good.fclib.h5"], "-fclib_input", good,
             "-fclib_output", good, *out)

@@ -60,10 +60,12 @@ PETSC_EXTERN PetscErrorCode KergsStepperGetRunSummary(KergsStepper, PetscInt *no
    did not converge, otherwise KERGS_EXIT_DONE. */
 typedef struct _p_KergsFCLibRun *KergsFCLibRun;
 PETSC_EXTERN PetscErrorCode      KergsFCLibRunCreate(MPI_Comm, KergsFCLibRun *);
-PETSC_EXTERN PetscErrorCode      KergsFCLibRunSetFromOptions(KergsFCLibRun);
-PETSC_EXTERN PetscErrorCode      KergsFCLibRunGetSolver(KergsFCLibRun, KergsSolver *);
-PETSC_EXTERN PetscErrorCode      KergsFCLibRunSolve(KergsFCLibRun, KergsExitStatus *);
-PETSC_EXTERN PetscErrorCode      KergsFCLibRunDestroy(KergsFCLibRun *);
+/* as KergsStepperAddInput: an options file that no output may replace; before KergsFCLibRunSetFromOptions */
+PETSC_EXTERN PetscErrorCode KergsFCLibRunAddInput(KergsFCLibRun, const char option[], const char path[]);
+PETSC_EXTERN PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun);
+PETSC_EXTERN PetscErrorCode KergsFCLibRunGetSolver(KergsFCLibRun, KergsSolver *);
+PETSC_EXTERN PetscErrorCode KergsFCLibRunSolve(KergsFCLibRun, KergsExitStatus *);
+PETSC_EXTERN PetscErrorCode KergsFCLibRunDestroy(KergsFCLibRun *);
 /* With -help: list the options of -fclib_input runs. Collective. */
 PETSC_EXTERN PetscErrorCode KergsFCLibRunPrintHelp(MPI_Comm);
 

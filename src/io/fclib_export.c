@@ -197,13 +197,18 @@ static PetscErrorCode FCLibBuildVectors(const PetscReal *pack, FCLibProblem *p)
   PetscFunctionReturn(0);
 }
 
-/* Rank 0: write path.tmp with libfclib, then rename it to path; msg is set on failure. The title and the description's
-   head are the caller's; the description says further whether the problem was padded. */
-static PetscErrorCode FCLibWrite(FCLibProblem *p, const char title[], const char head[], const char path[], char msg[], size_t len)
+/* The texts of /fclib_local/info: the title, the description's head (FCLibWrite adds the contacts and the padding) and
+   the meaning of W and r. */
+typedef struct {
+  const char *title, *head, *math;
+} FCLibText;
+
+/* Rank 0: write path.tmp with libfclib, then rename it to path; msg is set on failure. */
+static PetscErrorCode FCLibWrite(FCLibProblem *p, const FCLibText *text, const char path[], char msg[], size_t len)
 {
   FCLibWriteLocalFn     write_local    = NULL;
   FCLibWriteSolutionFn  write_solution = NULL;
-  char                  tmp[PETSC_MAX_PATH_LEN], description[PETSC_MAX_PATH_LEN + 256], math[256];
+  char                  tmp[PETSC_MAX_PATH_LEN], description[PETSC_MAX_PATH_LEN + 256];
   struct fclib_matrix   W;
   struct fclib_info     info;
   struct fclib_local    problem;
@@ -214,14 +219,11 @@ static PetscErrorCode FCLibWrite(FCLibProblem *p, const char title[], const char
   if (msg[0]) PetscFunctionReturn(0);
   PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp", path));
   PetscCall(PetscSNPrintf(description, sizeof(description),
-                          "%s, %" PetscInt_FMT " active contacts%s; unknowns per contact normal then tangential", head, p->na,
+                          "%s, %" PetscInt_FMT " active contacts%s; unknowns per contact normal then tangential", text->head, p->na,
                           p->padded ? ", frictionless (tangential components padded: W_tt = W_nn, q_t = 0, mu = 0)" : ""));
-  PetscCall(PetscSNPrintf(
-      math, sizeof(math),
-      "W = H_f^T M^-1 H_f symmetric positive semi-definite (singular in confined packings); solution r is kergs' impulse, u = W r + q"));
   W = (struct fclib_matrix){
       .nzmax = (int)p->nnz, .m = (int)p->m, .n = (int)p->m, .p = p->colptr, .i = p->rowind, .x = p->val, .nz = -1, .info = NULL};
-  info    = (struct fclib_info){.title = (char *)title, .description = description, .math_info = math};
+  info    = (struct fclib_info){.title = (char *)text->title, .description = description, .math_info = (char *)text->math};
   problem = (struct fclib_local){
       .W = &W, .V = NULL, .R = NULL, .mu = p->mu, .q = p->q, .s = NULL, .spacedim = KERGS_FCLIB_SPACEDIM, .info = &info};
   solution = (struct fclib_solution){.v = NULL, .u = p->u, .r = p->r, .l = NULL};
@@ -239,8 +241,8 @@ static PetscErrorCode FCLibWrite(FCLibProblem *p, const char title[], const char
 }
 
 /* The problem of the active contacts, with their impulses as its solution, written to path by rank 0. Collective. */
-static PetscErrorCode FCLibExport(KergsContacts contacts, KergsOperators ops, const PetscBool *active, const char title[],
-                                  const char head[], const char path[])
+static PetscErrorCode FCLibExport(KergsContacts contacts, KergsOperators ops, const PetscBool *active, const FCLibText *text,
+                                  const char path[])
 {
   MPI_Comm       comm;
   PetscMPIInt    rank;
@@ -291,7 +293,7 @@ static PetscErrorCode FCLibExport(KergsContacts contacts, KergsOperators ops, co
     p.padded = (PetscBool)(nc == 1);
     PetscCall(FCLibBuildCSC(sub[0], nc, &p));
     PetscCall(FCLibBuildVectors(pack, &p));
-    PetscCall(FCLibWrite(&p, title, head, path, msg, sizeof(msg)));
+    PetscCall(FCLibWrite(&p, text, path, msg, sizeof(msg)));
     PetscCall(FCLibProblemFree(&p));
   }
   PetscCall(MatDestroySubMatrices(1, &sub));
@@ -318,7 +320,11 @@ PetscErrorCode KergsFCLibExport(KergsScene scene, KergsContacts contacts, KergsO
   }
   PetscCall(PetscSNPrintf(title, sizeof(title), "kergs %s step %" PetscInt_FMT, name, step));
   PetscCall(PetscSNPrintf(head, sizeof(head), "2D disks, step from time %g", (double)time));
-  PetscCall(FCLibExport(contacts, ops, active, title, head, path));
+  PetscCall(FCLibExport(contacts, ops, active,
+                        &(FCLibText){title, head,
+                                     "W = H_f^T M^-1 H_f symmetric positive semi-definite (singular in confined packings); solution r is "
+                                     "kergs' impulse, u = W r + q"},
+                        path));
   PetscFunctionReturn(0);
 }
 
@@ -333,8 +339,12 @@ PetscErrorCode KergsFCLibExportSolved(KergsContacts contacts, KergsOperators ops
   PetscCall(PetscMalloc1(PetscMax(n, 1), &all));
   for (PetscInt k = 0; k < n; k++) all[k] = PETSC_TRUE; /* every contact of an FCLib problem holds its law */
   PetscCall(PetscSNPrintf(title, sizeof(title), "kergs solution of %s", source));
-  PetscCall(FCLibExport(contacts, ops, all, title,
-                        "2D local problem as kergs -fclib_input read it (a global one as W = H^T M^-1 H, q = H^T M^-1 f + w)", path));
+  PetscCall(
+      FCLibExport(contacts, ops, all,
+                  &(FCLibText){title, "2D local problem as kergs -fclib_input read it (a global one as W = H^T M^-1 H, q = H^T M^-1 f + w)",
+                               "W as kergs solved it: the source's upper triangle, mirrored; solution r: the impulses kergs's solver found "
+                               "(converged or not), u = W r + q"},
+                  path));
   PetscCall(PetscFree(all));
   PetscFunctionReturn(0);
 }

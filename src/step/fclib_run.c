@@ -12,6 +12,8 @@ struct _p_KergsFCLibRun {
   char              path[PETSC_MAX_PATH_LEN];   /* -fclib_input */
   char              name[PETSC_MAX_PATH_LEN];   /* its base name without .h5 / .fclib.h5: the default results/<name>.h5 */
   char              solved[PETSC_MAX_PATH_LEN]; /* -fclib_output: the problem with the solution found, or empty */
+  PetscInt          ninputs;                    /* the options files (KergsFCLibRunAddInput) */
+  char              input_option[KERGS_STEPPER_MAXINPUTS][32], input_path[KERGS_STEPPER_MAXINPUTS][PETSC_MAX_PATH_LEN];
   PetscBool         error_on_nonconvergence;
   PetscBool         start_solution; /* -fclib_start solution: start from the file's solution instead of r = 0 */
   KergsFCLibProblem problem;
@@ -93,13 +95,24 @@ PetscErrorCode KergsFCLibRunPrintHelp(MPI_Comm comm)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsFCLibRunAddInput(KergsFCLibRun r, const char option[], const char path[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(r->ninputs < KERGS_STEPPER_MAXINPUTS, r->comm, PETSC_ERR_ARG_OUTOFRANGE, "At most %d input files of %s",
+             KERGS_STEPPER_MAXINPUTS, option);
+  PetscCall(PetscStrncpy(r->input_option[r->ninputs], option, sizeof(r->input_option[0])));
+  PetscCall(PetscStrncpy(r->input_path[r->ninputs], path, sizeof(r->input_path[0])));
+  r->ninputs++;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun r)
 {
   PetscBool       set, needs_H;
   KergsSolverType type;
   const char     *out;
   PetscBool       enabled;
-  KergsFileRole   outputs[2], inputs[1];
+  KergsFileRole   outputs[2], inputs[1 + KERGS_STEPPER_MAXINPUTS];
 
   PetscFunctionBeginUser;
   PetscCall(FCLibRunOptions(r, &set));
@@ -128,7 +141,8 @@ PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun r)
   outputs[0] = (KergsFileRole){"-output", enabled ? out : NULL};
   outputs[1] = (KergsFileRole){"-fclib_output", r->solved[0] ? r->solved : NULL};
   inputs[0]  = (KergsFileRole){"-fclib_input", r->path};
-  PetscCall(KergsFileCheckPaths(r->comm, 2, outputs, 1, inputs, 0, NULL));
+  for (PetscInt k = 0; k < r->ninputs; k++) inputs[1 + k] = (KergsFileRole){r->input_option[k], r->input_path[k]};
+  PetscCall(KergsFileCheckPaths(r->comm, 2, outputs, 1 + r->ninputs, inputs, 0, NULL));
   PetscCall(KergsFCLibRead(r->comm, r->path, &r->problem));
   PetscCheck(!r->start_solution || r->problem.r_ref, r->comm, PETSC_ERR_ARG_WRONG, "-fclib_start solution: %s holds no solution", r->path);
   PetscFunctionReturn(0);
@@ -228,7 +242,6 @@ PetscErrorCode KergsFCLibRunSolve(KergsFCLibRun r, KergsExitStatus *status)
   PetscCall(KergsSolverSolve(r->solver, r->scene, r->contacts, r->ops, &ss));
   PetscCall(KergsOperatorsSetImpulses(r->ops, r->contacts));
   PetscCall(FCLibRunCompare(r, start, &dr, &du));
-  if (r->solved[0]) PetscCall(KergsFCLibExportSolved(r->contacts, r->ops, r->path, r->solved));
   PetscCall(KergsSolverGetType(r->solver, &type));
   PetscCall(KergsOperatorsGetNonzeros(r->ops, &nnz_Hf, &nnz_W));
   PetscCall(KergsStepperPeakMemory(r->comm, &peak));
@@ -258,7 +271,11 @@ PetscErrorCode KergsFCLibRunSolve(KergsFCLibRun r, KergsExitStatus *status)
                           (double)dr, (double)du));
   PetscCall(KergsResultsGetPath(r->results, &out, &enabled));
   if (enabled) PetscCall(PetscPrintf(r->comm, "kergs: results in %s\n", out));
-  if (r->solved[0]) PetscCall(PetscPrintf(r->comm, "kergs: the problem with its solution in %s\n", r->solved));
+  if (r->solved[0]) { /* after the results file is closed: a failed write loses nothing of the solve */
+    PetscCall(KergsFCLibExportSolved(r->contacts, r->ops, r->path, r->solved));
+    PetscCall(PetscPrintf(r->comm, "kergs: the problem%s in %s\n", r->problem.ncontacts ? " with its solution" : " (empty: no solution)",
+                          r->solved));
+  }
   *status = (ss.reason > 0 || !r->error_on_nonconvergence) ? KERGS_EXIT_DONE : KERGS_EXIT_NOT_CONVERGED;
   PetscCall(PetscPrintf(r->comm, "kergs: %s, exit status %d\n", ss.reason > 0 ? "done" : "done, not converged", (int)*status));
   PetscFunctionReturn(0);

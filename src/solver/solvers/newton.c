@@ -730,12 +730,14 @@ static PetscErrorCode ReadRedundantOptions(KSP ksp)
   PetscFunctionReturn(0);
 }
 
-/* Under -help: CHOLMOD's options (-solver_mat_cholmod_*), which PETSc 3.18 reads at the first symbolic factorization,
-   inside the time loop; that of a 1 x 1 matrix whose factors carry the KSP's prefix makes PETSc list them now (rank 0). */
-static PetscErrorCode ListCholmodOptions(KSP ksp)
+/* CHOLMOD's options (-solver_mat_cholmod_*) for newton's Cholesky on one rank: PETSc 3.18 reads them at the first
+   symbolic factorization, inside the time loop. That of a 1 x 1 matrix whose factors carry the KSP's prefix reads them
+   now, so that -help lists them and a wrong value is refused before any work. (SBAIJ: an AIJ matrix's assembly would
+   add its own options to -help.) */
+static PetscErrorCode ReadCholmodOptions(KSP ksp)
 {
-  PetscBool     help;
-  PetscMPIInt   rank;
+  PetscBool     help, available;
+  PetscMPIInt   rank, size;
   const char   *prefix;
   Mat           A, F;
   MatFactorInfo info;
@@ -743,18 +745,21 @@ static PetscErrorCode ListCholmodOptions(KSP ksp)
   PetscFunctionBeginUser;
   PetscCall(PetscOptionsHasHelp(NULL, &help));
   PetscCallMPI(MPI_Comm_rank(PetscObjectComm((PetscObject)ksp), &rank));
-  if (!help || rank) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)ksp), &size));
+  if (rank || (size > 1 && !help)) PetscFunctionReturn(0);
   PetscCall(KSPGetOptionsPrefix(ksp, &prefix));
-  PetscCall(MatCreateSeqAIJ(PETSC_COMM_SELF, 1, 1, 1, NULL, &A));
-  PetscCall(MatSetOptionsPrefixFactor(A, prefix)); /* as PCFactor names the factors of J */
-  PetscCall(MatSetValue(A, 0, 0, 1.0, INSERT_VALUES));
-  PetscCall(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE));
-  PetscCall(MatGetFactor(A, MATSOLVERCHOLMOD, MAT_FACTOR_CHOLESKY, &F));
-  PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
-  PetscCall(MatDestroy(&F));
+  PetscCall(MatCreateSeqSBAIJ(PETSC_COMM_SELF, 1, 1, 1, 1, NULL, &A));
+  PetscCall(MatGetFactorAvailable(A, MATSOLVERCHOLMOD, MAT_FACTOR_CHOLESKY, &available));
+  if (available) {
+    PetscCall(MatSetOptionsPrefixFactor(A, prefix)); /* as PCFactor names the factors of J */
+    PetscCall(MatSetValue(A, 0, 0, 1.0, INSERT_VALUES));
+    PetscCall(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
+    PetscCall(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
+    PetscCall(MatGetFactor(A, MATSOLVERCHOLMOD, MAT_FACTOR_CHOLESKY, &F));
+    PetscCall(MatFactorInfoInitialize(&info));
+    PetscCall(MatCholeskyFactorSymbolic(F, A, NULL, &info));
+    PetscCall(MatDestroy(&F));
+  }
   PetscCall(MatDestroy(&A));
   PetscFunctionReturn(0);
 }
@@ -919,7 +924,7 @@ static PetscErrorCode SolverSetFromOptions_Newton(PetscOptionItems *PetscOptions
   PetscCheck(!(nt->working_set && nt->prox == NEWTON_PROX_KERNEL), s->comm, PETSC_ERR_ARG_INCOMP,
              "-solver_newton_working_set needs -solver_prox identity or none: the kernel term's projector is over every active contact");
   PetscCall(KSPSetFromOptions(nt->ksp));
-  if (nt->cholesky) PetscCall(ListCholmodOptions(nt->ksp));
+  if (nt->cholesky) PetscCall(ReadCholmodOptions(nt->ksp));
   s->needs_H = (PetscBool)(nt->prox == NEWTON_PROX_KERNEL); /* the kernel projector factors H_f H_f^T */
   if (nt->prox == NEWTON_PROX_KERNEL && !nt->kernel) {
     PetscCall(KergsKernelCreate(s->comm, &nt->kernel));
