@@ -61,14 +61,21 @@ PetscErrorCode KergsStepperDefaultCheckpointPath(KergsStepper st)
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KergsInputFilesAdd(MPI_Comm comm, KergsInputFiles *in, const char option[], const char path[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(in->n < KERGS_STEPPER_MAXINPUTS, comm, PETSC_ERR_ARG_OUTOFRANGE, "At most %d input files of %s", KERGS_STEPPER_MAXINPUTS,
+             option);
+  PetscCall(PetscStrncpy(in->option[in->n], option, sizeof(in->option[0])));
+  PetscCall(PetscStrncpy(in->path[in->n], path, sizeof(in->path[0])));
+  in->n++;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KergsStepperAddInput(KergsStepper st, const char option[], const char path[])
 {
   PetscFunctionBeginUser;
-  PetscCheck(st->ninputs < KERGS_STEPPER_MAXINPUTS, st->comm, PETSC_ERR_ARG_OUTOFRANGE, "At most %d input files of %s",
-             KERGS_STEPPER_MAXINPUTS, option);
-  PetscCall(PetscStrncpy(st->input_option[st->ninputs], option, sizeof(st->input_option[0])));
-  PetscCall(PetscStrncpy(st->input_path[st->ninputs], path, sizeof(st->input_path[0])));
-  st->ninputs++;
+  PetscCall(KergsInputFilesAdd(st->comm, &st->inputs, option, path));
   PetscFunctionReturn(0);
 }
 
@@ -93,7 +100,7 @@ PetscErrorCode KergsStepperCheckPaths(KergsStepper st)
   outputs[4]    = (KergsFileRole){"-output_xdmf", xdmf};                                    /* <output without .h5>.xdmf */
   inputs[nin++] = (KergsFileRole){"-sample_input", st->restart_path[0] ? NULL : sample_in}; /* a restart does not read it */
   inputs[nin++] = (KergsFileRole){"-restart", st->restart_path};
-  for (PetscInt k = 0; k < st->ninputs; k++) inputs[nin++] = (KergsFileRole){st->input_option[k], st->input_path[k]};
+  for (PetscInt k = 0; k < st->inputs.n; k++) inputs[nin++] = (KergsFileRole){st->inputs.option[k], st->inputs.path[k]};
   PetscCall(KergsFileCheckPaths(st->comm, 5, outputs, nin, inputs, 1, same));
   PetscFunctionReturn(0);
 }

@@ -12,8 +12,7 @@ struct _p_KergsFCLibRun {
   char              path[PETSC_MAX_PATH_LEN];   /* -fclib_input */
   char              name[PETSC_MAX_PATH_LEN];   /* its base name without .h5 / .fclib.h5: the default results/<name>.h5 */
   char              solved[PETSC_MAX_PATH_LEN]; /* -fclib_output: the problem with the solution found, or empty */
-  PetscInt          ninputs;                    /* the options files (KergsFCLibRunAddInput) */
-  char              input_option[KERGS_STEPPER_MAXINPUTS][32], input_path[KERGS_STEPPER_MAXINPUTS][PETSC_MAX_PATH_LEN];
+  KergsInputFiles   inputs;                     /* the options files (KergsFCLibRunAddInput) */
   PetscBool         error_on_nonconvergence;
   PetscBool         start_solution; /* -fclib_start solution: start from the file's solution instead of r = 0 */
   KergsFCLibProblem problem;
@@ -98,11 +97,7 @@ PetscErrorCode KergsFCLibRunPrintHelp(MPI_Comm comm)
 PetscErrorCode KergsFCLibRunAddInput(KergsFCLibRun r, const char option[], const char path[])
 {
   PetscFunctionBeginUser;
-  PetscCheck(r->ninputs < KERGS_STEPPER_MAXINPUTS, r->comm, PETSC_ERR_ARG_OUTOFRANGE, "At most %d input files of %s",
-             KERGS_STEPPER_MAXINPUTS, option);
-  PetscCall(PetscStrncpy(r->input_option[r->ninputs], option, sizeof(r->input_option[0])));
-  PetscCall(PetscStrncpy(r->input_path[r->ninputs], path, sizeof(r->input_path[0])));
-  r->ninputs++;
+  PetscCall(KergsInputFilesAdd(r->comm, &r->inputs, option, path));
   PetscFunctionReturn(0);
 }
 
@@ -141,8 +136,8 @@ PetscErrorCode KergsFCLibRunSetFromOptions(KergsFCLibRun r)
   outputs[0] = (KergsFileRole){"-output", enabled ? out : NULL};
   outputs[1] = (KergsFileRole){"-fclib_output", r->solved[0] ? r->solved : NULL};
   inputs[0]  = (KergsFileRole){"-fclib_input", r->path};
-  for (PetscInt k = 0; k < r->ninputs; k++) inputs[1 + k] = (KergsFileRole){r->input_option[k], r->input_path[k]};
-  PetscCall(KergsFileCheckPaths(r->comm, 2, outputs, 1 + r->ninputs, inputs, 0, NULL));
+  for (PetscInt k = 0; k < r->inputs.n; k++) inputs[1 + k] = (KergsFileRole){r->inputs.option[k], r->inputs.path[k]};
+  PetscCall(KergsFileCheckPaths(r->comm, 2, outputs, 1 + r->inputs.n, inputs, 0, NULL));
   PetscCall(KergsFCLibRead(r->comm, r->path, &r->problem));
   PetscCheck(!r->start_solution || r->problem.r_ref, r->comm, PETSC_ERR_ARG_WRONG, "-fclib_start solution: %s holds no solution", r->path);
   PetscFunctionReturn(0);

@@ -6,6 +6,14 @@
 
 #define KERGS_STEPPER_MAXINPUTS 8
 
+/* Input files named outside the options database (-options_file), for the checks of a run's paths: no output may
+   replace one. */
+typedef struct {
+  PetscInt n;
+  char     option[KERGS_STEPPER_MAXINPUTS][32], path[KERGS_STEPPER_MAXINPUTS][PETSC_MAX_PATH_LEN];
+} KergsInputFiles;
+PETSC_INTERN PetscErrorCode KergsInputFilesAdd(MPI_Comm, KergsInputFiles *, const char option[], const char path[]);
+
 struct _p_KergsStepper {
   MPI_Comm       comm;
   KergsScene     scene;
@@ -57,8 +65,7 @@ struct _p_KergsStepper {
   PetscBool       moved;                               /* -stop_at_rest: the packing has moved faster than rest_speed */
   KergsExitStatus status;                              /* how the run ended (KergsStepperGetExitStatus) */
   int             signal;                              /* the signal that stopped it (0: none) */
-  PetscInt        ninputs;                             /* input files named outside the options database (-options_file) */
-  char            input_option[KERGS_STEPPER_MAXINPUTS][32], input_path[KERGS_STEPPER_MAXINPUTS][PETSC_MAX_PATH_LEN];
+  KergsInputFiles inputs;                              /* input files named outside the options database (-options_file) */
   /* the latest step's figures, for the progress lines */
   PetscInt  last_contacts, last_sweeps;
   PetscReal last_residual, last_max_violation;
