@@ -17,12 +17,13 @@ TEST is one of:
             an off-diagonal M is refused
   bad       a missing file, a text file, an HDF5 file that is no FCLib problem, a 3D problem, a NaN in q, a short
             dataset, a non-symmetric W, -fclib_start solution without a solution, a kernel-regularised type, an
-            -fclib_output that is the -fclib_input or an -options_file: each refused with a message naming the fault,
-            no crash
+            -fclib_output that is the -fclib_input or an -options_file, or on a full file system: each refused with a
+            message naming the fault, no crash
 Exit status 0 when every check holds, 1 otherwise."""
 import argparse
 import os
 import shutil
+import subprocess
 import sys
 
 import h5py
@@ -215,6 +216,27 @@ def copy_with(k, src, name, edit):
     return dst
 
 
+def check_full_disk(k, good):
+    """-fclib_output on a file system too small for it (a 200 KB tmpfs; skipped unless root can mount one): refused with
+    "No space left on device" naming the file before libfclib writes (it exits the process on a failed write), no .tmp
+    left, and the solve's results file, written first, kept."""
+    mnt = k.path("full")
+    os.makedirs(mnt, exist_ok=True)
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", mnt], capture_output=True).returncode:
+        print("skipped: a full file system (cannot mount a small tmpfs here)")
+        return
+    try:
+        out, results = os.path.join(mnt, "solved.fclib.h5"), k.path("full_results.h5")
+        p = k.run(1, "-fclib_input", good, "-output", results, "-fclib_output", out)
+        text = p.stdout + p.stderr
+        check(p.returncode == 1 and "No space left on device" in text and out in text,
+              f"a full file system: -fclib_output refused, 'No space left on device' naming it (exit {p.returncode})")
+        check(not os.path.exists(out) and not os.path.exists(out + ".tmp") and os.path.exists(results),
+              "no partial file is left, and the results file of the solve is kept")
+    finally:
+        subprocess.run(["umount", mnt])
+
+
 def test_bad(k):
     good = k.export("good.fclib.h5")
     out = ["-output", k.path("bad.h5")]
@@ -287,6 +309,7 @@ def test_bad(k):
     refused(k, "-fclib_output that is the -fclib_input", ["-fclib_output", "-fclib_input", "good.fclib.h5"], "-fclib_input", good,
             "-fclib_output", good, *out)
     check((os.path.getmtime(good), os.path.getsize(good)) == before, "the input is left as it was")
+    check_full_disk(k, good)
     p = k.run(1, "-fclib_input", nosol, "-output", k.path("nosol.h5"), "-solver_type", "newton", "-solver_max_it", 1000)
     check(p.returncode == 0 and "against the file's solution" not in p.stdout, "a file without a solution is solved, no comparison")
     check(not os.path.exists(k.path("bad.h5")), "no results file is left by a refused input")

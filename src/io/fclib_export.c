@@ -19,8 +19,9 @@
 #define KERGS_FCLIB_LIBRARY "libfclib.so.0"
 #endif
 
-#define KERGS_FCLIB_SPACEDIM 2 /* FCLib's 2D frictional contact: normal then tangential per contact */
-#define KERGS_FCLIB_PACK 5     /* per exported contact: q_n, q_t, mu, r_n, r_t */
+#define KERGS_FCLIB_SPACEDIM 2         /* FCLib's 2D frictional contact: normal then tangential per contact */
+#define KERGS_FCLIB_PACK 5             /* per exported contact: q_n, q_t, mu, r_n, r_t */
+#define KERGS_FCLIB_HDF5_BYTES 32768.0 /* HDF5's groups, attributes and texts around the data: 13 KB measured for 5 contacts */
 
 typedef int (*FCLibWriteLocalFn)(struct fclib_local *, const char *);
 typedef int (*FCLibWriteSolutionFn)(struct fclib_solution *, const char *);
@@ -254,6 +255,7 @@ static PetscErrorCode FCLibExport(KergsContacts contacts, KergsOperators ops, co
   KergsContact  *c;
   KergsDofLayout layout;
   FCLibProblem   p                                 = {0};
+  PetscReal      bytes                             = 0.0;
   char           msg[2 * PETSC_MAX_PATH_LEN + 128] = "";
 
   PetscFunctionBeginUser;
@@ -293,6 +295,15 @@ static PetscErrorCode FCLibExport(KergsContacts contacts, KergsOperators ops, co
     p.padded = (PetscBool)(nc == 1);
     PetscCall(FCLibBuildCSC(sub[0], nc, &p));
     PetscCall(FCLibBuildVectors(pack, &p));
+    bytes = 12.0 * (PetscReal)p.nnz + 8.0 * (PetscReal)(6 * p.m + p.na) + KERGS_FCLIB_HDF5_BYTES;
+  }
+  PetscCallMPI(MPI_Bcast(&bytes, 1, MPIU_REAL, 0, comm));
+  { /* libfclib exits the process when a write fails: a full file system is refused before it writes */
+    PetscErrorCode ierr = KergsFileCheckSpace(comm, path, NULL, "the FCLib problem", bytes);
+    if (ierr && rank == 0) PetscCall(FCLibProblemFree(&p));
+    PetscCall(ierr);
+  }
+  if (rank == 0) {
     PetscCall(FCLibWrite(&p, text, path, msg, sizeof(msg)));
     PetscCall(FCLibProblemFree(&p));
   }
