@@ -97,15 +97,23 @@ static void CollectOptionsFile(const char path[], void *ctx)
   if (files->n < 9) snprintf(files->path[files->n++], PETSC_MAX_PATH_LEN, "%s", path);
 }
 
-static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **argv)
+/* The options files of the command line, walked again at each call (a malformed one is the options reader's error) */
+static const OptionsFiles *GetOptionsFiles(int argc, char **argv)
 {
   static OptionsFiles files;
   char                msg[256];
 
-  PetscFunctionBeginUser;
   files.n = 0;
   (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
-  for (int i = 0; i < files.n; i++) PetscCall(KergsStepperAddInput(stepper, "-options_file", files.path[i]));
+  return &files;
+}
+
+static PetscErrorCode AddOptionsFiles(KergsStepper stepper, int argc, char **argv)
+{
+  const OptionsFiles *files = GetOptionsFiles(argc, argv);
+
+  PetscFunctionBeginUser;
+  for (int i = 0; i < files->n; i++) PetscCall(KergsStepperAddInput(stepper, "-options_file", files->path[i]));
   PetscFunctionReturn(0);
 }
 
@@ -128,20 +136,18 @@ static PetscErrorCode TakeNamedInput(const char name[], const char value[], void
 
 static PetscErrorCode CheckViewerFiles(int argc, char **argv)
 {
-  static OptionsFiles files;
-  static char         given[NAMED_INPUTS][PETSC_MAX_PATH_LEN];
-  KergsViewerFiles   *vf;
-  KergsFileRole       outputs[KERGS_MAX_VIEWER_FILES], inputs[NAMED_INPUTS + 9];
-  PetscInt            nin = 0;
-  char                msg[256], *all;
+  static char       given[NAMED_INPUTS][PETSC_MAX_PATH_LEN];
+  KergsViewerFiles *vf;
+  KergsFileRole     outputs[KERGS_MAX_VIEWER_FILES], inputs[NAMED_INPUTS + 9];
+  PetscInt          nin = 0;
+  char             *all;
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&vf));
   PetscCall(KergsFileViewerFiles(vf));
   if (vf->n) { /* no viewer's file, nothing to check */
-    files.n = 0;
-    (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
-    for (int i = 0; i < files.n; i++) inputs[nin++] = (KergsFileRole){"-options_file", files.path[i]};
+    const OptionsFiles *files = GetOptionsFiles(argc, argv);
+    for (int i = 0; i < files->n; i++) inputs[nin++] = (KergsFileRole){"-options_file", files->path[i]};
     PetscCall(PetscOptionsGetAll(NULL, &all));
     PetscCall(KergsOptionsTextWalk(all, TakeNamedInput, given));
     PetscCall(PetscFree(all));
@@ -156,17 +162,14 @@ static PetscErrorCode CheckViewerFiles(int argc, char **argv)
 /* -fclib_input FILE: one FCLib problem instead of a scene */
 static PetscErrorCode RunFCLib(int argc, char **argv, KergsExitStatus *status)
 {
-  static OptionsFiles files;
+  const OptionsFiles *files = GetOptionsFiles(argc, argv);
   KergsFCLibRun       run;
   KergsSolver         solver;
-  char                msg[256];
 
   PetscFunctionBeginUser;
   (void)KergsStepperCatchStopSignals(PETSC_FALSE); /* one solve, no time loop to stop cleanly: a signal ends it */
   PetscCall(KergsFCLibRunCreate(PETSC_COMM_WORLD, &run));
-  files.n = 0;
-  (void)KergsOptionsFilesWalk(argc, argv, CollectOptionsFile, &files, msg, sizeof(msg));
-  for (int i = 0; i < files.n; i++) PetscCall(KergsFCLibRunAddInput(run, "-options_file", files.path[i]));
+  for (int i = 0; i < files->n; i++) PetscCall(KergsFCLibRunAddInput(run, "-options_file", files->path[i]));
   PetscCall(KergsFCLibRunSetFromOptions(run));
   PetscCall(KergsFCLibRunGetSolver(run, &solver));
   PetscCall(CheckUnusedOptions(PETSC_COMM_WORLD, PETSC_TRUE));
