@@ -732,8 +732,8 @@ static PetscErrorCode ReadRedundantOptions(KSP ksp)
 
 /* CHOLMOD's options (-solver_mat_cholmod_*) for newton's Cholesky on one rank: PETSc 3.18 reads them at the first
    symbolic factorization, inside the time loop. That of a 1 x 1 matrix whose factors carry the KSP's prefix reads them
-   now, so that -help lists them and a wrong value is refused before any work. (SBAIJ: an AIJ matrix's assembly would
-   add its own options to -help.) */
+   now, so that -help lists them and a wrong value is refused before any work. Its assembly lists PETSc's options of an
+   unprefixed SeqSBAIJ matrix under -help too (-mat_no_inode, -mat_view). */
 static PetscErrorCode ReadCholmodOptions(KSP ksp)
 {
   PetscBool     help, available;
