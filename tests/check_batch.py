@@ -35,7 +35,7 @@ import time
 import h5py
 import numpy as np
 
-from checks import Kergs, check, failures
+from checks import Kergs, check, failures, small_tmpfs
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -520,23 +520,16 @@ def test_paths(k):
 
 
 def test_enospc(k):
-    if os.geteuid() != 0:
-        print("skipped: mounting a small tmpfs needs root")
-        return 77
-    mnt = k.path("full")
-    os.makedirs(mnt, exist_ok=True)
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", mnt], capture_output=True).returncode != 0:
-        print("skipped: cannot mount a tmpfs here")
-        return 77
-    try:
+    with small_tmpfs(k.path("full")) as mnt:
+        if mnt is None:
+            print("skipped: cannot mount a small tmpfs here (mounting needs root)")
+            return 77
         out = os.path.join(mnt, "r.h5")
         p = k.run(2, *PAPER500, "-steps", 30, "-quiet", "-output", out, "-output_every", 1, log="enospc.log")
         text = p.stdout + p.stderr
         check(p.returncode == 1 and "No space left on device" in text and out in text,
               "enospc: a full disk stops the run with 'No space left on device' naming the file")
         check(not os.path.exists(out + ".tmp") and not os.path.exists(out), "enospc: the partial .tmp is removed")
-    finally:
-        subprocess.run(["umount", mnt])
     return 0
 
 

@@ -23,14 +23,13 @@ Exit status 0 when every check holds, 1 otherwise."""
 import argparse
 import os
 import shutil
-import subprocess
 import sys
 
 import h5py
 import numpy as np
 import scipy.sparse
 
-from checks import Kergs, check, failures
+from checks import Kergs, check, failures, small_tmpfs
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -220,12 +219,10 @@ def check_full_disk(k, good):
     """-fclib_output on a file system too small for it (a 200 KB tmpfs; skipped unless root can mount one): refused with
     "No space left on device" naming the file before libfclib writes (it exits the process on a failed write), no .tmp
     left, and the solve's results file, written first, kept."""
-    mnt = k.path("full")
-    os.makedirs(mnt, exist_ok=True)
-    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", mnt], capture_output=True).returncode:
-        print("skipped: a full file system (cannot mount a small tmpfs here)")
-        return
-    try:
+    with small_tmpfs(k.path("full")) as mnt:
+        if mnt is None:
+            print("skipped: a full file system (cannot mount a small tmpfs here)")
+            return
         out, results = os.path.join(mnt, "solved.fclib.h5"), k.path("full_results.h5")
         p = k.run(1, "-fclib_input", good, "-output", results, "-fclib_output", out)
         text = p.stdout + p.stderr
@@ -233,8 +230,6 @@ def check_full_disk(k, good):
               f"a full file system: -fclib_output refused, 'No space left on device' naming it (exit {p.returncode})")
         check(not os.path.exists(out) and not os.path.exists(out + ".tmp") and os.path.exists(results),
               "no partial file is left, and the results file of the solve is kept")
-    finally:
-        subprocess.run(["umount", mnt])
 
 
 def test_bad(k):

@@ -2,6 +2,7 @@
 runner for the kergs under test."""
 
 import argparse
+import contextlib
 import os
 import subprocess
 
@@ -15,6 +16,20 @@ def check(ok, what):
     if not ok:
         failures.append(what)
     return ok
+
+
+@contextlib.contextmanager
+def small_tmpfs(path, size="200k"):
+    """A file system of `size` mounted at path, for the checks of a full disk; None where it cannot be mounted (mounting
+    needs root). Unmounted on exit."""
+    os.makedirs(path, exist_ok=True)
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", path], capture_output=True).returncode:
+        yield None
+        return
+    try:
+        yield path
+    finally:
+        subprocess.run(["umount", path], capture_output=True)
 
 
 class Kergs:
